@@ -1,0 +1,37 @@
+PY ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+
+.PHONY: run test lint bench clean
+
+$(BIN)/python:
+	$(PY) -m venv $(VENV)
+	$(BIN)/pip install -q --upgrade pip
+
+$(VENV)/.installed: pyproject.toml | $(BIN)/python
+	$(BIN)/pip install -q -e .
+	touch $@
+
+$(VENV)/.installed-test: pyproject.toml | $(BIN)/python
+	$(BIN)/pip install -q -e '.[test]'
+	touch $@ $(VENV)/.installed
+
+# The main job. Until the motion layer lands: validate every reference cell and
+# print the keypoints of the cable-routing cell.
+run: $(VENV)/.installed
+	$(BIN)/cellengine validate cells/
+	$(BIN)/cellengine show cells/cable_routing/cell.yaml
+
+test: $(VENV)/.installed-test
+	$(BIN)/python -m pytest
+
+lint: $(VENV)/.installed-test
+	$(BIN)/ruff check cellengine skills tests
+	$(BIN)/ruff format --check cellengine skills tests
+	$(BIN)/mypy
+
+bench: $(VENV)/.installed-test
+	$(BIN)/python bench/validate_speed.py
+
+clean:
+	rm -rf $(VENV) build *.egg-info

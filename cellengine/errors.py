@@ -1,0 +1,88 @@
+"""User-facing errors: each names a file and a place in it, and maps to an exit code.
+
+A user's mistake never shows a traceback; the CLI prints the problems and exits with
+the code of the error class (DESIGN section 4).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+EXIT_OK = 0
+EXIT_INVALID = 1
+EXIT_USAGE = 2
+EXIT_DRIVER = 3
+
+
+def display_path(path: str | Path) -> str:
+    """A path as users typed it: relative to the working directory when inside it."""
+    p = Path(path)
+    try:
+        rel = os.path.relpath(p)
+    except ValueError:  # another drive (Windows)
+        return str(p)
+    return str(p) if rel.startswith("..") else rel
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One thing wrong with one input: where (file, line, col; CSV uses line = row) and what."""
+
+    message: str
+    file: str | None = None
+    line: int | None = None
+    col: int | None = None
+
+    def location(self) -> str:
+        parts = [display_path(self.file) if self.file else "<input>"]
+        if self.line is not None:
+            parts.append(str(self.line))
+            if self.col is not None:
+                parts.append(str(self.col))
+        return ":".join(parts)
+
+    def __str__(self) -> str:
+        return f"{self.location()}: {self.message}"
+
+
+class CellError(Exception):
+    """Base of every error meant for a user. Carries one or more problems."""
+
+    exit_code = EXIT_INVALID
+
+    def __init__(self, problems: Problem | Iterable[Problem]) -> None:
+        self.problems: tuple[Problem, ...] = (
+            (problems,) if isinstance(problems, Problem) else tuple(problems)
+        )
+        super().__init__("\n".join(str(p) for p in self.problems))
+
+    @classmethod
+    def at(
+        cls, message: str, file: str | Path | None, line: int | None = None, col: int | None = None
+    ) -> CellError:
+        return cls(Problem(message, str(file) if file is not None else None, line, col))
+
+
+class InputError(CellError):
+    """Invalid input, or a plan that cannot run (exit 1)."""
+
+
+class UsageError(CellError):
+    """Bad command-line usage (exit 2)."""
+
+    exit_code = EXIT_USAGE
+
+
+class DriverError(CellError):
+    """A driver or hardware fault (exit 3)."""
+
+    exit_code = EXIT_DRIVER
+
+
+def known(names: Iterable[str]) -> str:
+    """The '; known: a, b, c' suffix of an unknown-name message."""
+    names = sorted(names)
+    return "; known: " + ", ".join(names) if names else "; none are defined"

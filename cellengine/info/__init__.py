@@ -1,0 +1,1 @@
+"""The information layer: files in, immutable models and keypoints out."""

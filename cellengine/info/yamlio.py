@@ -1,0 +1,162 @@
+"""Safe, line-aware YAML loading.
+
+PyYAML's composer gives nodes with marks; we build plain dicts/lists ourselves so that
+every value and key keeps its line and column, standard tags only are accepted, duplicate
+keys are errors, and an alias bomb is refused from its node graph before it is expanded.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from cellengine.errors import InputError
+from cellengine.info.files import read_capped
+
+Loc = tuple[str | int, ...]
+Pos = tuple[int, int]
+
+MAX_NODES = 100_000  # after alias expansion
+MAX_ALIASES = 1_000
+
+_STD = "tag:yaml.org,2002:"
+_ALLOWED_TAGS = {_STD + t for t in ("str", "int", "float", "bool", "null", "map", "seq")}
+
+
+@dataclass(frozen=True)
+class YamlDoc:
+    """A loaded YAML file: the data and where each value and key was written (1-based)."""
+
+    file: Path
+    data: Any
+    values: dict[Loc, Pos] = field(default_factory=dict)
+    keys: dict[Loc, Pos] = field(default_factory=dict)
+
+    def where(self, loc: Loc, key: bool = False) -> Pos | None:
+        """Position of ``loc``; its key's if ``key``; else the nearest enclosing value's."""
+        loc = tuple(loc)
+        if key and loc in self.keys:
+            return self.keys[loc]
+        while loc:
+            if loc in self.values:
+                return self.values[loc]
+            loc = loc[:-1]
+        return self.values.get((), (1, 1))
+
+    def error(self, message: str, loc: Loc, key: bool = False) -> InputError:
+        line, col = self.where(loc, key) or (None, None)
+        return InputError.at(message, self.file, line, col)
+
+
+def load_yaml(path: Path) -> YamlDoc:
+    raw = read_capped(path, "yaml")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        line = raw.count(b"\n", 0, e.start) + 1
+        raise InputError.at("file is not valid UTF-8", path, line) from None
+    return parse_yaml(text, path)
+
+
+def parse_yaml(text: str, path: Path) -> YamlDoc:
+    loader = yaml.SafeLoader(text)
+    try:
+        node = loader.get_single_node()
+    except yaml.MarkedYAMLError as e:
+        mark = e.problem_mark or e.context_mark
+        msg = f"YAML syntax error: {e.problem or e.context}"
+        raise InputError.at(
+            msg, path, mark.line + 1 if mark else None, mark.column + 1 if mark else None
+        ) from None
+    except yaml.YAMLError as e:
+        raise InputError.at(f"YAML error: {e}", path) from None
+    except RecursionError:
+        raise InputError.at("YAML is nested too deeply", path) from None
+    finally:
+        loader.dispose()
+    doc = YamlDoc(path, None)
+    if node is None:
+        return doc
+    builder = _Builder(doc, loader)
+    builder.check_size(node)
+    return YamlDoc(path, builder.build(node, ()), doc.values, doc.keys)
+
+
+def _pos(node: yaml.Node) -> Pos:
+    return node.start_mark.line + 1, node.start_mark.column + 1
+
+
+class _Builder:
+    def __init__(self, doc: YamlDoc, loader: yaml.SafeLoader) -> None:
+        self.doc = doc
+        self.loader = loader
+
+    def _fail(self, message: str, node: yaml.Node) -> InputError:
+        return InputError.at(message, self.doc.file, *_pos(node))
+
+    def check_size(self, root: yaml.Node) -> None:
+        """Count nodes as they would be after alias expansion, without expanding."""
+        sizes: dict[int, int] = {}
+        active: set[int] = set()
+        seen: set[int] = set()
+        shared = 0
+
+        def size(n: yaml.Node) -> int:
+            nonlocal shared
+            key = id(n)
+            if key in sizes:
+                shared += 1
+                if shared > MAX_ALIASES:
+                    raise self._fail(f"YAML uses more than {MAX_ALIASES} aliases", n)
+                return sizes[key]
+            if key in active:
+                raise self._fail("recursive YAML alias", n)
+            if n.tag not in _ALLOWED_TAGS:
+                raise self._fail(
+                    f"YAML tag '{n.tag.replace(_STD, '!!')}' is not allowed; "
+                    "only plain maps, lists, strings, numbers, booleans and null",
+                    n,
+                )
+            active.add(key)
+            total = 1
+            if isinstance(n, yaml.MappingNode):
+                self.loader.flatten_mapping(n)  # resolve '<<' merge keys in place
+                total += sum(size(k) + size(v) for k, v in n.value)
+            elif isinstance(n, yaml.SequenceNode):
+                total += sum(size(v) for v in n.value)
+            active.discard(key)
+            seen.add(key)
+            sizes[key] = total
+            if total > MAX_NODES:
+                raise self._fail(
+                    f"YAML expands to more than {MAX_NODES} values (an alias bomb?)", n
+                )
+            return total
+
+        size(root)
+
+    def build(self, node: yaml.Node, loc: Loc) -> Any:
+        self.doc.values.setdefault(loc, _pos(node))
+        if isinstance(node, yaml.MappingNode):
+            out: dict[str, Any] = {}
+            first: dict[str, yaml.Node] = {}
+            for k, v in node.value:
+                if not isinstance(k, yaml.ScalarNode):
+                    raise self._fail("mapping keys must be plain names", k)
+                name = str(k.value)
+                if name in first:
+                    line = _pos(first[name])[0]
+                    raise self._fail(f"duplicate key '{name}' (first given at line {line})", k)
+                first[name] = k
+                self.doc.keys.setdefault((*loc, name), _pos(k))
+                out[name] = self.build(v, (*loc, name))
+            return out
+        if isinstance(node, yaml.SequenceNode):
+            return [self.build(v, (*loc, i)) for i, v in enumerate(node.value)]
+        try:
+            return self.loader.construct_object(node, deep=True)
+        except yaml.YAMLError as e:
+            raise self._fail(f"bad YAML value: {e}", node) from None
