@@ -1,0 +1,196 @@
+"""The element-model XML of a native platform (DESIGN 3.2), validated against
+``schemas/element-models.xsd`` and converted once to metres and radians.
+
+```xml
+<elements units="mm" angles="deg">
+  <element model="guide_u">
+    <dimension name="gap" value="10"/>
+    <keypoint name="slot" xyz="0 0 55" rpy="0 0 90"/>
+  </element>
+</elements>
+```
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+from lxml import etree
+
+from cellengine.errors import InputError, Problem
+from cellengine.geometry import pose
+from cellengine.info.files import read_capped
+from cellengine.info.platform import Keypoint, Source, frozen_array
+from cellengine.info.xmlsafe import parse_xml
+
+SCHEMA = Path(__file__).resolve().parents[2] / "schemas" / "element-models.xsd"
+
+LENGTH = {"m": 1.0, "cm": 1e-2, "mm": 1e-3}
+ANGLE = {"rad": 1.0, "deg": math.pi / 180.0}
+
+
+@dataclass(frozen=True)
+class ElementModel:
+    """One ``<element model=...>``: dimensions in metres, keypoints in the element frame."""
+
+    name: str
+    dimensions: Mapping[str, float]
+    keypoints: Mapping[str, Keypoint]  # document order: the first is the default
+    source: Source
+
+
+def load_models(path: Path) -> Mapping[str, ElementModel]:
+    """Models of ``path`` by name, in document order. Every mistake is an InputError."""
+    tree = parse_xml(path)
+    lines = source_lines(path)
+    schema = _schema()
+    if not schema.validate(tree):
+        raise InputError(_schema_problems(schema.error_log, path, lines))
+    root = tree.getroot()
+    length = LENGTH[root.get("units", "m")]
+    angle = ANGLE[root.get("angles", "rad")]
+    models: dict[str, ElementModel] = {}
+    first: dict[str, int] = {}
+    for el in root.iterchildren("element"):
+        name = el.get("model")
+        _unique(name, "model", el, first, path, lines)
+        models[name] = _model(el, length, angle, path, lines)
+    return MappingProxyType(models)
+
+
+def _model(el: Any, length: float, angle: float, path: Path, lines: Sequence[str]) -> ElementModel:
+    dims: dict[str, float] = {}
+    kps: dict[str, Keypoint] = {}
+    first_dim: dict[str, int] = {}
+    first_kp: dict[str, int] = {}
+    for child in el.iterchildren("dimension", "keypoint"):
+        name = child.get("name")
+        if child.tag == "dimension":
+            _unique(name, "dimension", child, first_dim, path, lines)
+            dims[name] = float(child.get("value")) * length
+        else:
+            _unique(name, "keypoint", child, first_kp, path, lines)
+            xyz = [float(v) * length for v in child.get("xyz").split()]
+            rpy = [float(v) * angle for v in child.get("rpy", "0 0 0").split()]
+            kps[name] = Keypoint(name, frozen_array(pose(xyz, rpy)))
+    return ElementModel(
+        el.get("model"),
+        MappingProxyType(dims),
+        MappingProxyType(kps),
+        Source(str(path), el.sourceline),
+    )
+
+
+def _unique(
+    name: str, what: str, el: Any, first: dict[str, int], path: Path, lines: Sequence[str]
+) -> None:
+    """Record ``name``'s line in ``first``; a second definition is an error naming the first."""
+    line: int = el.sourceline
+    if name in first:
+        raise InputError.at(
+            f"duplicate {what} '{name}' (first defined at line {first[name]})",
+            path,
+            line,
+            column(lines, line, el.tag, "model" if what == "model" else "name"),
+        )
+    first[name] = line
+
+
+@lru_cache(maxsize=1)
+def _schema() -> Any:
+    # The XSD goes through the same secure parser as user files: no DTD, entities, network.
+    return etree.XMLSchema(parse_xml(SCHEMA, "xml"))
+
+
+# --- readable schema errors ------------------------------------------------------------------
+
+_NUMBER_PATTERN = r"[+\-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+\-]?[0-9]+)?"
+_PATTERNS = {
+    _NUMBER_PATTERN: "is not a finite number",
+    r"[^.\s]+": "is not a name: use no dots or spaces (plans write platform.element.keypoint)",
+    r"\S+": "is not a name: it must be non-empty, without spaces",
+}
+_REWRITES: list[tuple[re.Pattern[str], str]] = [
+    (re.compile(r"^Element '([^']+)', attribute '([^']+)': "), r"<\1> attribute '\2': "),
+    (re.compile(r"^Element '([^']+)': "), r"<\1>: "),
+    (
+        re.compile(r"\[facet 'enumeration'\] The value '([^']*)' is not an element of the set "),
+        r"'\1' is not one of ",
+    ),
+    (
+        re.compile(
+            r"\[facet 'length'\] The value '([^']*)' has a length of '(\d+)'; "
+            r"this differs from the allowed length of '(\d+)'\."
+        ),
+        r"'\1' has \2 numbers; expected \3 separated by spaces",
+    ),
+    (
+        re.compile(r"'([^']*)' is not a valid value of the atomic type 'number'\."),
+        r"'\1' is not a number",
+    ),
+    (
+        re.compile(r"No matching global declaration available for the validation root\."),
+        "this is not an element-model file; expected the root element <elements>",
+    ),
+    (
+        re.compile(r"This element is not expected\. Expected is (one of )?"),
+        "unexpected element; expected ",
+    ),
+]
+_ATTR = re.compile(r"^Element '([^']+)'(?:, attribute '([^']+)')?")
+
+
+def _readable(message: str) -> str:
+    m = re.search(
+        r"\[facet 'pattern'\] The value '([^']*)' is not accepted by the pattern '(.*)'\.", message
+    )
+    if m:
+        why = _PATTERNS.get(m.group(2), f"does not match '{m.group(2)}'")
+        message = message[: m.start()] + f"'{m.group(1)}' {why}"
+    for pattern, repl in _REWRITES:
+        message = pattern.sub(repl, message)
+    return message.rstrip(".")
+
+
+def _schema_problems(log: Any, path: Path, lines: Sequence[str]) -> list[Problem]:
+    """One problem per element and attribute: libxml2 follows an item error in a list with
+    a second error about the whole list, which would only repeat it."""
+    problems: list[Problem] = []
+    seen: set[tuple[int, str]] = set()
+    for entry in log:
+        m = _ATTR.match(entry.message)
+        key = (entry.line, m.group(0) if m else entry.message)
+        if key in seen:
+            continue
+        seen.add(key)
+        tag, attr = (m.group(1), m.group(2)) if m else ("", None)
+        col = column(lines, entry.line, tag, attr) if tag else None
+        problems.append(Problem(_readable(entry.message), str(path), entry.line, col))
+    return problems
+
+
+# --- columns: libxml2 reports lines only, so find the tag (and attribute) on its line --------
+
+
+def source_lines(path: Path) -> list[str]:
+    return read_capped(path, "xml").decode("utf-8", errors="replace").splitlines()
+
+
+def column(lines: Sequence[str], line: int | None, tag: str, attr: str | None = None) -> int | None:
+    """1-based column of ``attr=`` (else of ``<tag``) on ``line``, or None if not found there."""
+    if line is None or not 1 <= line <= len(lines):
+        return None
+    text = lines[line - 1]
+    start = text.find(f"<{tag}") if tag else 0
+    if attr:
+        m = re.compile(rf"\b{re.escape(attr)}\s*=").search(text, max(start, 0))
+        if m:
+            return m.start() + 1
+    return start + 1 if start >= 0 else None
