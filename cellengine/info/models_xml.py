@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -117,12 +117,44 @@ _PATTERNS = {
     r"[^.\s]+": "is not a name: use no dots or spaces (plans write platform.element.keypoint)",
     r"\S+": "is not a name: it must be non-empty, without spaces",
 }
-_REWRITES: list[tuple[re.Pattern[str], str]] = [
+
+
+def _pattern(m: re.Match[str]) -> str:
+    return f"'{m.group(1)}' " + _PATTERNS.get(m.group(2), f"does not match '{m.group(2)}'")
+
+
+def _one_of(text: str) -> str:
+    return ", ".join(n.strip(" '") for n in text.split(","))
+
+
+def _choices(m: re.Match[str]) -> str:
+    return f"'{m.group(1)}' is not one of {_one_of(m.group(2))}"
+
+
+def _expected(m: re.Match[str]) -> str:
+    return f"unexpected element; expected {_one_of(m.group(2))}"
+
+
+# libxml2's messages, reworded for people who write the file rather than the schema.
+_REWRITES: list[tuple[re.Pattern[str], str | Callable[[re.Match[str]], str]]] = [
+    (
+        re.compile(r"^Element '([^']+)', attribute '([^']+)': The attribute '[^']+' "),
+        r"<\1>: attribute '\2' ",
+    ),
     (re.compile(r"^Element '([^']+)', attribute '([^']+)': "), r"<\1> attribute '\2': "),
+    (re.compile(r"^Element '([^']+)': The attribute"), r"<\1>: attribute"),
     (re.compile(r"^Element '([^']+)': "), r"<\1>: "),
     (
-        re.compile(r"\[facet 'enumeration'\] The value '([^']*)' is not an element of the set "),
-        r"'\1' is not one of ",
+        re.compile(
+            r"\[facet 'pattern'\] The value '([^']*)' is not accepted by the pattern '(.*)'\."
+        ),
+        _pattern,
+    ),
+    (
+        re.compile(
+            r"\[facet 'enumeration'\] The value '([^']*)' is not an element of the set \{(.*)\}"
+        ),
+        _choices,
     ),
     (
         re.compile(
@@ -139,21 +171,12 @@ _REWRITES: list[tuple[re.Pattern[str], str]] = [
         re.compile(r"No matching global declaration available for the validation root\."),
         "this is not an element-model file; expected the root element <elements>",
     ),
-    (
-        re.compile(r"This element is not expected\. Expected is (one of )?"),
-        "unexpected element; expected ",
-    ),
+    (re.compile(r"This element is not expected\. Expected is (one of )?\( (.*) \)"), _expected),
 ]
 _ATTR = re.compile(r"^Element '([^']+)'(?:, attribute '([^']+)')?")
 
 
 def _readable(message: str) -> str:
-    m = re.search(
-        r"\[facet 'pattern'\] The value '([^']*)' is not accepted by the pattern '(.*)'\.", message
-    )
-    if m:
-        why = _PATTERNS.get(m.group(2), f"does not match '{m.group(2)}'")
-        message = message[: m.start()] + f"'{m.group(1)}' {why}"
     for pattern, repl in _REWRITES:
         message = pattern.sub(repl, message)
     return message.rstrip(".")
