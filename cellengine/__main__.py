@@ -1,0 +1,5 @@
+import sys
+
+from cellengine.cli import main
+
+sys.exit(main())

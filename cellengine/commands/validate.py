@@ -1,0 +1,168 @@
+"""`cellengine validate PATH...`: check cell, objects and plan files (or every one in folders)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from cellengine.errors import EXIT_INVALID, EXIT_OK, InputError, Problem, UsageError, display_path
+from cellengine.info.load import load_objects, load_plan, load_world
+from cellengine.info.yamlio import load_yaml
+from cellengine.world import World
+
+KINDS = ("cell", "objects", "plan")
+_KEYS = {"plan": ("steps",), "cell": ("robots",), "objects": ("cables", "containers")}
+
+
+def add_parser(sub: Any, name: str) -> None:
+    p = sub.add_parser(name, help="check cell, objects and plan files",
+                       description="Check cell, objects and plan files, or every one in folders.")
+    p.add_argument("paths", nargs="+", metavar="PATH", type=Path)
+    p.add_argument("--format", choices=("text", "json", "github"), default="text")
+    p.set_defaults(run=run)
+
+
+@dataclass
+class Result:
+    file: Path
+    kind: str | None
+    problems: list[Problem] = field(default_factory=list)
+
+
+def run(args: argparse.Namespace) -> int:
+    results = validate_paths(args.paths)
+    {"text": _text, "json": _json, "github": _github}[args.format](results)
+    return EXIT_OK if all(not r.problems for r in results) else EXIT_INVALID
+
+
+def validate_paths(paths: list[Path]) -> list[Result]:
+    files: list[tuple[Path, bool]] = []
+    for p in paths:
+        if p.is_dir():
+            files += [(f, False) for f in sorted(p.rglob("*.y*ml")) if _visible(f, p)]
+        elif p.is_file():
+            files.append((p, True))
+        else:
+            raise UsageError.at("no such file or folder", p)
+    worlds: dict[Path, World] = {}
+
+    def world_of(cell: Path) -> World:
+        key = cell.resolve()
+        if key not in worlds:
+            worlds[key] = load_world(cell)
+        return worlds[key]
+
+    results = []
+    seen: set[Path] = set()
+    for f, explicit in files:
+        if f.resolve() in seen:
+            continue
+        seen.add(f.resolve())
+        result = _validate_file(f, explicit, world_of)
+        if result is not None:
+            results.append(result)
+    return results
+
+
+def _visible(f: Path, top: Path) -> bool:
+    return f.suffix in (".yaml", ".yml") and not any(
+        part.startswith(".") for part in f.relative_to(top).parts
+    )
+
+
+def _validate_file(f: Path, explicit: bool, world_of: Any) -> Result | None:
+    try:
+        kind = classify(f)
+    except InputError as e:
+        return Result(f, None, list(e.problems))
+    if kind is None:
+        if not explicit:
+            return None  # not one of ours: other YAML may live in a folder
+        msg = ("cannot tell what this file is: a cell has 'robots', objects have 'cables' or "
+               "'containers', a plan has 'steps'")
+        return Result(f, None, [Problem(msg, str(f), 1, 1)])
+    result = Result(f, kind)
+    try:
+        if kind == "cell":
+            world_of(f)
+        elif kind == "objects":
+            load_objects(f)
+        else:
+            load_plan(f, world_of)
+    except InputError as e:
+        result.problems = _unique(e.problems)
+    return result
+
+
+def classify(f: Path) -> str | None:
+    """What a YAML file is, from its top-level keys, else from its name."""
+    data = load_yaml(f).data
+    if isinstance(data, dict):
+        for kind, keys in _KEYS.items():
+            if any(k in data for k in keys):
+                return kind
+    stem = f.stem.lower()
+    return next((k for k in KINDS if stem.startswith(k.rstrip("s"))), None)
+
+
+def _unique(problems: tuple[Problem, ...] | list[Problem]) -> list[Problem]:
+    return list(dict.fromkeys(problems))
+
+
+def _text(results: list[Result]) -> None:
+    bad = 0
+    shown: set[Problem] = set()  # a plan repeats its cell's problems: print each once
+    for r in results:
+        if r.problems:
+            bad += 1
+            for p in r.problems:
+                if p not in shown:
+                    shown.add(p)
+                    print(p)
+        else:
+            print(f"{display_path(r.file)}: ok ({r.kind})")
+    print(f"{len(results)} file(s) checked, {bad} with problems", file=sys.stderr)
+
+
+def _json(results: list[Result]) -> None:
+    out = {
+        "ok": all(not r.problems for r in results),
+        "files": [
+            {
+                "file": display_path(r.file),
+                "kind": r.kind,
+                "ok": not r.problems,
+                "problems": [
+                    {"file": display_path(p.file) if p.file else None, "line": p.line,
+                     "col": p.col, "message": p.message}
+                    for p in r.problems
+                ],
+            }
+            for r in results
+        ],
+    }
+    print(json.dumps(out, indent=2))
+
+
+def _escape(text: str, prop: bool = False) -> str:
+    text = text.replace("%", "%25").replace("\r", "%0D").replace("\n", "%0A")
+    return text.replace(":", "%3A").replace(",", "%2C") if prop else text
+
+
+def _github(results: list[Result]) -> None:
+    shown: set[Problem] = set()
+    for r in results:
+        for p in r.problems:
+            if p in shown:
+                continue
+            shown.add(p)
+            props = [f"file={_escape(display_path(p.file or r.file), True)}"]
+            if p.line is not None:
+                props.append(f"line={p.line}")
+                if p.col is not None:
+                    props.append(f"col={p.col}")
+            print(f"::error {','.join(props)}::{_escape(p.message)}")

@@ -1,0 +1,114 @@
+"""cell.yaml (DESIGN 3.1): robots, tools, platforms, obstacles, driver."""
+
+from __future__ import annotations
+
+from ipaddress import IPv4Address
+from typing import Annotated, Literal
+
+from pydantic import Field, StringConstraints, model_validator
+
+from cellengine import geometry
+from cellengine.info.units import Angle, Frozen, Length, Mass, Units, Vec3Angle, Vec3Length
+
+# Names become parts of dotted references (platform.element.keypoint): no dots, no spaces.
+Name = Annotated[str, StringConstraints(pattern=r"^[A-Za-z_][A-Za-z0-9_-]*$")]
+
+BUILTIN_ROBOTS = ("ur3e", "ur5", "ur5e", "ur10e")
+
+
+class Pose(Frozen):
+    xyz: Vec3Length = (0.0, 0.0, 0.0)
+    rpy: Vec3Angle = (0.0, 0.0, 0.0)  # URDF: R = Rz(yaw) Ry(pitch) Rx(roll)
+
+    def matrix(self) -> geometry.Mat:
+        return geometry.pose(self.xyz, self.rpy)
+
+
+class UrdfModel(Frozen):
+    urdf: str  # path inside the cell folder
+    tip: str  # the flange link
+
+
+class Robot(Frozen):
+    model: str | UrdfModel
+    base: Pose = Pose()  # controller base frame in the cell frame
+    tool: str | None = None
+    home: tuple[Angle, ...] | None = None
+
+
+class Tool(Frozen):
+    kind: Literal["parallel_gripper"]
+    tcp: Pose = Pose()  # fingertip centre in the flange frame
+    finger_width: Length | None = Field(None, gt=0)
+    finger_thickness: Length | None = Field(None, gt=0)
+    jaw: dict[Name, Annotated[Length, Field(ge=0)]] = {}
+    mass: Mass | None = Field(None, ge=0)
+
+
+class PlatformSpec(Frozen):
+    pose: Pose = Pose()
+    format: Literal["x3d", "remodel"] = "x3d"
+    cad: str
+    models: str
+    map: str | None = None  # x3d: the mapping CSV
+    ids: str | None = None  # remodel: the *_ids.wri file
+    up: Literal["y", "z"] = "y"
+
+    @model_validator(mode="after")
+    def _files_for_format(self) -> PlatformSpec:
+        need, other = ("map", "ids") if self.format == "x3d" else ("ids", "map")
+        if getattr(self, need) is None:
+            raise ValueError(f"format '{self.format}' needs '{need}'")
+        if getattr(self, other) is not None:
+            raise ValueError(f"'{other}' is not used by format '{self.format}'; remove it")
+        return self
+
+
+class Cylinder(Frozen):
+    radius: Length = Field(gt=0)
+    length: Length = Field(gt=0)
+
+
+class Sphere(Frozen):
+    radius: Length = Field(gt=0)
+
+
+class Obstacle(Frozen):
+    box: Vec3Length | None = None
+    cylinder: Cylinder | None = None
+    sphere: Sphere | None = None
+    pose: Pose = Pose()
+
+    @model_validator(mode="after")
+    def _one_shape(self) -> Obstacle:
+        given = [k for k in ("box", "cylinder", "sphere") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError(
+                "give exactly one shape of box, cylinder, sphere"
+                + (f" (got {', '.join(given)})" if given else "")
+            )
+        if self.box is not None and min(self.box) <= 0:
+            raise ValueError("box sizes must be greater than 0")
+        return self
+
+
+class SimDriver(Frozen):
+    kind: Literal["sim"]
+
+
+class UrRtdeDriver(Frozen):
+    kind: Literal["ur_rtde"]
+    arms: dict[Name, IPv4Address]
+
+
+Driver = Annotated[SimDriver | UrRtdeDriver, Field(discriminator="kind")]
+
+
+class Cell(Frozen):
+    name: Name
+    units: Units = Units()
+    robots: dict[Name, Robot] = Field(min_length=1)
+    tools: dict[Name, Tool] = {}
+    platforms: dict[Name, PlatformSpec] = {}
+    obstacles: dict[Name, Obstacle] = {}
+    driver: Driver = SimDriver(kind="sim")

@@ -1,0 +1,172 @@
+"""Loading a cell, its objects and a plan into a checked World and Plan.
+
+Every problem found in one file is reported together; a file that fails stops what
+depends on it (a plan is not checked against a cell that did not load).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+from cellengine.errors import InputError, Problem, known
+from cellengine.info.cell import BUILTIN_ROBOTS, Cell, PlatformSpec, UrdfModel
+from cellengine.info.files import resolve_inside
+from cellengine.info.objects import Objects
+from cellengine.info.plan import Plan, parse_plan
+from cellengine.info.platform import Platform
+from cellengine.info.units import Units
+from cellengine.info.validation import dotted, validate
+from cellengine.info.yamlio import YamlDoc, load_yaml
+from cellengine.world import RefError, World
+
+UR_JOINTS = 6
+
+
+def _units(doc: YamlDoc) -> Units:
+    if isinstance(doc.data, dict) and "units" in doc.data:
+        return validate(Units, doc, data=doc.data["units"], prefix=("units",))
+    return Units()
+
+
+def _require_mapping(doc: YamlDoc, what: str) -> None:
+    if not isinstance(doc.data, dict):
+        raise InputError.at(f"a {what} file must be a mapping of keys", doc.file, 1, 1)
+
+
+def load_cell(path: Path) -> tuple[Cell, YamlDoc]:
+    doc = load_yaml(path)
+    _require_mapping(doc, "cell")
+    cell = validate(Cell, doc, _units(doc).context())
+    problems = _check_cell(cell, doc)
+    if problems:
+        raise InputError(problems)
+    return cell, doc
+
+
+def _check_cell(cell: Cell, doc: YamlDoc) -> list[Problem]:
+    out: list[Problem] = []
+
+    def err(message: str, *loc: str | int) -> None:
+        out.append(doc.error(message, loc).problems[0])
+
+    for name, robot in cell.robots.items():
+        if robot.tool is not None and robot.tool not in cell.tools:
+            err(f"robots.{name}.tool: unknown tool '{robot.tool}'" + known(cell.tools),
+                "robots", name, "tool")
+        if isinstance(robot.model, UrdfModel):
+            urdf = ("robots", name, "model", "urdf")
+            try:
+                resolve_inside(doc.file.parent, robot.model.urdf, doc.file, *_at(doc, urdf))
+            except InputError as e:
+                out.extend(e.problems)
+        elif robot.model not in BUILTIN_ROBOTS:
+            err(f"robots.{name}.model: unknown robot model '{robot.model}'"
+                + known(BUILTIN_ROBOTS) + "; or give {urdf: path, tip: link}",
+                "robots", name, "model")
+        elif robot.home is not None and len(robot.home) != UR_JOINTS:
+            err(f"robots.{name}.home: a {robot.model} has {UR_JOINTS} joints, got "
+                f"{len(robot.home)} angles", "robots", name, "home")
+    driver = cell.driver
+    if driver.kind == "ur_rtde":
+        for arm in driver.arms:
+            if arm not in cell.robots:
+                err(f"driver.arms.{arm}: unknown robot '{arm}'" + known(cell.robots),
+                    "driver", "arms", arm)
+        for name in cell.robots:
+            if name not in driver.arms:
+                err(f"driver.arms: no address for robot '{name}'", "driver", "arms")
+    return out
+
+
+def _at(doc: YamlDoc, loc: tuple[str | int, ...]) -> tuple[int | None, int | None]:
+    pos = doc.where(loc)
+    return pos if pos else (None, None)
+
+
+def load_platform(name: str, spec: PlatformSpec, doc: YamlDoc) -> Platform:
+    root = doc.file.parent
+
+    def ref(key: str) -> Path:
+        value = getattr(spec, key)
+        return resolve_inside(root, value, doc.file, *_at(doc, ("platforms", name, key)))
+
+    T = spec.pose.matrix()
+    if spec.format == "remodel":
+        from cellengine.info.remodel import load_remodel_platform
+
+        return load_remodel_platform(name, T, ref("cad"), ref("ids"), ref("models"), root, spec.up)
+    from cellengine.info.native import load_native_platform
+
+    return load_native_platform(name, T, ref("cad"), ref("models"), ref("map"), root, spec.up)
+
+
+def load_objects(path: Path) -> Objects:
+    doc = load_yaml(path)
+    _require_mapping(doc, "objects")
+    return validate(Objects, doc, _units(doc).context())
+
+
+def load_world(cell_path: Path, objects_path: Path | None = None) -> World:
+    cell, doc = load_cell(cell_path)
+    platforms: dict[str, Platform] = {}
+    problems: list[Problem] = []
+    for name, spec in cell.platforms.items():
+        try:
+            platforms[name] = load_platform(name, spec, doc)
+        except InputError as e:
+            problems.extend(e.problems)
+    objects = Objects()
+    if objects_path is not None:
+        try:
+            objects = load_objects(objects_path)
+        except InputError as e:
+            problems.extend(e.problems)
+    if problems:
+        raise InputError(problems)
+    return World(cell, cell_path, platforms, objects)
+
+
+@dataclass(frozen=True)
+class LoadedPlan:
+    plan: Plan
+    world: World
+
+
+def load_plan(path: Path, load_cell_world: Callable[[Path], World] | None = None) -> LoadedPlan:
+    """Load a plan, its cell and objects. ``load_cell_world`` lets a caller reuse worlds
+    already loaded (validating a folder loads each cell once)."""
+    doc = load_yaml(path)
+    _require_mapping(doc, "plan")
+    plan = parse_plan(doc)
+    root = path.parent
+    cell_path = resolve_inside(root, plan.cell, path, *_at(doc, ("cell",)))
+    objects_path = None
+    if plan.objects is not None:
+        objects_path = resolve_inside(root, plan.objects, path, *_at(doc, ("objects",)))
+    world = (load_cell_world or load_world)(cell_path)
+    if objects_path is not None:
+        world = replace(world, objects=load_objects(objects_path))
+    problems = check_plan(plan, world, doc)
+    if problems:
+        raise InputError(problems)
+    return LoadedPlan(plan, world)
+
+
+def check_plan(plan: Plan, world: World, doc: YamlDoc) -> list[Problem]:
+    """Every name in every step resolves in the world."""
+    out: list[Problem] = []
+    arms = [*world.cell.robots, "both", "auto"]
+    for i, step in enumerate(plan.steps):
+        if step.arm not in arms:
+            msg = f"steps[{i}].arm: unknown arm '{step.arm}'" + known(arms)
+            out.append(doc.error(msg, ("steps", i, "arm")).problems[0])
+        for loc, kind, name in step.refs():
+            try:
+                world.check(kind, name)
+            except RefError as e:
+                where: tuple[Any, ...] = ("steps", i, *loc)
+                out.append(doc.error(f"{dotted(where)}: {e}", where).problems[0])
+    return out

@@ -1,0 +1,49 @@
+"""objects.yaml (DESIGN 3.3): cables and containers."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field
+
+from cellengine.info.cell import Name
+from cellengine.info.units import Frozen, Length, Mass, Number, Units
+
+
+class Connector(Frozen):
+    type: str
+    length: Length = Field(gt=0)
+    width: Length = Field(gt=0)
+    height: Length = Field(gt=0)
+
+
+class Cable(Frozen):
+    length: Length = Field(gt=0)
+    diameter: Length = Field(gt=0)
+    color: str | None = None
+    connector: Connector | None = None
+    mass: Mass | None = Field(None, ge=0)
+
+
+class Cap(Frozen):
+    kind: Literal["screw"]
+    pitch: Length = Field(gt=0)
+    turns: Number = Field(gt=0)
+
+
+class Container(Frozen):
+    kind: Literal["vial", "beaker", "bottle", "box"]
+    diameter: Length | None = Field(None, gt=0)
+    size: tuple[Length, Length, Length] | None = None  # boxes: x, y, z
+    height: Length | None = Field(None, gt=0)
+    mass: Mass | None = Field(None, ge=0)
+    cap: Cap | None = None
+
+
+class Objects(Frozen):
+    units: Units = Units()
+    cables: dict[Name, Cable] = {}
+    containers: dict[Name, Container] = {}
+
+    def names(self) -> list[str]:
+        return [*self.cables, *self.containers]

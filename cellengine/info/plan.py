@@ -1,0 +1,106 @@
+"""plan.yaml (DESIGN 3.4): a sequence (or precedence graph) of skill steps."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import Field
+
+from cellengine.errors import InputError, Problem, known
+from cellengine.info.units import Frozen, Units
+from cellengine.info.validation import validate
+from cellengine.info.yamlio import YamlDoc
+from cellengine.skill import Skill, registry
+
+
+class PlanFile(Frozen):
+    cell: str = "cell.yaml"
+    objects: str | None = None
+    execution: Literal["split", "sync", "async"] = "split"
+    units: Units = Units()
+    steps: list[dict[str, Any]] = Field(min_length=1)
+
+
+@dataclass(frozen=True)
+class Plan:
+    file: Path
+    cell: str
+    objects: str | None
+    execution: str
+    steps: tuple[Skill, ...]
+
+
+def parse_plan(doc: YamlDoc) -> Plan:
+    head = validate(PlanFile, doc)
+    context = head.units.context()
+    problems: list[Problem] = []
+    steps: list[Skill] = []
+    skills = registry()
+    for i, raw in enumerate(head.steps):
+        name = raw.get("skill")
+        if name not in skills:
+            what = "missing required key 'skill'" if name is None else f"unknown skill '{name}'"
+            loc = ("steps", i) if name is None else ("steps", i, "skill")
+            problems.append(doc.error(f"steps[{i}]: {what}" + known(skills), loc).problems[0])
+            continue
+        try:
+            steps.append(validate(skills[name], doc, context, data=raw, prefix=("steps", i)))
+        except InputError as e:
+            problems.extend(e.problems)
+    if problems:
+        raise InputError(problems)
+    problems = _check_graph(doc, steps)
+    if problems:
+        raise InputError(problems)
+    return Plan(doc.file, head.cell, head.objects, head.execution, tuple(steps))
+
+
+def _check_graph(doc: YamlDoc, steps: list[Skill]) -> list[Problem]:
+    """Step ids unique, `after` names known ids, and no cycles."""
+    out: list[Problem] = []
+    first: dict[str, int] = {}
+    for i, s in enumerate(steps):
+        if s.id is None:
+            continue
+        if s.id in first:
+            msg = f"steps[{i}].id: duplicate step id '{s.id}' (first used by steps[{first[s.id]}])"
+            out.append(doc.error(msg, ("steps", i, "id")).problems[0])
+        else:
+            first[s.id] = i
+    for i, s in enumerate(steps):
+        for j, dep in enumerate(s.after):
+            if dep not in first:
+                msg = f"steps[{i}].after[{j}]: unknown step id '{dep}'" + known(first)
+                out.append(doc.error(msg, ("steps", i, "after", j)).problems[0])
+    if out:
+        return out
+    cycle = _find_cycle({s.id: s.after for s in steps if s.id is not None})
+    if cycle:
+        i = first[cycle[0]]
+        msg = f"steps[{i}].after: steps wait for each other in a cycle: " + " -> ".join(cycle)
+        out.append(doc.error(msg, ("steps", i, "after")).problems[0])
+    return out
+
+
+def _find_cycle(graph: dict[str, tuple[str, ...]]) -> list[str] | None:
+    state: dict[str, int] = {}  # 1 on the stack, 2 done
+    stack: list[str] = []
+
+    def visit(n: str) -> list[str] | None:
+        state[n] = 1
+        stack.append(n)
+        for m in graph.get(n, ()):
+            if state.get(m) == 1:
+                return [*stack[stack.index(m):], m]
+            if m not in state and (found := visit(m)):
+                return found
+        stack.pop()
+        state[n] = 2
+        return None
+
+    for n in graph:
+        if n not in state and (found := visit(n)):
+            return found
+    return None

@@ -1,0 +1,153 @@
+"""Pydantic validation of a loaded YAML file, with errors turned into problems at
+file:line:col that name the path to the bad value and, where they can, the valid choices."""
+
+from __future__ import annotations
+
+import types
+import typing
+from typing import Any, TypeVar
+
+from pydantic import BaseModel, ValidationError
+from pydantic_core import ErrorDetails
+
+from cellengine.errors import InputError, Problem, known
+from cellengine.info.yamlio import Loc, YamlDoc
+
+M = TypeVar("M", bound=BaseModel)
+
+
+def validate(cls: type[M], doc: YamlDoc, context: dict[str, Any] | None = None,
+             data: Any = None, prefix: Loc = ()) -> M:
+    """Validate ``data`` (default: the whole document) found at ``prefix`` in ``doc``."""
+    value = doc.data if data is None else data
+    if value is None:
+        value = {}
+    try:
+        return cls.model_validate(value, context=context)
+    except ValidationError as e:
+        raise InputError([problem(doc, cls, err, prefix) for err in e.errors()]) from None
+
+
+def dotted(loc: Loc) -> str:
+    out = ""
+    for part in loc:
+        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+    return out
+
+
+def problem(doc: YamlDoc, cls: type[BaseModel], err: ErrorDetails, prefix: Loc = ()) -> Problem:
+    """One pydantic error as a Problem at the place the value (or key) was written."""
+    path, on_key = _data_path(doc.data, prefix, err["loc"])
+    kind = err["type"]
+    here = dotted(path)
+    if kind in ("missing", "extra_forbidden"):
+        parent, name = path[:-1], path[-1] if path else "?"
+        where = doc.where(parent if kind == "missing" else path, key=kind != "missing")
+        if kind == "missing":
+            msg = f"missing required key '{name}'"
+        else:
+            fields = _fields_at(cls, path[len(prefix):-1])
+            msg = f"unknown key '{name}'" + (known(fields) if fields is not None else "")
+        loc_text = dotted(parent)
+        message = f"{loc_text}: {msg}" if loc_text else msg
+    else:
+        where = doc.where(path, key=on_key)
+        message = f"{here}: {_describe(err, on_key)}" if here else _describe(err, on_key)
+    line, col = where or (None, None)
+    return Problem(message, str(doc.file), line, col)
+
+
+def _describe(err: ErrorDetails, on_key: bool) -> str:
+    kind, ctx, value = err["type"], err.get("ctx") or {}, err.get("input")
+    if kind == "union_tag_invalid":
+        tags = [t.strip(" '") for t in str(ctx.get("expected_tags", "")).split(",")]
+        return f"unknown {str(ctx.get('discriminator')).strip(chr(39))} '{ctx.get('tag')}'" + known(
+            tags
+        )
+    if kind == "union_tag_not_found":
+        return f"missing required key {ctx.get('discriminator')}"
+    if kind == "string_pattern_mismatch":
+        what = f"'{value}' is not a valid name" if isinstance(value, str) else "not a valid name"
+        return f"{what}: use letters, digits, '_' and '-', starting with a letter or '_'"
+    msg = err["msg"].removeprefix("Value error, ")
+    msg = msg.replace("Input should be", "must be").replace("Input is", "is")
+    if kind in ("literal_error", "enum") or kind.endswith("_type") or kind.endswith("_parsing"):
+        msg += f", got {_show(value)}"
+    return msg
+
+
+def _show(value: Any) -> str:
+    if isinstance(value, dict):
+        return "a mapping"
+    if isinstance(value, list):
+        return "a list"
+    return repr(value) if isinstance(value, str) else str(value)
+
+
+def _data_path(data: Any, prefix: Loc, loc: tuple[int | str, ...]) -> tuple[Loc, bool]:
+    """Follow pydantic's loc through the data; skip parts that are not in the data
+    (union tags, '[key]'). The second result says whether the error is about a key."""
+    path: list[str | int] = list(prefix)
+    node, on_key = data, False
+    for part in loc:
+        if part == "[key]":
+            on_key = True
+        elif isinstance(node, dict) and part in node:
+            node = node[part]
+            path.append(part)
+        elif isinstance(node, list) and isinstance(part, int) and 0 <= part < len(node):
+            node = node[part]
+            path.append(part)
+        elif isinstance(node, dict) and isinstance(part, str) and _is_field_name(part):
+            path.append(part)  # a missing or extra key
+            node = None
+    return tuple(path), on_key
+
+
+def _is_field_name(part: str) -> bool:
+    # pydantic inserts union member names such as 'function-after[...]' or class names
+    return not any(c in part for c in "[]()") and not part[:1].isupper()
+
+
+def _fields_at(cls: Any, path: Loc) -> list[str] | None:
+    """The keys a model accepts at ``path`` (relative to ``cls``), or None if unknown."""
+    node: Any = cls
+    for part in path:
+        node = _step(node, part)
+        if node is None:
+            return None
+    model = _model_in(node)
+    return [f.alias or n for n, f in model.model_fields.items()] if model else None
+
+
+def _step(tp: Any, part: str | int) -> Any:
+    model = _model_in(tp, part)
+    if model is not None and isinstance(part, str):
+        for name, field in model.model_fields.items():
+            if part in (name, field.alias):
+                return field.annotation
+        return None
+    origin, args = typing.get_origin(tp), typing.get_args(tp)
+    if origin is typing.Annotated:
+        return _step(args[0], part)
+    if origin is dict:
+        return args[1]
+    if origin in (list, tuple) and args:
+        return args[0] if origin is list or args[-1] is Ellipsis else args[min(int(part), len(args) - 1)]
+    return None
+
+
+def _model_in(tp: Any, field: str | int | None = None) -> type[BaseModel] | None:
+    """The model class ``tp`` is, or the first union member model with ``field``."""
+    if isinstance(tp, type) and issubclass(tp, BaseModel):
+        return tp
+    origin, args = typing.get_origin(tp), typing.get_args(tp)
+    if origin is typing.Annotated:
+        return _model_in(args[0], field)
+    if origin is typing.Union or origin is types.UnionType:
+        models = [a for a in args if isinstance(a, type) and issubclass(a, BaseModel)]
+        for m in models:
+            if field is None or field in m.model_fields:
+                return m
+        return models[0] if models else None
+    return None

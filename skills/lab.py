@@ -1,0 +1,59 @@
+"""Lab-automation skills (the cooperative lab platform). Parameters now; motion in #5."""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+from pydantic import Field
+
+from cellengine.info.units import Angle, Number
+from cellengine.skill import KeypointRef, ObjectRef, Skill, register
+
+
+@register
+class Pick(Skill):
+    skill: Literal["Pick"]
+    object: ObjectRef
+    from_: KeypointRef | None = Field(None, alias="from")  # default: where the object is
+
+
+@register
+class Place(Skill):
+    skill: Literal["Place"]
+    object: ObjectRef
+    to: KeypointRef
+
+
+@register
+class Handover(Skill):
+    """One arm puts the object at a shared keypoint; the other picks it up there."""
+
+    skill: Literal["Handover"]
+    object: ObjectRef
+    at: KeypointRef | None = None  # default: the allocator's handover keypoint
+
+
+@register
+class Unscrew(Skill):
+    """One arm holds the container, the other turns its cap off."""
+
+    skill: Literal["Unscrew"]
+    object: ObjectRef
+    turns: Number | None = Field(None, gt=0)  # default: the cap's turns
+
+
+@register
+class Weigh(Skill):
+    skill: Literal["Weigh"]
+    object: ObjectRef
+
+
+@register
+class Pour(Skill):
+    """Tilt an open container over a target and back."""
+
+    skill: Literal["Pour"]
+    object: ObjectRef
+    into: ObjectRef
+    angle: Angle = Field(math.radians(100.0), gt=0, le=math.pi)
