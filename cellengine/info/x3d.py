@@ -1,0 +1,651 @@
+"""X3D (XML encoding) loader: the named frames and meshes of a CAD assembly, in metres, z-up.
+
+A Transform is composed per ISO/IEC 19775-1 (10.4.4):
+P' = T·C·R·SR·S·SR⁻¹·C⁻¹·P. A named node's frame is rigid (DESIGN 3.2): its origin is where
+the full affine chain maps the node's origin, its orientation the product of the chain's
+``rotation`` fields only. Scale moves children and sizes geometry; it shows up in the meshes,
+which are expressed in the rigid node frame.
+
+Input is untrusted: nothing is fetched, Inline files must lie inside the cell folder, and
+DEF/USE or Inline repetition is capped so a small file cannot expand without bound.
+"""
+
+from __future__ import annotations
+
+import difflib
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from types import MappingProxyType
+from typing import Literal
+
+import numpy as np
+import trimesh
+from lxml import etree
+from numpy.typing import NDArray
+
+from cellengine.errors import CellError, InputError, display_path
+from cellengine.geometry import Mat, axis_angle_to_matrix, inverse, rot_x, transform
+from cellengine.info.files import resolve_inside
+from cellengine.info.xmlsafe import parse_xml
+
+Ints = NDArray[np.int64]
+
+MAX_INLINE_DEPTH = 8
+MAX_NESTING = 200  # keeps recursion far below Python's limit, even through Inlines
+MAX_VISITS = 1_000_000  # elements visited, counting every USE instance
+MAX_TRIANGLES = 5_000_000
+
+GROUPS = ("Anchor", "Collision", "Group", "StaticGroup", "Switch", "Transform")
+GEOMETRY = (
+    "Box",
+    "Cone",
+    "Cylinder",
+    "IndexedFaceSet",
+    "IndexedTriangleSet",
+    "Sphere",
+    "TriangleSet",
+)
+# Geometry without a surface (FreeCAD exports edges and vertices): nothing to collide with.
+NO_SURFACE = ("IndexedLineSet", "LineSet", "PointSet")
+COORDINATES = ("Coordinate", "CoordinateDouble")
+_KNOWN = (*GROUPS, *GEOMETRY, *NO_SURFACE, *COORDINATES, "Shape", "Inline", "Scene", "X3D")
+_CANON = {t.lower(): t for t in _KNOWN}  # FreeCAD writes <x3d> and <scene>
+_CONTENT = frozenset((*GROUPS, "Shape", "Inline"))
+
+_URL = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*:")
+_DRIVE = re.compile(r"^[A-Za-z]:[\\/]")
+_QUOTED = re.compile(r'"((?:[^"\\]|\\.)*)"')
+
+
+def _affine(L: Mat, t: Mat) -> Mat:
+    T = np.eye(4)
+    T[:3, :3] = L
+    T[:3, 3] = t
+    return T
+
+
+_ZERO3 = np.zeros(3)
+_ONE3 = np.ones(3)
+_NO_ROTATION = np.array([0.0, 0.0, 1.0, 0.0])
+_Y_UP = _affine(rot_x(np.pi / 2), _ZERO3)  # T_platform_scene: x3d y (up) -> z, z -> -y
+_SECTIONS = 32  # around cylinders and cones: a multiple of 4, so extents are exact
+
+
+@dataclass(frozen=True)
+class X3DNode:
+    name: str  # its DEF (or `id`, as FreeCAD writes)
+    file: str  # the file it was defined in (an Inline'd file for inlined nodes)
+    line: int  # source line of its element
+    T_scene_node: Mat  # 4x4 rigid transform, metres, in the z-up platform frame
+    mesh: trimesh.Trimesh | None  # this node's own geometry, in the node frame, metres
+
+
+@dataclass(frozen=True)
+class X3DScene:
+    file: str
+    nodes: Mapping[str, X3DNode]  # every DEF'd/id'd Transform or Group, document order
+    mesh: trimesh.Trimesh | None = None  # geometry under no named node, in the platform frame
+
+
+def load_x3d(
+    path: Path, root: Path, up: Literal["y", "z"] = "y", *, meshes: bool = True
+) -> X3DScene:
+    """Load ``path``; Inline urls must resolve inside ``root`` (the cell folder).
+
+    ``up="y"`` (X3D's convention) turns the scene +90° about x into the z-up platform
+    frame; ``up="z"`` leaves it as it is. ``meshes=False`` reads poses only: geometry is
+    neither parsed nor checked, so a damaged mesh cannot stop the poses from loading.
+    """
+    if up not in ("y", "z"):
+        raise ValueError(f"up must be 'y' or 'z', got {up!r}")
+    loader = _Loader(Path(root).resolve(), meshes)
+    top = loader.open(Path(path), ())
+    T = _Y_UP if up == "y" else np.eye(4)
+    ctx = _Ctx(top, T, T[:3, :3].copy(), None, False, 0)
+    for child in _children(top.scene):
+        loader.visit(child, ctx)
+    nodes = {o.name: o.node() for o in loader.owners.values()}
+    return X3DScene(str(path), MappingProxyType(nodes), _mesh(loader.loose.parts))
+
+
+# --- traversal -------------------------------------------------------------------------------
+
+
+@dataclass
+class _File:
+    name: str  # as reported in errors and in X3DNode.file
+    scene: etree._Element
+    defs: dict[str, etree._Element]  # DEF and id names; USE looks up only its own file
+    chain: tuple[Path, ...]  # resolved files of the Inline chain down to this one
+
+
+@dataclass
+class _Owner:
+    """A named node collecting the geometry of the shapes it owns."""
+
+    name: str
+    file: str
+    line: int
+    T: Mat  # rigid platform <- node
+    T_inv: Mat
+    parts: list[tuple[Mat, Ints]] = field(default_factory=list)
+
+    def node(self) -> X3DNode:
+        T = self.T.copy()
+        T.setflags(write=False)
+        return X3DNode(self.name, self.file, self.line, T, _mesh(self.parts))
+
+
+@dataclass(frozen=True)
+class _Ctx:
+    file: _File
+    A: Mat  # affine platform <- current element (the full chain, scale included)
+    R: Mat  # product of the chain's rotations: the orientation of a rigid frame here
+    owner: _Owner | None  # nearest named ancestor
+    instancing: bool  # inside a USE: geometry again, but no new names
+    depth: int
+
+
+class _Loader:
+    def __init__(self, root: Path, meshes: bool) -> None:
+        self.root = root
+        self.meshes = meshes
+        self.owners: dict[str, _Owner] = {}
+        self.loose = _Owner("", "", 0, np.eye(4), np.eye(4))
+        self.active: set[etree._Element] = set()  # elements being visited: USE cycles
+        self.cache: dict[etree._Element, tuple[Mat, Ints]] = {}  # geometry, local frame
+        self.points: dict[etree._Element, Mat] = {}  # Coordinate nodes, often USE'd
+        self.visits = 0
+        self.triangles = 0
+
+    # files
+
+    def open(self, path: Path, chain: tuple[Path, ...]) -> _File:
+        name = str(path)
+        root_el = parse_xml(path, kind="x3d").getroot()
+        if _tag(root_el) != "X3D":
+            raise InputError.at(
+                f"the root element must be X3D, got '{root_el.tag}'", name, root_el.sourceline
+            )
+        scene = next((c for c in root_el if _tag(c) == "Scene"), None)
+        if scene is None:
+            raise InputError.at("X3D has no Scene element", name, root_el.sourceline)
+        return _File(name, scene, _definitions(scene, name), (*chain, path.resolve()))
+
+    # elements
+
+    def visit(self, el: etree._Element, ctx: _Ctx) -> None:
+        tag = _tag(el)
+        if tag is None:
+            return
+        self._count(el, ctx)
+        use = el.get("USE")
+        if use is not None:
+            el = self._use(el, tag, use, ctx.file)
+            ctx = replace(ctx, instancing=True)
+        if tag in GROUPS or tag in ("Shape", "Inline"):
+            self.active.add(el)
+            try:
+                self._dispatch(el, tag, replace(ctx, depth=ctx.depth + 1))
+            finally:
+                self.active.discard(el)
+        elif any(_tag(d) in _CONTENT for d in el.iter(etree.Element)):
+            raise InputError.at(
+                f"unsupported node '{tag}' around geometry; supported grouping nodes: "
+                + ", ".join(GROUPS),
+                ctx.file.name,
+                el.sourceline,
+            )
+        # anything else (head, Viewpoint, lights, Background, ...) has no geometry: ignored
+
+    def _dispatch(self, el: etree._Element, tag: str, ctx: _Ctx) -> None:
+        if tag == "Shape":
+            if self.meshes:
+                self._shape(el, ctx)
+        elif tag == "Inline":
+            self._inline(el, ctx)
+        else:
+            self._group(el, tag, ctx)
+
+    def _count(self, el: etree._Element, ctx: _Ctx) -> None:
+        self.visits += 1
+        if self.visits > MAX_VISITS:
+            raise InputError.at(
+                f"the scene expands to more than {MAX_VISITS} nodes "
+                "(DEF/USE or Inline repeated too often)",
+                ctx.file.name,
+                el.sourceline,
+            )
+        if ctx.depth >= MAX_NESTING:
+            raise InputError.at(
+                f"nodes nest more than {MAX_NESTING} levels deep", ctx.file.name, el.sourceline
+            )
+
+    def _use(self, el: etree._Element, tag: str, use: str, file: _File) -> etree._Element:
+        target = file.defs.get(use)
+        if target is None:
+            close = difflib.get_close_matches(use, list(file.defs), n=1)
+            hint = f"; did you mean '{close[0]}'?" if close else ""
+            raise InputError.at(
+                f"USE '{use}' names no DEF or id in this file{hint}", file.name, el.sourceline
+            )
+        if _tag(target) != tag:
+            raise InputError.at(
+                f"{tag} USE '{use}' names a {_tag(target)} (line {target.sourceline})",
+                file.name,
+                el.sourceline,
+            )
+        if target in self.active:
+            raise InputError.at(
+                f"USE '{use}' is inside the node it names (line {target.sourceline})",
+                file.name,
+                el.sourceline,
+            )
+        return target
+
+    def _group(self, el: etree._Element, tag: str, ctx: _Ctx) -> None:
+        if tag == "Transform":
+            M, R = _transform_fields(el, ctx.file.name)
+            ctx = replace(ctx, A=ctx.A @ M, R=ctx.R @ R)
+        name = _name(el)
+        if name is not None and not ctx.instancing:
+            ctx = replace(ctx, owner=self._define(name, el, ctx))
+        children = _children(el)
+        if tag == "Switch":
+            children = _chosen(el, children, ctx.file.name)
+        for child in children:
+            self.visit(child, ctx)
+
+    def _define(self, name: str, el: etree._Element, ctx: _Ctx) -> _Owner:
+        first = self.owners.get(name)
+        if first is not None:
+            raise InputError.at(
+                f"duplicate name '{name}' (first defined at "
+                f"{display_path(first.file)}:{first.line})",
+                ctx.file.name,
+                el.sourceline,
+            )
+        T = _affine(ctx.R, ctx.A[:3, 3])
+        owner = _Owner(name, ctx.file.name, el.sourceline or 0, T, inverse(T))
+        self.owners[name] = owner
+        return owner
+
+    def _inline(self, el: etree._Element, ctx: _Ctx) -> None:
+        path = self._inline_path(el, ctx.file)
+        if path.resolve() in ctx.file.chain:
+            loop = " -> ".join(display_path(p) for p in (*ctx.file.chain, path))
+            raise InputError.at(
+                f"Inline '{display_path(path)}' includes itself ({loop})",
+                ctx.file.name,
+                el.sourceline,
+            )
+        if len(ctx.file.chain) > MAX_INLINE_DEPTH:
+            raise InputError.at(
+                f"Inline '{display_path(path)}' nests files more than {MAX_INLINE_DEPTH} deep",
+                ctx.file.name,
+                el.sourceline,
+            )
+        inlined = self.open(path, ctx.file.chain)
+        ctx = replace(ctx, file=inlined)
+        for child in _children(inlined.scene):
+            self.visit(child, ctx)
+
+    def _inline_path(self, el: etree._Element, file: _File) -> Path:
+        """The first of the Inline's urls that exists. Urls are relative to the file that
+        names them, as in X3D, and must stay inside the cell folder."""
+        line = el.sourceline
+        urls = _mfstring(el.get("url", ""))
+        if not urls:
+            raise InputError.at("Inline has no url", file.name, line)
+        base = file.chain[-1].parent
+        targets = []
+        for url in urls:
+            if _URL.match(url) and not _DRIVE.match(url):
+                raise InputError.at(
+                    f"Inline url '{url}' is a URL; only files inside the cell folder "
+                    f"{self.root} are allowed",
+                    file.name,
+                    line,
+                )
+            target = (base / url).resolve()
+            if not target.is_relative_to(self.root):
+                raise InputError.at(
+                    f"Inline url '{url}' points outside the cell folder {self.root}",
+                    file.name,
+                    line,
+                )
+            targets.append(target)
+        found = next((t for t in targets if t.is_file()), targets[0])
+        return resolve_inside(self.root, str(found.relative_to(self.root)), file.name, line)
+
+    def _shape(self, el: etree._Element, ctx: _Ctx) -> None:
+        for child in el:
+            tag = _tag(child)
+            if tag is None or tag == "Appearance" or tag.startswith("Metadata"):
+                continue
+            if tag in NO_SURFACE:
+                continue
+            if tag not in GEOMETRY:
+                raise InputError.at(
+                    f"unsupported geometry node '{tag}'; supported: " + ", ".join(GEOMETRY),
+                    ctx.file.name,
+                    child.sourceline,
+                )
+            use = child.get("USE")
+            geom = self._use(child, tag, use, ctx.file) if use is not None else child
+            self._add(*self._geometry(geom, tag, ctx.file), ctx, child)
+
+    def _geometry(self, el: etree._Element, tag: str, file: _File) -> tuple[Mat, Ints]:
+        cached = self.cache.get(el)
+        if cached is None:
+            cached = _BUILDERS[tag](el, file, self)
+            self.cache[el] = cached
+        return cached
+
+    def coordinates(self, el: etree._Element, file: _File) -> Mat:
+        """The points of the Coordinate child of a geometry node."""
+        coord = next((c for c in el if _tag(c) in COORDINATES), None)
+        if coord is None:
+            raise InputError.at(f"{_label(el)}: no Coordinate child", file.name, el.sourceline)
+        use = coord.get("USE")
+        if use is not None:
+            coord = self._use(coord, str(_tag(coord)), use, file)
+        pts = self.points.get(coord)
+        if pts is None:
+            pts = self.points[coord] = _points(coord, "point", file.name)
+        return pts
+
+    def _add(self, V: Mat, F: Ints, ctx: _Ctx, el: etree._Element) -> None:
+        if len(F) == 0:
+            return
+        self.triangles += len(F)
+        if self.triangles > MAX_TRIANGLES:
+            raise InputError.at(
+                f"the scene has more than {MAX_TRIANGLES} triangles", ctx.file.name, el.sourceline
+            )
+        owner = ctx.owner or self.loose
+        M = owner.T_inv @ ctx.A  # shape frame -> the owner's rigid frame
+        owner.parts.append((V @ M[:3, :3].T + M[:3, 3], F))
+
+
+# --- elements and fields ---------------------------------------------------------------------
+
+
+def _tag(el: etree._Element) -> str | None:
+    """The canonical X3D name of an element, or None for comments and processing instructions."""
+    tag = el.tag
+    if not isinstance(tag, str):
+        return None
+    if tag[0] == "{":
+        tag = tag.split("}", 1)[1]
+    return _CANON.get(tag.lower(), tag)
+
+
+def _name(el: etree._Element) -> str | None:
+    name: str | None = el.get("DEF") or el.get("id")
+    return name
+
+
+def _label(el: etree._Element) -> str:
+    name = _name(el)
+    return f"{_tag(el)} '{name}'" if name else str(_tag(el))
+
+
+def _definitions(scene: etree._Element, file: str) -> dict[str, etree._Element]:
+    defs: dict[str, etree._Element] = {}
+    for el in scene.iter(etree.Element):
+        for attr in ("DEF", "id"):
+            name = el.get(attr)
+            if not name:
+                continue
+            first = defs.get(name)
+            if first is el:
+                continue
+            if first is not None:
+                raise InputError.at(
+                    f"duplicate name '{name}' (first defined at "
+                    f"{display_path(file)}:{first.sourceline})",
+                    file,
+                    el.sourceline,
+                )
+            defs[name] = el
+    return defs
+
+
+def _children(el: etree._Element) -> list[etree._Element]:
+    """The element children that are scene nodes (not a Collision's proxy, not metadata)."""
+    return [
+        c
+        for c in el
+        if isinstance(c.tag, str) and c.get("containerField", "children") == "children"
+    ]
+
+
+def _chosen(el: etree._Element, children: list[etree._Element], file: str) -> list[etree._Element]:
+    which = _field(el, "whichChoice", 1, np.array([-1.0]), file, "an integer")[0]
+    if which != int(which):
+        raise _bad(el, "whichChoice", "an integer", file)
+    return [children[int(which)]] if 0 <= which < len(children) else []
+
+
+def _mfstring(text: str) -> list[str]:
+    """X3D MFString: '"a.x3d" "b.x3d"', or a bare single value."""
+    if '"' in text:
+        return [m.replace('\\"', '"').strip() for m in _QUOTED.findall(text) if m.strip()]
+    return [text.strip()] if text.strip() else []
+
+
+def _plain(text: str) -> str:
+    return text.replace(",", " ").strip() if "," in text else text.strip()
+
+
+def _floats(text: str) -> Mat | None:
+    """Whitespace- and/or comma-separated numbers parsed in C; None if any is malformed."""
+    text = _plain(text)
+    if not text:  # np.fromstring reads whitespace-only text as [-1]
+        return np.empty(0)
+    try:
+        a = np.fromstring(text, sep=" ")
+    except ValueError:
+        return None
+    return a if np.isfinite(a).all() else None
+
+
+def _ints(text: str) -> Ints | None:
+    text = _plain(text)
+    if not text:
+        return np.empty(0, np.int64)
+    try:
+        return np.fromstring(text, dtype=np.int64, sep=" ")
+    except ValueError:
+        return None
+
+
+def _first_bad(text: str, integers: bool) -> str:
+    """What is wrong with a long number array, found token by token (only on the error path)."""
+    tokens = _plain(text).split()
+    for i, tok in enumerate(tokens):
+        try:
+            ok = bool(np.isfinite(int(tok) if integers else float(tok)))
+        except ValueError:
+            ok = False
+        if not ok:
+            return f"'{_shown(tok)}' (item {i + 1} of {len(tokens)})"
+    return f"{len(tokens)} numbers"
+
+
+def _shown(text: str) -> str:
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _bad(el: etree._Element, attr: str, expect: str, file: str) -> CellError:
+    return InputError.at(
+        f"{_label(el)}: {attr} must be {expect}, got '{_shown(el.get(attr, ''))}'",
+        file,
+        el.sourceline,
+    )
+
+
+def _field(el: etree._Element, attr: str, n: int, default: Mat, file: str, expect: str = "") -> Mat:
+    """A fixed-size numeric field (SFVec3f, SFRotation, SFFloat), or its default if absent."""
+    text = el.get(attr)
+    if text is None:
+        return default
+    a = _floats(text)
+    if a is None or a.size != n:
+        raise _bad(el, attr, expect or (f"{n} numbers" if n > 1 else "a number"), file)
+    return a
+
+
+def _positive(el: etree._Element, attr: str, n: int, default: float, file: str) -> Mat:
+    expect = f"{n} positive numbers" if n > 1 else "a positive number"
+    a = _field(el, attr, n, np.full(n, default), file, expect)
+    if (a <= 0).any():
+        raise _bad(el, attr, expect, file)
+    return a
+
+
+def _bad_array(el: etree._Element, attr: str, expect: str, file: str, ints: bool) -> CellError:
+    got = _first_bad(el.get(attr, ""), ints)
+    return InputError.at(f"{_label(el)}: {attr} must be {expect}, got {got}", file, el.sourceline)
+
+
+def _points(el: etree._Element, attr: str, file: str) -> Mat:
+    a = _floats(el.get(attr, ""))
+    if a is None or a.size % 3:
+        raise _bad_array(el, attr, "x y z triples of numbers", file, False)
+    return a.reshape(-1, 3)
+
+
+def _indices(el: etree._Element, attr: str, file: str) -> Ints:
+    a = _ints(el.get(attr, ""))
+    if a is None:
+        raise _bad_array(el, attr, "integers", file, True)
+    return a
+
+
+def _transform_fields(el: etree._Element, file: str) -> tuple[Mat, Mat]:
+    """ISO 19775 Transform: the affine matrix T·C·R·SR·S·SR⁻¹·C⁻¹ and the rotation R alone."""
+    t = _field(el, "translation", 3, _ZERO3, file)
+    r = _field(el, "rotation", 4, _NO_ROTATION, file)
+    s = _field(el, "scale", 3, _ONE3, file)
+    c = _field(el, "center", 3, _ZERO3, file)
+    so = _field(el, "scaleOrientation", 4, _NO_ROTATION, file)
+    R = axis_angle_to_matrix(r[:3].tolist(), float(r[3]))
+    SR = axis_angle_to_matrix(so[:3].tolist(), float(so[3]))
+    L = R @ SR @ np.diag(s) @ SR.T
+    return _affine(L, t + c - L @ c), R
+
+
+# --- geometry, in the geometry node's own frame ----------------------------------------------
+
+
+def _in_range(el: etree._Element, attr: str, idx: Ints, n: int, file: str) -> None:
+    bad = idx[(idx < 0) | (idx >= n)]
+    if bad.size:
+        raise InputError.at(
+            f"{_label(el)}: {attr} refers to point {int(bad[0])}, "
+            f"but there are {n} points (0..{n - 1})",
+            file,
+            el.sourceline,
+        )
+
+
+def _oriented(el: etree._Element, F: Ints) -> Ints:
+    return F[:, ::-1].copy() if el.get("ccw", "true").strip().lower() == "false" else F
+
+
+def _fan(idx: Ints) -> Ints:
+    """Triangles of -1-separated polygons, each fanned from its first vertex, vectorised."""
+    if idx.size and idx[-1] != -1:  # the trailing -1 is optional
+        idx = np.append(idx, -1)
+    sep = idx == -1
+    pos = np.arange(idx.size)
+    starts = np.concatenate(([True], sep[:-1]))
+    first = np.maximum.accumulate(np.where(starts, pos, 0))  # start of each one's polygon
+    nxt = np.append(sep[1:], True)
+    mid = ~sep & (pos > first) & ~nxt  # every vertex but the first and last of a polygon
+    j = pos[mid]
+    return np.stack([idx[first[j]], idx[j], idx[j + 1]], axis=1)
+
+
+def _indexed_face_set(el: etree._Element, file: _File, loader: _Loader) -> tuple[Mat, Ints]:
+    V = loader.coordinates(el, file)
+    idx = _indices(el, "coordIndex", file.name)
+    _in_range(el, "coordIndex", idx[idx != -1], len(V), file.name)
+    return V, _oriented(el, _fan(idx))
+
+
+def _indexed_triangle_set(el: etree._Element, file: _File, loader: _Loader) -> tuple[Mat, Ints]:
+    V = loader.coordinates(el, file)
+    idx = _indices(el, "index", file.name)
+    if idx.size % 3:
+        raise _bad_array(el, "index", "integers in triples", file.name, True)
+    _in_range(el, "index", idx, len(V), file.name)
+    return V, _oriented(el, idx.reshape(-1, 3))
+
+
+def _triangle_set(el: etree._Element, file: _File, loader: _Loader) -> tuple[Mat, Ints]:
+    V = loader.coordinates(el, file)
+    if len(V) % 3:
+        raise InputError.at(
+            f"{_label(el)}: the Coordinate must hold whole triangles (3 points each), "
+            f"got {len(V)} points",
+            file.name,
+            el.sourceline,
+        )
+    return V, _oriented(el, np.arange(len(V), dtype=np.int64).reshape(-1, 3))
+
+
+def _primitive(mesh: trimesh.Trimesh, T: Mat | None = None) -> tuple[Mat, Ints]:
+    if T is not None:
+        mesh.apply_transform(T)
+    return np.asarray(mesh.vertices, float), np.asarray(mesh.faces, np.int64)
+
+
+_Z_TO_Y = transform(rot_x(-np.pi / 2))  # trimesh builds round shapes along z; X3D along y
+
+
+def _box(el: etree._Element, file: _File, _: _Loader) -> tuple[Mat, Ints]:
+    size = _positive(el, "size", 3, 2.0, file.name)
+    return _primitive(trimesh.creation.box(extents=size))
+
+
+def _cylinder(el: etree._Element, file: _File, _: _Loader) -> tuple[Mat, Ints]:
+    r = _positive(el, "radius", 1, 1.0, file.name)[0]
+    h = _positive(el, "height", 1, 2.0, file.name)[0]
+    return _primitive(trimesh.creation.cylinder(radius=r, height=h, sections=_SECTIONS), _Z_TO_Y)
+
+
+def _cone(el: etree._Element, file: _File, _: _Loader) -> tuple[Mat, Ints]:
+    r = _positive(el, "bottomRadius", 1, 1.0, file.name)[0]
+    h = _positive(el, "height", 1, 2.0, file.name)[0]
+    cone = trimesh.creation.cone(radius=r, height=h, sections=_SECTIONS)  # base at z = 0
+    return _primitive(cone, _Z_TO_Y @ transform(t=(0.0, 0.0, -h / 2)))
+
+
+def _sphere(el: etree._Element, file: _File, _: _Loader) -> tuple[Mat, Ints]:
+    r = _positive(el, "radius", 1, 1.0, file.name)[0]
+    return _primitive(trimesh.creation.icosphere(subdivisions=2, radius=r))
+
+
+_BUILDERS = {
+    "Box": _box,
+    "Cone": _cone,
+    "Cylinder": _cylinder,
+    "IndexedFaceSet": _indexed_face_set,
+    "IndexedTriangleSet": _indexed_triangle_set,
+    "Sphere": _sphere,
+    "TriangleSet": _triangle_set,
+}
+
+
+def _mesh(parts: list[tuple[Mat, Ints]]) -> trimesh.Trimesh | None:
+    if not parts:
+        return None
+    offsets = np.cumsum([0] + [len(V) for V, _ in parts[:-1]])
+    V = np.concatenate([V for V, _ in parts])
+    F = np.concatenate([F + off for (_, F), off in zip(parts, offsets, strict=True)])
+    return trimesh.Trimesh(vertices=V, faces=F, process=False)
