@@ -37,7 +37,7 @@ def resolve_inside(
     target = (base / ref).resolve()
     if not target.is_relative_to(base):
         raise InputError.at(
-            f"file reference '{ref}' points outside the cell folder {base}", *where
+            f"file reference '{ref}' points outside the cell folder", *where
         )
     if not target.is_file():
         raise InputError.at(f"file '{ref}' not found (looked for {target})", *where)

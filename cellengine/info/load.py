@@ -49,8 +49,8 @@ def load_cell(path: Path) -> tuple[Cell, YamlDoc]:
 def _check_cell(cell: Cell, doc: YamlDoc) -> list[Problem]:
     out: list[Problem] = []
 
-    def err(message: str, *loc: str | int) -> None:
-        out.append(doc.error(message, loc).problems[0])
+    def err(message: str, *loc: str | int, key: bool = False) -> None:
+        out.append(doc.error(message, loc, key).problems[0])
 
     for name, robot in cell.robots.items():
         if robot.tool is not None and robot.tool not in cell.tools:
@@ -74,7 +74,7 @@ def _check_cell(cell: Cell, doc: YamlDoc) -> list[Problem]:
         for arm in driver.arms:
             if arm not in cell.robots:
                 err(f"driver.arms.{arm}: unknown robot '{arm}'" + known(cell.robots),
-                    "driver", "arms", arm)
+                    "driver", "arms", arm, key=True)
         for name in cell.robots:
             if name not in driver.arms:
                 err(f"driver.arms: no address for robot '{name}'", "driver", "arms")
@@ -94,13 +94,14 @@ def load_platform(name: str, spec: PlatformSpec, doc: YamlDoc) -> Platform:
         return resolve_inside(root, value, doc.file, *_at(doc, ("platforms", name, key)))
 
     T = spec.pose.matrix()
+    cad, models = ref("cad"), ref("models")
     if spec.format == "remodel":
         from cellengine.info.remodel import load_remodel_platform
 
-        return load_remodel_platform(name, T, ref("cad"), ref("ids"), ref("models"), root, spec.up)
+        return load_remodel_platform(name, T, cad, ref("ids"), models, root, spec.up)
     from cellengine.info.native import load_native_platform
 
-    return load_native_platform(name, T, ref("cad"), ref("models"), ref("map"), root, spec.up)
+    return load_native_platform(name, T, cad, models, ref("map"), root, spec.up)
 
 
 def load_objects(path: Path) -> Objects:

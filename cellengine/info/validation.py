@@ -51,6 +51,11 @@ def problem(doc: YamlDoc, cls: type[BaseModel], err: ErrorDetails, prefix: Loc =
         loc_text = dotted(parent)
         message = f"{loc_text}: {msg}" if loc_text else msg
     else:
+        if kind == "union_tag_invalid":  # point at the tag's value, not the mapping
+            tag_key = str((err.get("ctx") or {}).get("discriminator", "")).strip("'")
+            if (*path, tag_key) in doc.values:
+                path = (*path, tag_key)
+                here = dotted(path)
         where = doc.where(path, key=on_key)
         message = f"{here}: {_describe(err, on_key)}" if here else _describe(err, on_key)
     line, col = where or (None, None)
@@ -70,8 +75,10 @@ def _describe(err: ErrorDetails, on_key: bool) -> str:
         what = f"'{value}' is not a valid name" if isinstance(value, str) else "not a valid name"
         return f"{what}: use letters, digits, '_' and '-', starting with a letter or '_'"
     msg = err["msg"].removeprefix("Value error, ")
-    msg = msg.replace("Input should be", "must be").replace("Input is", "is")
+    msg = msg.replace("Input should be", "must be").replace("Input is ", "")
     if kind in ("literal_error", "enum") or kind.endswith("_type") or kind.endswith("_parsing"):
+        msg += f", got {_show(value)}"
+    elif isinstance(value, str | int | float) and "got" not in msg:
         msg += f", got {_show(value)}"
     return msg
 
@@ -89,7 +96,8 @@ def _data_path(data: Any, prefix: Loc, loc: tuple[int | str, ...]) -> tuple[Loc,
     (union tags, '[key]'). The second result says whether the error is about a key."""
     path: list[str | int] = list(prefix)
     node, on_key = data, False
-    for part in loc:
+    for i, part in enumerate(loc):
+        last = i == len(loc) - 1
         if part == "[key]":
             on_key = True
         elif isinstance(node, dict) and part in node:
@@ -98,15 +106,9 @@ def _data_path(data: Any, prefix: Loc, loc: tuple[int | str, ...]) -> tuple[Loc,
         elif isinstance(node, list) and isinstance(part, int) and 0 <= part < len(node):
             node = node[part]
             path.append(part)
-        elif isinstance(node, dict) and isinstance(part, str) and _is_field_name(part):
-            path.append(part)  # a missing or extra key
-            node = None
+        elif last and isinstance(node, dict) and isinstance(part, str):
+            path.append(part)  # a missing key; anything else not in the data is a union tag
     return tuple(path), on_key
-
-
-def _is_field_name(part: str) -> bool:
-    # pydantic inserts union member names such as 'function-after[...]' or class names
-    return not any(c in part for c in "[]()") and not part[:1].isupper()
 
 
 def _fields_at(cls: Any, path: Loc) -> list[str] | None:

@@ -1,0 +1,74 @@
+from pathlib import Path
+
+import pytest
+
+from cellengine.errors import InputError
+from cellengine.info import yamlio
+from cellengine.info.yamlio import parse_yaml
+
+F = Path("f.yaml")
+
+
+def err(text: str) -> str:
+    with pytest.raises(InputError) as e:
+        parse_yaml(text, F)
+    return str(e.value)
+
+
+def test_positions_of_values_and_keys() -> None:
+    doc = parse_yaml("a:\n  b: [1, 2]\n  c: x\n", F)
+    assert doc.data == {"a": {"b": [1, 2], "c": "x"}}
+    assert doc.values[("a", "b", 1)] == (2, 10)
+    assert doc.keys[("a", "c")] == (3, 3)
+    assert doc.where(("a", "zz")) == (2, 3)  # nearest enclosing value
+
+
+def test_merge_keys_and_anchors_work() -> None:
+    doc = parse_yaml("base: &b {x: 1}\nfoo:\n  <<: *b\n  y: 2\n", F)
+    assert doc.data["foo"] == {"x": 1, "y": 2}
+
+
+def test_python_tags_are_refused() -> None:
+    assert err("a: !!python/object/apply:os.system [ls]\n") == (
+        "f.yaml:1:4: YAML tag '!!python/object/apply:os.system' is not allowed; "
+        "only plain maps, lists, strings, numbers, booleans and null"
+    )
+
+
+def test_duplicate_keys_are_errors() -> None:
+    assert err("a: 1\nb: 2\na: 3\n") == "f.yaml:3:1: duplicate key 'a' (first given at line 1)"
+
+
+def test_alias_bomb_refused_before_expansion() -> None:
+    lines = ['a: &a ["x","x","x","x","x","x","x","x","x"]']
+    for prev, name in zip("abcdefg", "bcdefgh", strict=True):
+        lines.append(f"{name}: &{name} [" + ",".join([f"*{prev}"] * 9) + "]")
+    assert err("\n".join(lines) + "\n") == (
+        "f.yaml:6:4: YAML expands to more than 100000 values (an alias bomb?)"
+    )
+
+
+def test_too_many_aliases(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(yamlio, "MAX_ALIASES", 3)
+    assert err("a: &a 1\nb: [*a, *a, *a, *a]\n") == "f.yaml:1:4: YAML uses more than 3 aliases"  # at the anchor
+
+
+def test_syntax_error_has_line_and_column() -> None:
+    assert err("a: [1, 2\nb: 3\n") == (
+        "f.yaml:2:2: YAML syntax error: expected ',' or ']', but got ':'"
+    )
+
+
+def test_size_cap(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from cellengine.info import files
+
+    monkeypatch.setitem(files.MAX_BYTES, "yaml", 10)
+    p = tmp_path / "big.yaml"
+    p.write_text("a: 123456789012\n")
+    with pytest.raises(InputError) as e:
+        yamlio.load_yaml(p)
+    assert "more than the 10-byte limit for yaml files" in str(e.value)
+
+
+def test_empty_document() -> None:
+    assert parse_yaml("# nothing\n", F).data is None
