@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import Field
 
+from cellengine.info.units import count
 from cellengine.skill import CableRef, GuideRef, KeypointRef, Skill, register
 
 
@@ -15,7 +16,9 @@ class PickCable(Skill):
 
     skill: Literal["PickCable"]
     cable: CableRef
-    from_: tuple[KeypointRef, KeypointRef] = Field(alias="from")
+    from_: Annotated[
+        tuple[KeypointRef, KeypointRef], count(2, "keypoints [connector end, other end]")
+    ] = Field(alias="from")
 
 
 @register

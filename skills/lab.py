@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from typing import Literal
 
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from cellengine.info.units import Angle, Number
 from cellengine.skill import KeypointRef, ObjectRef, Skill, register
@@ -56,4 +56,11 @@ class Pour(Skill):
     skill: Literal["Pour"]
     object: ObjectRef
     into: ObjectRef
-    angle: Angle = Field(math.radians(100.0), gt=0, le=math.pi)
+    angle: Angle = Field(math.radians(100.0), gt=0)
+
+    @model_validator(mode="after")
+    def _at_most_half_turn(self) -> Pour:
+        # checked here, after unit conversion, so degrees and radians both work
+        if self.angle > math.pi:
+            raise ValueError("angle: a pour tilts at most 180 deg (pi rad)")
+        return self

@@ -39,12 +39,12 @@ def _scaler(kind: str) -> AfterValidator:
     return AfterValidator(scale)
 
 
-def _numbers(n: int, what: str) -> BeforeValidator:
+def count(n: int, what: str) -> BeforeValidator:
     """Check a list's length up front so the message says what was expected."""
 
     def check(v: Any) -> Any:
         if isinstance(v, list | tuple) and len(v) != n:
-            raise ValueError(f"expected {n} numbers {what}, got {len(v)}")
+            raise ValueError(f"expected {n} {what}, got {len(v)}")
         return v
 
     return BeforeValidator(check)
@@ -54,5 +54,5 @@ Number = Annotated[float, Strict()]  # ints welcome; strings and booleans are no
 Length = Annotated[float, Strict(), _scaler("length")]
 Angle = Annotated[float, Strict(), _scaler("angle")]
 Mass = Annotated[float, Strict(), _scaler("mass")]
-Vec3Length = Annotated[tuple[Length, Length, Length], _numbers(3, "[x, y, z]")]
-Vec3Angle = Annotated[tuple[Angle, Angle, Angle], _numbers(3, "[roll, pitch, yaw]")]
+Vec3Length = Annotated[tuple[Length, Length, Length], count(3, "numbers [x, y, z]")]
+Vec3Angle = Annotated[tuple[Angle, Angle, Angle], count(3, "numbers [roll, pitch, yaw]")]

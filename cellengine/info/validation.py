@@ -40,6 +40,9 @@ def problem(doc: YamlDoc, cls: type[BaseModel], err: ErrorDetails, prefix: Loc =
     path, on_key = _data_path(doc.data, prefix, err["loc"])
     kind = err["type"]
     here = dotted(path)
+    if kind == "missing" and err["loc"] and isinstance(err["loc"][-1], int):
+        line, col = doc.where(path) or (None, None)  # a tuple with too few items
+        return Problem(f"{here}: too few items", str(doc.file), line, col)
     if kind in ("missing", "extra_forbidden"):
         parent, name = path[:-1], path[-1] if path else "?"
         where = doc.where(parent if kind == "missing" else path, key=kind != "missing")
@@ -96,6 +99,8 @@ def _data_path(data: Any, prefix: Loc, loc: tuple[int | str, ...]) -> tuple[Loc,
     (union tags, '[key]'). The second result says whether the error is about a key."""
     path: list[str | int] = list(prefix)
     node, on_key = data, False
+    for part in prefix:
+        node = node[part]
     for i, part in enumerate(loc):
         last = i == len(loc) - 1
         if part == "[key]":

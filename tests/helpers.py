@@ -1,0 +1,52 @@
+"""Small builders shared by tests: a world with hand-made platforms (no files)."""
+
+from __future__ import annotations
+
+from types import MappingProxyType
+
+import numpy as np
+
+from cellengine import geometry as g
+from cellengine.info.cell import Cell
+from cellengine.info.objects import Objects
+from cellengine.info.platform import Element, Keypoint, Platform
+from cellengine.world import World
+
+
+def element(name: str, xyz: tuple[float, float, float], keypoints: dict[str, g.Mat],
+            dims: dict[str, float] | None = None, note: str = "") -> Element:
+    return Element(
+        name=name,
+        model="m",
+        T_platform_element=g.pose(xyz),
+        dimensions=MappingProxyType(dims or {}),
+        keypoints=MappingProxyType({k: Keypoint(k, T) for k, T in keypoints.items()}),
+        note=note,
+    )
+
+
+def routing_world() -> World:
+    """Platform 'routing' at (0.5, -0.1, 0) turned 90 deg about z, with three guides."""
+    slot = g.pose([0.0, 0.0, 0.055])
+    guides = {
+        f"guide{i}": element(f"guide{i}", (0.1 * i, 0.0, 0.0), {"slot": slot, "top": np.eye(4)},
+                             {"length": 0.01, "gap": 0.01})
+        for i in (1, 2, 3)
+    }
+    guides["plate"] = element("plate", (0, 0, 0), {}, note="model 'x' is not defined")
+    platform = Platform("routing", g.pose([0.5, -0.1, 0.0], [0, 0, np.pi / 2]),
+                        MappingProxyType(guides))
+    cell = Cell.model_validate(
+        {"name": "c", "robots": {"left": {"model": "ur5e"}, "right": {"model": "ur5e"}}}
+    )
+    objects = Objects.model_validate(
+        {"cables": {"cable1": {"length": 0.65, "diameter": 0.006}},
+         "containers": {"vial1": {"kind": "vial", "diameter": 0.028, "height": 0.06}}}
+    )
+    return World(cell, Path_("cell.yaml"), MappingProxyType({"routing": platform}), objects)
+
+
+def Path_(p: str):  # type: ignore[no-untyped-def]
+    from pathlib import Path
+
+    return Path(p)
