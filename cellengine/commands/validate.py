@@ -115,17 +115,23 @@ def _unique(problems: tuple[Problem, ...] | list[Problem]) -> list[Problem]:
 
 def _text(results: list[Result]) -> None:
     bad = 0
-    shown: set[Problem] = set()  # a plan repeats its cell's problems: print each once
+    shown: set[tuple[object, ...]] = set()  # a plan repeats its cell's problems: print once
     for r in results:
         if r.problems:
             bad += 1
-            for p in r.problems:
-                if p not in shown:
-                    shown.add(p)
-                    print(p)
+            new = [p for p in r.problems if _key(p) not in shown]
+            shown.update(_key(p) for p in new)
+            for p in new:
+                print(p)
+            if not new:
+                print(f"{display_path(r.file)}: not checked: it uses files with problems above")
         else:
             print(f"{display_path(r.file)}: ok ({r.kind})")
     print(f"{len(results)} file(s) checked, {bad} with problems", file=sys.stderr)
+
+
+def _key(p: Problem) -> tuple[object, ...]:
+    return (Path(p.file).resolve() if p.file else None, p.line, p.col, p.message)
 
 
 def _json(results: list[Result]) -> None:
@@ -154,12 +160,12 @@ def _escape(text: str, prop: bool = False) -> str:
 
 
 def _github(results: list[Result]) -> None:
-    shown: set[Problem] = set()
+    shown: set[tuple[object, ...]] = set()
     for r in results:
         for p in r.problems:
-            if p in shown:
+            if _key(p) in shown:
                 continue
-            shown.add(p)
+            shown.add(_key(p))
             props = [f"file={_escape(display_path(p.file or r.file), True)}"]
             if p.line is not None:
                 props.append(f"line={p.line}")

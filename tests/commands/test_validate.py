@@ -1,0 +1,91 @@
+import json
+from pathlib import Path
+
+import pytest
+
+from cellengine.cli import main
+
+CELL = """\
+name: bench
+robots:
+  left: {model: ur5e, base: {xyz: [0, 0.35, 0]}}
+  right: {model: ur5e, base: {xyz: [0, -0.35, 0]}}
+"""
+OBJECTS = "containers:\n  vial1: {kind: vial, diameter: 0.028, height: 0.06, mass: 0.03}\n"
+PLAN = "cell: cell.yaml\nobjects: objects.yaml\nsteps:\n  - {skill: Weigh, object: vial1}\n"
+
+
+@pytest.fixture
+def cell_dir(tmp_path: Path) -> Path:
+    (tmp_path / "cell.yaml").write_text(CELL)
+    (tmp_path / "objects.yaml").write_text(OBJECTS)
+    (tmp_path / "plan.yaml").write_text(PLAN)
+    (tmp_path / ".hidden").mkdir()
+    (tmp_path / ".hidden" / "ci.yaml").write_text("on: push\n")
+    (tmp_path / "other.yaml").write_text("just: data\n")  # not ours: skipped in folders
+    return tmp_path
+
+
+def test_folder_passes(cell_dir: Path, capsys: pytest.CaptureFixture[str],
+                       monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(cell_dir)
+    assert main(["validate", "."]) == 0
+    out = capsys.readouterr()
+    assert out.out.splitlines() == [
+        "cell.yaml: ok (cell)", "objects.yaml: ok (objects)", "plan.yaml: ok (plan)"
+    ]
+    assert out.err == "3 file(s) checked, 0 with problems\n"
+
+
+def test_explicit_unknown_file_fails(cell_dir: Path, capsys: pytest.CaptureFixture[str],
+                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(cell_dir)
+    assert main(["validate", "other.yaml"]) == 1
+    assert capsys.readouterr().out == (
+        "other.yaml:1:1: cannot tell what this file is: a cell has 'robots', objects have "
+        "'cables' or 'containers', a plan has 'steps'\n"
+    )
+
+
+def test_formats(cell_dir: Path, capsys: pytest.CaptureFixture[str],
+                 monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(cell_dir)
+    (cell_dir / "plan.yaml").write_text(PLAN.replace("object: vial1", "object: vial2"))
+    assert main(["validate", "plan.yaml", "cell.yaml", "--format", "github"]) == 1
+    assert capsys.readouterr().out == (
+        "::error file=plan.yaml,line=4,col=28::steps[0].object: unknown object 'vial2'; "
+        "known: vial1\n"
+    )
+    assert main(["validate", "plan.yaml", "cell.yaml", "--format", "json"]) == 1
+    report = json.loads(capsys.readouterr().out)
+    assert report["ok"] is False
+    assert [(f["file"], f["kind"], f["ok"]) for f in report["files"]] == [
+        ("plan.yaml", "plan", False), ("cell.yaml", "cell", True)
+    ]
+    assert report["files"][0]["problems"] == [
+        {"file": "plan.yaml", "line": 4, "col": 28,
+         "message": "steps[0].object: unknown object 'vial2'; known: vial1"}
+    ]
+
+
+def test_broken_cell_reported_once(cell_dir: Path, capsys: pytest.CaptureFixture[str],
+                                   monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(cell_dir)
+    (cell_dir / "cell.yaml").write_text(CELL.replace("ur5e,", "ur6,", 1))
+    assert main(["validate", "."]) == 1
+    out = capsys.readouterr()
+    assert out.out.splitlines() == [
+        "cell.yaml:3:17: robots.left.model: unknown robot model 'ur6'; known: ur10e, ur3e, "
+        "ur5, ur5e; or give {urdf: path, tip: link}",
+        "objects.yaml: ok (objects)",
+        "plan.yaml: not checked: it uses files with problems above",
+    ]
+    assert out.err == "3 file(s) checked, 2 with problems\n"
+
+
+def test_usage_errors_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["validate", str(tmp_path / "nope.yaml")]) == 2
+    assert capsys.readouterr().err == f"{tmp_path}/nope.yaml: no such file or folder\n"
+    with pytest.raises(SystemExit) as e:
+        main(["validate", "--format", "xml", str(tmp_path)])
+    assert e.value.code == 2
