@@ -32,6 +32,7 @@ lint: $(VENV)/.installed-test
 
 bench: $(VENV)/.installed-test
 	$(BIN)/python bench/validate_speed.py
+	$(BIN)/python bench/bench_x3d.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info
