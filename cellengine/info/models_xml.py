@@ -98,7 +98,7 @@ def _unique(
             f"duplicate {what} '{name}' (first defined at line {first[name]})",
             path,
             line,
-            column(lines, line, el.tag, "model" if what == "model" else "name"),
+            element_column(lines, el, "model" if what == "model" else "name"),
         )
     first[name] = line
 
@@ -206,14 +206,34 @@ def source_lines(path: Path) -> list[str]:
     return read_capped(path, "xml").decode("utf-8", errors="replace").splitlines()
 
 
-def column(lines: Sequence[str], line: int | None, tag: str, attr: str | None = None) -> int | None:
-    """1-based column of ``attr=`` (else of ``<tag``) on ``line``, or None if not found there."""
+def column(
+    lines: Sequence[str], line: int | None, tag: str, attr: str | None = None, nth: int = 0
+) -> int | None:
+    """1-based column of ``attr=`` (else of ``<tag``) in the ``nth`` ``<tag`` on ``line``,
+    or None if not found there."""
     if line is None or not 1 <= line <= len(lines):
         return None
     text = lines[line - 1]
-    start = text.find(f"<{tag}") if tag else 0
+    start = -1
+    if tag:
+        for _ in range(nth + 1):
+            start = text.find(f"<{tag}", start + 1)
+            if start < 0:
+                break
     if attr:
         m = re.compile(rf"\b{re.escape(attr)}\s*=").search(text, max(start, 0))
         if m:
             return m.start() + 1
     return start + 1 if start >= 0 else None
+
+
+def element_column(lines: Sequence[str], el: Any, attr: str | None = None) -> int | None:
+    """Column of element ``el`` (or its ``attr``), telling apart same-tag elements that
+    share its line."""
+    line = el.sourceline
+    nth = 0
+    for other in el.getroottree().iter(el.tag):
+        if other is el:
+            break
+        nth += other.sourceline == line
+    return column(lines, line, el.tag, attr, nth)
