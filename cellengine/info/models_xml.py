@@ -24,7 +24,7 @@ from typing import Any
 
 from lxml import etree
 
-from cellengine.errors import InputError, Problem
+from cellengine.errors import CellError, InputError, Problem
 from cellengine.geometry import pose
 from cellengine.info.files import read_capped
 from cellengine.info.platform import Keypoint, Source, frozen_array
@@ -49,10 +49,9 @@ class ElementModel:
 def load_models(path: Path) -> Mapping[str, ElementModel]:
     """Models of ``path`` by name, in document order. Every mistake is an InputError."""
     tree = parse_xml(path)
-    lines = source_lines(path)
     schema = _schema()
     if not schema.validate(tree):
-        raise InputError(_schema_problems(schema.error_log, path, lines))
+        raise InputError(_schema_problems(schema.error_log, path, source_lines(path)))
     root = tree.getroot()
     length = LENGTH[root.get("units", "m")]
     angle = ANGLE[root.get("angles", "rad")]
@@ -60,12 +59,12 @@ def load_models(path: Path) -> Mapping[str, ElementModel]:
     first: dict[str, int] = {}
     for el in root.iterchildren("element"):
         name = el.get("model")
-        _unique(name, "model", el, first, path, lines)
-        models[name] = _model(el, length, angle, path, lines)
+        _unique(name, "model", el, first, path)
+        models[name] = _model(el, length, angle, path)
     return MappingProxyType(models)
 
 
-def _model(el: Any, length: float, angle: float, path: Path, lines: Sequence[str]) -> ElementModel:
+def _model(el: Any, length: float, angle: float, path: Path) -> ElementModel:
     dims: dict[str, float] = {}
     kps: dict[str, Keypoint] = {}
     first_dim: dict[str, int] = {}
@@ -73,12 +72,12 @@ def _model(el: Any, length: float, angle: float, path: Path, lines: Sequence[str
     for child in el.iterchildren("dimension", "keypoint"):
         name = child.get("name")
         if child.tag == "dimension":
-            _unique(name, "dimension", child, first_dim, path, lines)
-            dims[name] = float(child.get("value")) * length
+            _unique(name, "dimension", child, first_dim, path)
+            dims[name] = _numbers(child, "value", path)[0] * length
         else:
-            _unique(name, "keypoint", child, first_kp, path, lines)
-            xyz = [float(v) * length for v in child.get("xyz").split()]
-            rpy = [float(v) * angle for v in child.get("rpy", "0 0 0").split()]
+            _unique(name, "keypoint", child, first_kp, path)
+            xyz = [v * length for v in _numbers(child, "xyz", path)]
+            rpy = [v * angle for v in _numbers(child, "rpy", path)]
             kps[name] = Keypoint(name, frozen_array(pose(xyz, rpy)))
     return ElementModel(
         el.get("model"),
@@ -88,19 +87,29 @@ def _model(el: Any, length: float, angle: float, path: Path, lines: Sequence[str
     )
 
 
-def _unique(
-    name: str, what: str, el: Any, first: dict[str, int], path: Path, lines: Sequence[str]
-) -> None:
+def _numbers(el: Any, attr: str, path: Path) -> list[float]:
+    """A schema-valid numeric attribute; the schema cannot refuse overflow such as 1e999."""
+    text = el.get(attr, "0 0 0")  # only rpy is optional
+    values = [float(v) for v in text.split()]
+    if not all(math.isfinite(v) for v in values):
+        raise _error(f"<{el.tag}> attribute '{attr}': '{text}' is out of range", el, path, attr)
+    return values
+
+
+def _unique(name: str, what: str, el: Any, first: dict[str, int], path: Path) -> None:
     """Record ``name``'s line in ``first``; a second definition is an error naming the first."""
-    line: int = el.sourceline
     if name in first:
-        raise InputError.at(
-            f"duplicate {what} '{name}' (first defined at line {first[name]})",
-            path,
-            line,
-            element_column(lines, el, "model" if what == "model" else "name"),
+        attr = "model" if what == "model" else "name"
+        raise _error(
+            f"duplicate {what} '{name}' (first defined at line {first[name]})", el, path, attr
         )
-    first[name] = line
+    first[name] = el.sourceline
+
+
+def _error(message: str, el: Any, path: Path, attr: str) -> CellError:
+    # The file is read again for the column only when there is an error to report.
+    col = element_column(source_lines(path), el, attr)
+    return InputError.at(message, path, el.sourceline, col)
 
 
 @lru_cache(maxsize=1)

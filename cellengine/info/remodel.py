@@ -15,9 +15,11 @@ Elements are named by their label, so guide 1 of jig J3 is keypoint "1" of eleme
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Literal
@@ -172,7 +174,10 @@ class _Doc:
 
     def __init__(self, path: Path) -> None:
         self.path = path
-        self.lines = source_lines(path)
+
+    @cached_property
+    def lines(self) -> list[str]:
+        return source_lines(self.path)  # read again only when there is an error to report
 
     def error(self, message: str, el: Any, attr: str | None = None) -> CellError:
         line: int | None = el.sourceline
@@ -354,7 +359,7 @@ def _text_number(doc: _Doc, el: Any, axis: str) -> float:
     # Comments may sit inside the element; the number is the text around them.
     text = (el.text or "") + "".join(c.tail or "" for c in el)
     unit = "mm" if el.tag == "pos" else "radians"
-    if not _NUMBER.fullmatch(text):
+    if not _is_number(text):
         raise doc.error(
             f'<{el.tag} name="{axis}"> is {_shown(text.strip())}; expected a number in {unit}',
             el,
@@ -373,7 +378,7 @@ def _numeric_attributes(
     for attr, value in el.attrib.items():
         if attr in skip:
             continue
-        if not _NUMBER.fullmatch(value):
+        if not _is_number(value):
             raise doc.error(
                 f"<{el.tag}> attribute '{attr}' is {_shown(value)}; expected a number in mm",
                 el,
@@ -381,6 +386,11 @@ def _numeric_attributes(
             )
         out[attr] = float(value) * MM
     return out
+
+
+def _is_number(text: str) -> bool:
+    """A finite decimal number: no nan, inf, hex or digit separators, no overflow."""
+    return _NUMBER.fullmatch(text) is not None and math.isfinite(float(text))
 
 
 def _model_name(doc: _Doc, el: Any) -> str:

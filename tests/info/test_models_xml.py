@@ -123,6 +123,15 @@ def test_schema_violation_infinity_and_dotted_name(tmp_path: Path) -> None:
     )
 
 
+def test_overflow_is_refused(tmp_path: Path) -> None:
+    p = write(
+        tmp_path,
+        '<elements>\n<element model="a">\n  <keypoint name="k" xyz="0 1e999 0"/>\n'
+        "</element>\n</elements>",
+    )
+    assert error(p) == ("<keypoint> attribute 'xyz': '0 1e999 0' is out of range", 3, 22)
+
+
 def test_schema_violation_unknown_tag_and_attribute(tmp_path: Path) -> None:
     p = write(
         tmp_path, '<elements>\n<element model="a">\n  <slot name="k"/>\n</element>\n</elements>'

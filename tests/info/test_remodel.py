@@ -318,6 +318,13 @@ def jigs(tmp_path: Path, body: str) -> Path:
             3,
             16,
         ),
+        (
+            f'<jig model="a" zdim="1e999">\n<guide couple="1"><key length="1" gap="1" height="1">'
+            f"{POSE}</key></guide></jig>",
+            "<jig> attribute 'zdim' is '1e999'; expected a number in mm",
+            3,
+            16,
+        ),
         (  # an angle
             '<jig model="a">\n<guide couple="1">\n<key length="1" gap="1" height="1">\n'
             '<pos name="x">0</pos><pos name="y">0</pos><pos name="z">0</pos>\n'
