@@ -14,11 +14,11 @@ from __future__ import annotations
 
 import difflib
 import re
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import MappingProxyType
-from typing import Literal
+from typing import Literal, TypeAlias
 
 import numpy as np
 import trimesh
@@ -26,11 +26,12 @@ from lxml import etree
 from numpy.typing import NDArray
 
 from cellengine.errors import CellError, InputError, display_path
-from cellengine.geometry import Mat, axis_angle_to_matrix, inverse, rot_x, transform
-from cellengine.info.files import resolve_inside
+from cellengine.geometry import Mat, axis_angle_to_matrix, inverse, rot_x
+from cellengine.info.files import read_capped, resolve_inside
 from cellengine.info.xmlsafe import parse_xml
 
-Ints = NDArray[np.int64]
+Ints: TypeAlias = NDArray[np.int64]
+Element: TypeAlias = etree._Element
 
 MAX_INLINE_DEPTH = 8
 MAX_NESTING = 200  # keeps recursion far below Python's limit, even through Inlines
@@ -57,6 +58,8 @@ _CONTENT = frozenset((*GROUPS, "Shape", "Inline"))
 _URL = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*:")
 _DRIVE = re.compile(r"^[A-Za-z]:[\\/]")
 _QUOTED = re.compile(r'"((?:[^"\\]|\\.)*)"')
+# Markup starting with '<'; group 1 matches (empty) for a start tag and only for one.
+_MARKUP = re.compile(rb"<(?:!--.*?-->|!\[CDATA\[.*?\]\]>|\?.*?\?>|[!/]|())", re.S)
 
 
 def _affine(L: Mat, t: Mat) -> Mat:
@@ -70,6 +73,7 @@ _ZERO3 = np.zeros(3)
 _ONE3 = np.ones(3)
 _NO_ROTATION = np.array([0.0, 0.0, 1.0, 0.0])
 _Y_UP = _affine(rot_x(np.pi / 2), _ZERO3)  # T_platform_scene: x3d y (up) -> z, z -> -y
+_Z_TO_Y = _affine(rot_x(-np.pi / 2), _ZERO3)  # trimesh builds round shapes along z, X3D on y
 _SECTIONS = 32  # around cylinders and cones: a multiple of 4, so extents are exact
 
 
@@ -101,24 +105,63 @@ def load_x3d(
     if up not in ("y", "z"):
         raise ValueError(f"up must be 'y' or 'z', got {up!r}")
     loader = _Loader(Path(root).resolve(), meshes)
-    top = loader.open(Path(path), ())
+    top, scene = loader.open(Path(path), ())
     T = _Y_UP if up == "y" else np.eye(4)
     ctx = _Ctx(top, T, T[:3, :3].copy(), None, False, 0)
-    for child in _children(top.scene):
+    for child in _children(scene):
         loader.visit(child, ctx)
     nodes = {o.name: o.node() for o in loader.owners.values()}
     return X3DScene(str(path), MappingProxyType(nodes), _mesh(loader.loose.parts))
 
 
-# --- traversal -------------------------------------------------------------------------------
+# --- files -----------------------------------------------------------------------------------
 
 
-@dataclass
 class _File:
-    name: str  # as reported in errors and in X3DNode.file
-    scene: etree._Element
-    defs: dict[str, etree._Element]  # DEF and id names; USE looks up only its own file
-    chain: tuple[Path, ...]  # resolved files of the Inline chain down to this one
+    """One parsed X3D file: its DEF/id names and the true lines of its elements.
+
+    libxml2 reports an element at the line where its start tag ends, and Blender spreads a
+    start tag over several lines; so lines come from the text: the k-th element in document
+    order is the k-th start tag.
+    """
+
+    def __init__(self, path: Path, root: Element, chain: tuple[Path, ...]) -> None:
+        self.name = str(path)  # as reported in errors and in X3DNode.file
+        self.path = path
+        self.chain = (*chain, path.resolve())  # the Inline chain down to this file
+        self.defs: dict[str, Element] = {}  # DEF and id names; a USE looks only in its file
+        self._order: dict[Element, int] = {}
+        self._lines: Ints | None = None
+        for i, el in enumerate(root.iter(etree.Element)):
+            self._order[el] = i
+            self._define(el)
+
+    def _define(self, el: Element) -> None:
+        for attr in ("DEF", "id"):
+            name = el.get(attr)
+            if not name:
+                continue
+            first = self.defs.setdefault(name, el)
+            if first is not el:
+                where = f"{display_path(self.name)}:{self.line(first)}"
+                raise self.error(el, f"duplicate name '{name}' (first defined at {where})")
+
+    def line(self, el: Element) -> int:
+        if self._lines is None:
+            data = read_capped(self.path, "x3d")
+            starts = [m.start() for m in _MARKUP.finditer(data) if m.group(1) is not None]
+            newlines = np.flatnonzero(np.frombuffer(data, np.uint8) == ord("\n"))
+            self._lines = np.searchsorted(newlines, starts) + 1
+        i = self._order.get(el)
+        if i is None or len(self._lines) < len(self._order):  # changed since it was parsed
+            return int(el.sourceline or 0)
+        return int(self._lines[i])
+
+    def error(self, el: Element, message: str) -> CellError:
+        return InputError.at(message, self.name, self.line(el))
+
+
+# --- traversal -------------------------------------------------------------------------------
 
 
 @dataclass
@@ -154,29 +197,24 @@ class _Loader:
         self.meshes = meshes
         self.owners: dict[str, _Owner] = {}
         self.loose = _Owner("", "", 0, np.eye(4), np.eye(4))
-        self.active: set[etree._Element] = set()  # elements being visited: USE cycles
-        self.cache: dict[etree._Element, tuple[Mat, Ints]] = {}  # geometry, local frame
-        self.points: dict[etree._Element, Mat] = {}  # Coordinate nodes, often USE'd
+        self.active: set[Element] = set()  # elements being visited: USE cycles
+        self.cache: dict[Element, tuple[Mat, Ints]] = {}  # geometry, in its own frame
+        self.points: dict[Element, Mat] = {}  # Coordinate nodes, often USE'd
         self.visits = 0
         self.triangles = 0
 
-    # files
-
-    def open(self, path: Path, chain: tuple[Path, ...]) -> _File:
-        name = str(path)
-        root_el = parse_xml(path, kind="x3d").getroot()
-        if _tag(root_el) != "X3D":
-            raise InputError.at(
-                f"the root element must be X3D, got '{root_el.tag}'", name, root_el.sourceline
-            )
-        scene = next((c for c in root_el if _tag(c) == "Scene"), None)
+    def open(self, path: Path, chain: tuple[Path, ...]) -> tuple[_File, Element]:
+        """The file and its Scene element."""
+        root = parse_xml(path, kind="x3d").getroot()
+        f = _File(path, root, chain)
+        if _tag(root) != "X3D":
+            raise f.error(root, f"the root element must be X3D, got '{root.tag}'")
+        scene = next((c for c in root if _tag(c) == "Scene"), None)
         if scene is None:
-            raise InputError.at("X3D has no Scene element", name, root_el.sourceline)
-        return _File(name, scene, _definitions(scene, name), (*chain, path.resolve()))
+            raise f.error(root, "X3D has no Scene element")
+        return f, scene
 
-    # elements
-
-    def visit(self, el: etree._Element, ctx: _Ctx) -> None:
+    def visit(self, el: Element, ctx: _Ctx) -> None:
         tag = _tag(el)
         if tag is None:
             return
@@ -185,22 +223,21 @@ class _Loader:
         if use is not None:
             el = self._use(el, tag, use, ctx.file)
             ctx = replace(ctx, instancing=True)
-        if tag in GROUPS or tag in ("Shape", "Inline"):
+        if tag in _CONTENT:
             self.active.add(el)
             try:
                 self._dispatch(el, tag, replace(ctx, depth=ctx.depth + 1))
             finally:
                 self.active.discard(el)
         elif any(_tag(d) in _CONTENT for d in el.iter(etree.Element)):
-            raise InputError.at(
+            raise ctx.file.error(
+                el,
                 f"unsupported node '{tag}' around geometry; supported grouping nodes: "
                 + ", ".join(GROUPS),
-                ctx.file.name,
-                el.sourceline,
             )
-        # anything else (head, Viewpoint, lights, Background, ...) has no geometry: ignored
+        # anything else (Viewpoint, lights, Background, ...) has no geometry: ignored
 
-    def _dispatch(self, el: etree._Element, tag: str, ctx: _Ctx) -> None:
+    def _dispatch(self, el: Element, tag: str, ctx: _Ctx) -> None:
         if tag == "Shape":
             if self.meshes:
                 self._shape(el, ctx)
@@ -209,172 +246,139 @@ class _Loader:
         else:
             self._group(el, tag, ctx)
 
-    def _count(self, el: etree._Element, ctx: _Ctx) -> None:
+    def _count(self, el: Element, ctx: _Ctx) -> None:
         self.visits += 1
         if self.visits > MAX_VISITS:
-            raise InputError.at(
+            raise ctx.file.error(
+                el,
                 f"the scene expands to more than {MAX_VISITS} nodes "
                 "(DEF/USE or Inline repeated too often)",
-                ctx.file.name,
-                el.sourceline,
             )
         if ctx.depth >= MAX_NESTING:
-            raise InputError.at(
-                f"nodes nest more than {MAX_NESTING} levels deep", ctx.file.name, el.sourceline
-            )
+            raise ctx.file.error(el, f"nodes nest more than {MAX_NESTING} levels deep")
 
-    def _use(self, el: etree._Element, tag: str, use: str, file: _File) -> etree._Element:
-        target = file.defs.get(use)
+    def _use(self, el: Element, tag: str, use: str, f: _File) -> Element:
+        target = f.defs.get(use)
         if target is None:
-            close = difflib.get_close_matches(use, list(file.defs), n=1)
+            close = difflib.get_close_matches(use, list(f.defs), n=1)
             hint = f"; did you mean '{close[0]}'?" if close else ""
-            raise InputError.at(
-                f"USE '{use}' names no DEF or id in this file{hint}", file.name, el.sourceline
-            )
+            raise f.error(el, f"USE '{use}' names no DEF or id in this file{hint}")
         if _tag(target) != tag:
-            raise InputError.at(
-                f"{tag} USE '{use}' names a {_tag(target)} (line {target.sourceline})",
-                file.name,
-                el.sourceline,
-            )
+            raise f.error(el, f"{tag} USE '{use}' names a {_tag(target)} (line {f.line(target)})")
         if target in self.active:
-            raise InputError.at(
-                f"USE '{use}' is inside the node it names (line {target.sourceline})",
-                file.name,
-                el.sourceline,
-            )
+            raise f.error(el, f"USE '{use}' is inside the node it names (line {f.line(target)})")
         return target
 
-    def _group(self, el: etree._Element, tag: str, ctx: _Ctx) -> None:
+    def _group(self, el: Element, tag: str, ctx: _Ctx) -> None:
         if tag == "Transform":
-            M, R = _transform_fields(el, ctx.file.name)
+            M, R = _transform_fields(el, ctx.file)
             ctx = replace(ctx, A=ctx.A @ M, R=ctx.R @ R)
         name = _name(el)
         if name is not None and not ctx.instancing:
             ctx = replace(ctx, owner=self._define(name, el, ctx))
         children = _children(el)
         if tag == "Switch":
-            children = _chosen(el, children, ctx.file.name)
+            children = _chosen(el, children, ctx.file)
         for child in children:
             self.visit(child, ctx)
 
-    def _define(self, name: str, el: etree._Element, ctx: _Ctx) -> _Owner:
+    def _define(self, name: str, el: Element, ctx: _Ctx) -> _Owner:
         first = self.owners.get(name)
-        if first is not None:
-            raise InputError.at(
-                f"duplicate name '{name}' (first defined at "
-                f"{display_path(first.file)}:{first.line})",
-                ctx.file.name,
-                el.sourceline,
-            )
+        if first is not None:  # the same name in two files
+            where = f"{display_path(first.file)}:{first.line}"
+            raise ctx.file.error(el, f"duplicate name '{name}' (first defined at {where})")
         T = _affine(ctx.R, ctx.A[:3, 3])
-        owner = _Owner(name, ctx.file.name, el.sourceline or 0, T, inverse(T))
+        owner = _Owner(name, ctx.file.name, ctx.file.line(el), T, inverse(T))
         self.owners[name] = owner
         return owner
 
-    def _inline(self, el: etree._Element, ctx: _Ctx) -> None:
+    def _inline(self, el: Element, ctx: _Ctx) -> None:
         path = self._inline_path(el, ctx.file)
-        if path.resolve() in ctx.file.chain:
-            loop = " -> ".join(display_path(p) for p in (*ctx.file.chain, path))
-            raise InputError.at(
-                f"Inline '{display_path(path)}' includes itself ({loop})",
-                ctx.file.name,
-                el.sourceline,
-            )
+        if path in ctx.file.chain:
+            loop = " -> ".join(self._rel(p) for p in (*ctx.file.chain, path))
+            raise ctx.file.error(el, f"Inline '{self._rel(path)}' includes itself ({loop})")
         if len(ctx.file.chain) > MAX_INLINE_DEPTH:
-            raise InputError.at(
-                f"Inline '{display_path(path)}' nests files more than {MAX_INLINE_DEPTH} deep",
-                ctx.file.name,
-                el.sourceline,
+            raise ctx.file.error(
+                el, f"Inline '{self._rel(path)}' nests files more than {MAX_INLINE_DEPTH} deep"
             )
-        inlined = self.open(path, ctx.file.chain)
+        inlined, scene = self.open(path, ctx.file.chain)
         ctx = replace(ctx, file=inlined)
-        for child in _children(inlined.scene):
+        for child in _children(scene):
             self.visit(child, ctx)
 
-    def _inline_path(self, el: etree._Element, file: _File) -> Path:
+    def _rel(self, path: Path) -> str:
+        """A path as the cell names it: relative to the cell folder."""
+        return str(path.relative_to(self.root)) if path.is_relative_to(self.root) else str(path)
+
+    def _inline_path(self, el: Element, f: _File) -> Path:
         """The first of the Inline's urls that exists. Urls are relative to the file that
-        names them, as in X3D, and must stay inside the cell folder."""
-        line = el.sourceline
+        names them, as in X3D, and every one must stay inside the cell folder."""
         urls = _mfstring(el.get("url", ""))
         if not urls:
-            raise InputError.at("Inline has no url", file.name, line)
-        base = file.chain[-1].parent
+            raise f.error(el, "Inline has no url")
         targets = []
         for url in urls:
             if _URL.match(url) and not _DRIVE.match(url):
-                raise InputError.at(
+                raise f.error(
+                    el,
                     f"Inline url '{url}' is a URL; only files inside the cell folder "
                     f"{self.root} are allowed",
-                    file.name,
-                    line,
                 )
-            target = (base / url).resolve()
+            target = (f.chain[-1].parent / url).resolve()
             if not target.is_relative_to(self.root):
-                raise InputError.at(
-                    f"Inline url '{url}' points outside the cell folder {self.root}",
-                    file.name,
-                    line,
-                )
+                raise f.error(el, f"Inline url '{url}' points outside the cell folder {self.root}")
             targets.append(target)
         found = next((t for t in targets if t.is_file()), targets[0])
-        return resolve_inside(self.root, str(found.relative_to(self.root)), file.name, line)
+        return resolve_inside(self.root, self._rel(found), f.name, f.line(el))
 
-    def _shape(self, el: etree._Element, ctx: _Ctx) -> None:
+    def _shape(self, el: Element, ctx: _Ctx) -> None:
         for child in el:
             tag = _tag(child)
-            if tag is None or tag == "Appearance" or tag.startswith("Metadata"):
-                continue
-            if tag in NO_SURFACE:
+            if tag is None or tag == "Appearance" or tag in NO_SURFACE or tag.startswith("Meta"):
                 continue
             if tag not in GEOMETRY:
-                raise InputError.at(
-                    f"unsupported geometry node '{tag}'; supported: " + ", ".join(GEOMETRY),
-                    ctx.file.name,
-                    child.sourceline,
+                raise ctx.file.error(
+                    child, f"unsupported geometry node '{tag}'; supported: " + ", ".join(GEOMETRY)
                 )
             use = child.get("USE")
             geom = self._use(child, tag, use, ctx.file) if use is not None else child
             self._add(*self._geometry(geom, tag, ctx.file), ctx, child)
 
-    def _geometry(self, el: etree._Element, tag: str, file: _File) -> tuple[Mat, Ints]:
+    def _geometry(self, el: Element, tag: str, f: _File) -> tuple[Mat, Ints]:
         cached = self.cache.get(el)
         if cached is None:
-            cached = _BUILDERS[tag](el, file, self)
-            self.cache[el] = cached
+            cached = self.cache[el] = _BUILDERS[tag](el, f, self)
         return cached
 
-    def coordinates(self, el: etree._Element, file: _File) -> Mat:
+    def coordinates(self, el: Element, f: _File) -> Mat:
         """The points of the Coordinate child of a geometry node."""
         coord = next((c for c in el if _tag(c) in COORDINATES), None)
         if coord is None:
-            raise InputError.at(f"{_label(el)}: no Coordinate child", file.name, el.sourceline)
+            raise f.error(el, f"{_label(el)}: no Coordinate child")
         use = coord.get("USE")
         if use is not None:
-            coord = self._use(coord, str(_tag(coord)), use, file)
+            coord = self._use(coord, str(_tag(coord)), use, f)
         pts = self.points.get(coord)
         if pts is None:
-            pts = self.points[coord] = _points(coord, "point", file.name)
+            pts = self.points[coord] = _points(coord, "point", f)
         return pts
 
-    def _add(self, V: Mat, F: Ints, ctx: _Ctx, el: etree._Element) -> None:
+    def _add(self, V: Mat, F: Ints, ctx: _Ctx, el: Element) -> None:
         if len(F) == 0:
             return
         self.triangles += len(F)
         if self.triangles > MAX_TRIANGLES:
-            raise InputError.at(
-                f"the scene has more than {MAX_TRIANGLES} triangles", ctx.file.name, el.sourceline
-            )
+            raise ctx.file.error(el, f"the scene has more than {MAX_TRIANGLES} triangles")
         owner = ctx.owner or self.loose
-        M = owner.T_inv @ ctx.A  # shape frame -> the owner's rigid frame
+        M = owner.T_inv @ ctx.A  # the shape's frame -> the owner's rigid frame
         owner.parts.append((V @ M[:3, :3].T + M[:3, 3], F))
 
 
 # --- elements and fields ---------------------------------------------------------------------
 
 
-def _tag(el: etree._Element) -> str | None:
-    """The canonical X3D name of an element, or None for comments and processing instructions."""
+def _tag(el: Element) -> str | None:
+    """The canonical X3D name of an element; None for comments and processing instructions."""
     tag = el.tag
     if not isinstance(tag, str):
         return None
@@ -383,38 +387,17 @@ def _tag(el: etree._Element) -> str | None:
     return _CANON.get(tag.lower(), tag)
 
 
-def _name(el: etree._Element) -> str | None:
+def _name(el: Element) -> str | None:
     name: str | None = el.get("DEF") or el.get("id")
     return name
 
 
-def _label(el: etree._Element) -> str:
+def _label(el: Element) -> str:
     name = _name(el)
     return f"{_tag(el)} '{name}'" if name else str(_tag(el))
 
 
-def _definitions(scene: etree._Element, file: str) -> dict[str, etree._Element]:
-    defs: dict[str, etree._Element] = {}
-    for el in scene.iter(etree.Element):
-        for attr in ("DEF", "id"):
-            name = el.get(attr)
-            if not name:
-                continue
-            first = defs.get(name)
-            if first is el:
-                continue
-            if first is not None:
-                raise InputError.at(
-                    f"duplicate name '{name}' (first defined at "
-                    f"{display_path(file)}:{first.sourceline})",
-                    file,
-                    el.sourceline,
-                )
-            defs[name] = el
-    return defs
-
-
-def _children(el: etree._Element) -> list[etree._Element]:
+def _children(el: Element) -> list[Element]:
     """The element children that are scene nodes (not a Collision's proxy, not metadata)."""
     return [
         c
@@ -423,10 +406,10 @@ def _children(el: etree._Element) -> list[etree._Element]:
     ]
 
 
-def _chosen(el: etree._Element, children: list[etree._Element], file: str) -> list[etree._Element]:
-    which = _field(el, "whichChoice", 1, np.array([-1.0]), file, "an integer")[0]
+def _chosen(el: Element, children: list[Element], f: _File) -> list[Element]:
+    which = _field(el, "whichChoice", 1, np.array([-1.0]), f, "an integer")[0]
     if which != int(which):
-        raise _bad(el, "whichChoice", "an integer", file)
+        raise _bad(el, "whichChoice", "an integer", f)
     return [children[int(which)]] if 0 <= which < len(children) else []
 
 
@@ -464,7 +447,7 @@ def _ints(text: str) -> Ints | None:
 
 
 def _first_bad(text: str, integers: bool) -> str:
-    """What is wrong with a long number array, found token by token (only on the error path)."""
+    """What is wrong with a long number array, token by token (only on the error path)."""
     tokens = _plain(text).split()
     for i, tok in enumerate(tokens):
         try:
@@ -480,59 +463,56 @@ def _shown(text: str) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
-def _bad(el: etree._Element, attr: str, expect: str, file: str) -> CellError:
-    return InputError.at(
-        f"{_label(el)}: {attr} must be {expect}, got '{_shown(el.get(attr, ''))}'",
-        file,
-        el.sourceline,
-    )
+def _bad(el: Element, attr: str, expect: str, f: _File) -> CellError:
+    got = _shown(el.get(attr, ""))
+    return f.error(el, f"{_label(el)}: {attr} must be {expect}, got '{got}'")
 
 
-def _field(el: etree._Element, attr: str, n: int, default: Mat, file: str, expect: str = "") -> Mat:
+def _bad_array(el: Element, attr: str, expect: str, f: _File, ints: bool) -> CellError:
+    got = _first_bad(el.get(attr, ""), ints)
+    return f.error(el, f"{_label(el)}: {attr} must be {expect}, got {got}")
+
+
+def _field(el: Element, attr: str, n: int, default: Mat, f: _File, expect: str = "") -> Mat:
     """A fixed-size numeric field (SFVec3f, SFRotation, SFFloat), or its default if absent."""
     text = el.get(attr)
     if text is None:
         return default
     a = _floats(text)
     if a is None or a.size != n:
-        raise _bad(el, attr, expect or (f"{n} numbers" if n > 1 else "a number"), file)
+        raise _bad(el, attr, expect or (f"{n} numbers" if n > 1 else "a number"), f)
     return a
 
 
-def _positive(el: etree._Element, attr: str, n: int, default: float, file: str) -> Mat:
+def _positive(el: Element, attr: str, n: int, default: float, f: _File) -> Mat:
     expect = f"{n} positive numbers" if n > 1 else "a positive number"
-    a = _field(el, attr, n, np.full(n, default), file, expect)
+    a = _field(el, attr, n, np.full(n, default), f, expect)
     if (a <= 0).any():
-        raise _bad(el, attr, expect, file)
+        raise _bad(el, attr, expect, f)
     return a
 
 
-def _bad_array(el: etree._Element, attr: str, expect: str, file: str, ints: bool) -> CellError:
-    got = _first_bad(el.get(attr, ""), ints)
-    return InputError.at(f"{_label(el)}: {attr} must be {expect}, got {got}", file, el.sourceline)
-
-
-def _points(el: etree._Element, attr: str, file: str) -> Mat:
+def _points(el: Element, attr: str, f: _File) -> Mat:
     a = _floats(el.get(attr, ""))
     if a is None or a.size % 3:
-        raise _bad_array(el, attr, "x y z triples of numbers", file, False)
+        raise _bad_array(el, attr, "x y z triples of numbers", f, False)
     return a.reshape(-1, 3)
 
 
-def _indices(el: etree._Element, attr: str, file: str) -> Ints:
+def _indices(el: Element, attr: str, f: _File) -> Ints:
     a = _ints(el.get(attr, ""))
     if a is None:
-        raise _bad_array(el, attr, "integers", file, True)
+        raise _bad_array(el, attr, "integers", f, True)
     return a
 
 
-def _transform_fields(el: etree._Element, file: str) -> tuple[Mat, Mat]:
+def _transform_fields(el: Element, f: _File) -> tuple[Mat, Mat]:
     """ISO 19775 Transform: the affine matrix T·C·R·SR·S·SR⁻¹·C⁻¹ and the rotation R alone."""
-    t = _field(el, "translation", 3, _ZERO3, file)
-    r = _field(el, "rotation", 4, _NO_ROTATION, file)
-    s = _field(el, "scale", 3, _ONE3, file)
-    c = _field(el, "center", 3, _ZERO3, file)
-    so = _field(el, "scaleOrientation", 4, _NO_ROTATION, file)
+    t = _field(el, "translation", 3, _ZERO3, f)
+    r = _field(el, "rotation", 4, _NO_ROTATION, f)
+    s = _field(el, "scale", 3, _ONE3, f)
+    c = _field(el, "center", 3, _ZERO3, f)
+    so = _field(el, "scaleOrientation", 4, _NO_ROTATION, f)
     R = axis_angle_to_matrix(r[:3].tolist(), float(r[3]))
     SR = axis_angle_to_matrix(so[:3].tolist(), float(so[3]))
     L = R @ SR @ np.diag(s) @ SR.T
@@ -541,19 +521,20 @@ def _transform_fields(el: etree._Element, file: str) -> tuple[Mat, Mat]:
 
 # --- geometry, in the geometry node's own frame ----------------------------------------------
 
+Geometry: TypeAlias = tuple[Mat, Ints]
 
-def _in_range(el: etree._Element, attr: str, idx: Ints, n: int, file: str) -> None:
+
+def _in_range(el: Element, attr: str, idx: Ints, n: int, f: _File) -> None:
     bad = idx[(idx < 0) | (idx >= n)]
     if bad.size:
-        raise InputError.at(
+        raise f.error(
+            el,
             f"{_label(el)}: {attr} refers to point {int(bad[0])}, "
             f"but there are {n} points (0..{n - 1})",
-            file,
-            el.sourceline,
         )
 
 
-def _oriented(el: etree._Element, F: Ints) -> Ints:
+def _oriented(el: Element, F: Ints) -> Ints:
     return F[:, ::-1].copy() if el.get("ccw", "true").strip().lower() == "false" else F
 
 
@@ -564,74 +545,69 @@ def _fan(idx: Ints) -> Ints:
     sep = idx == -1
     pos = np.arange(idx.size)
     starts = np.concatenate(([True], sep[:-1]))
-    first = np.maximum.accumulate(np.where(starts, pos, 0))  # start of each one's polygon
+    first = np.maximum.accumulate(np.where(starts, pos, 0))  # where each one's polygon starts
     nxt = np.append(sep[1:], True)
     mid = ~sep & (pos > first) & ~nxt  # every vertex but the first and last of a polygon
     j = pos[mid]
     return np.stack([idx[first[j]], idx[j], idx[j + 1]], axis=1)
 
 
-def _indexed_face_set(el: etree._Element, file: _File, loader: _Loader) -> tuple[Mat, Ints]:
-    V = loader.coordinates(el, file)
-    idx = _indices(el, "coordIndex", file.name)
-    _in_range(el, "coordIndex", idx[idx != -1], len(V), file.name)
+def _indexed_face_set(el: Element, f: _File, loader: _Loader) -> Geometry:
+    V = loader.coordinates(el, f)
+    idx = _indices(el, "coordIndex", f)
+    _in_range(el, "coordIndex", idx[idx != -1], len(V), f)
     return V, _oriented(el, _fan(idx))
 
 
-def _indexed_triangle_set(el: etree._Element, file: _File, loader: _Loader) -> tuple[Mat, Ints]:
-    V = loader.coordinates(el, file)
-    idx = _indices(el, "index", file.name)
+def _indexed_triangle_set(el: Element, f: _File, loader: _Loader) -> Geometry:
+    V = loader.coordinates(el, f)
+    idx = _indices(el, "index", f)
     if idx.size % 3:
-        raise _bad_array(el, "index", "integers in triples", file.name, True)
-    _in_range(el, "index", idx, len(V), file.name)
+        raise _bad_array(el, "index", "integers in triples", f, True)
+    _in_range(el, "index", idx, len(V), f)
     return V, _oriented(el, idx.reshape(-1, 3))
 
 
-def _triangle_set(el: etree._Element, file: _File, loader: _Loader) -> tuple[Mat, Ints]:
-    V = loader.coordinates(el, file)
+def _triangle_set(el: Element, f: _File, loader: _Loader) -> Geometry:
+    V = loader.coordinates(el, f)
     if len(V) % 3:
-        raise InputError.at(
+        raise f.error(
+            el,
             f"{_label(el)}: the Coordinate must hold whole triangles (3 points each), "
             f"got {len(V)} points",
-            file.name,
-            el.sourceline,
         )
     return V, _oriented(el, np.arange(len(V), dtype=np.int64).reshape(-1, 3))
 
 
-def _primitive(mesh: trimesh.Trimesh, T: Mat | None = None) -> tuple[Mat, Ints]:
+def _primitive(mesh: trimesh.Trimesh, T: Mat | None = None) -> Geometry:
     if T is not None:
         mesh.apply_transform(T)
     return np.asarray(mesh.vertices, float), np.asarray(mesh.faces, np.int64)
 
 
-_Z_TO_Y = transform(rot_x(-np.pi / 2))  # trimesh builds round shapes along z; X3D along y
+def _box(el: Element, f: _File, _: _Loader) -> Geometry:
+    return _primitive(trimesh.creation.box(extents=_positive(el, "size", 3, 2.0, f)))
 
 
-def _box(el: etree._Element, file: _File, _: _Loader) -> tuple[Mat, Ints]:
-    size = _positive(el, "size", 3, 2.0, file.name)
-    return _primitive(trimesh.creation.box(extents=size))
-
-
-def _cylinder(el: etree._Element, file: _File, _: _Loader) -> tuple[Mat, Ints]:
-    r = _positive(el, "radius", 1, 1.0, file.name)[0]
-    h = _positive(el, "height", 1, 2.0, file.name)[0]
+def _cylinder(el: Element, f: _File, _: _Loader) -> Geometry:
+    r = _positive(el, "radius", 1, 1.0, f)[0]
+    h = _positive(el, "height", 1, 2.0, f)[0]
     return _primitive(trimesh.creation.cylinder(radius=r, height=h, sections=_SECTIONS), _Z_TO_Y)
 
 
-def _cone(el: etree._Element, file: _File, _: _Loader) -> tuple[Mat, Ints]:
-    r = _positive(el, "bottomRadius", 1, 1.0, file.name)[0]
-    h = _positive(el, "height", 1, 2.0, file.name)[0]
+def _cone(el: Element, f: _File, _: _Loader) -> Geometry:
+    r = _positive(el, "bottomRadius", 1, 1.0, f)[0]
+    h = _positive(el, "height", 1, 2.0, f)[0]
     cone = trimesh.creation.cone(radius=r, height=h, sections=_SECTIONS)  # base at z = 0
-    return _primitive(cone, _Z_TO_Y @ transform(t=(0.0, 0.0, -h / 2)))
+    return _primitive(cone, _Z_TO_Y @ _affine(np.eye(3), np.array([0.0, 0.0, -h / 2])))
 
 
-def _sphere(el: etree._Element, file: _File, _: _Loader) -> tuple[Mat, Ints]:
-    r = _positive(el, "radius", 1, 1.0, file.name)[0]
+def _sphere(el: Element, f: _File, _: _Loader) -> Geometry:
+    r = _positive(el, "radius", 1, 1.0, f)[0]
     return _primitive(trimesh.creation.icosphere(subdivisions=2, radius=r))
 
 
-_BUILDERS = {
+_BUILDERS: dict[str, Callable[[Element, _File, _Loader], Geometry]] = {
     "Box": _box,
     "Cone": _cone,
     "Cylinder": _cylinder,
@@ -642,7 +618,7 @@ _BUILDERS = {
 }
 
 
-def _mesh(parts: list[tuple[Mat, Ints]]) -> trimesh.Trimesh | None:
+def _mesh(parts: list[Geometry]) -> trimesh.Trimesh | None:
     if not parts:
         return None
     offsets = np.cumsum([0] + [len(V) for V, _ in parts[:-1]])
