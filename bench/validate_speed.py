@@ -28,8 +28,10 @@ def main() -> None:
         t0 = time.perf_counter()
         subprocess.run(cmd, cwd=ROOT, check=True, capture_output=True)
         times.append(time.perf_counter() - t0)
-    print(f"cellengine validate cells/: median {statistics.median(times):.3f} s, "
-          f"min {min(times):.3f} s, max {max(times):.3f} s over {args.runs} runs")
+    print(
+        f"cellengine validate cells/: median {statistics.median(times):.3f} s, "
+        f"min {min(times):.3f} s, max {max(times):.3f} s over {args.runs} runs"
+    )
 
 
 if __name__ == "__main__":

@@ -10,6 +10,7 @@ import os
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Self
 
 EXIT_OK = 0
 EXIT_INVALID = 1
@@ -62,7 +63,7 @@ class CellError(Exception):
     @classmethod
     def at(
         cls, message: str, file: str | Path | None, line: int | None = None, col: int | None = None
-    ) -> CellError:
+    ) -> Self:
         return cls(Problem(message, str(file) if file is not None else None, line, col))
 
 

@@ -41,9 +41,7 @@ def matrix_to_rpy(R: Mat) -> Mat:
         pitch = np.copysign(np.pi / 2, sp)
         roll = np.arctan2(np.copysign(1.0, sp) * R[0, 1], R[1, 1])
         return np.array([roll, pitch, 0.0])
-    return np.array(
-        [np.arctan2(R[2, 1], R[2, 2]), np.arcsin(sp), np.arctan2(R[1, 0], R[0, 0])]
-    )
+    return np.array([np.arctan2(R[2, 1], R[2, 2]), np.arcsin(sp), np.arctan2(R[1, 0], R[0, 0])])
 
 
 def axis_angle_to_matrix(axis: Sequence[float], angle: float) -> Mat:
@@ -54,10 +52,11 @@ def axis_angle_to_matrix(axis: Sequence[float], angle: float) -> Mat:
         return np.eye(3)
     k = a / n
     K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)
+    R: Mat = np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)
+    return R
 
 
-def transform(R: Mat | None = None, t: Sequence[float] | None = None) -> Mat:
+def transform(R: Mat | None = None, t: Sequence[float] | Mat | None = None) -> Mat:
     T = np.eye(4)
     if R is not None:
         T[:3, :3] = R

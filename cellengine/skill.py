@@ -79,8 +79,10 @@ def _walk(value: Any, tp: Any, meta: list[Any], loc: Loc) -> Iterator[tuple[Loc,
     elif isinstance(value, tuple | list):
         args = typing.get_args(tp)
         for i, item in enumerate(value):
-            item_tp = args[0] if len(args) == 2 and args[1] is Ellipsis else (
-                args[i] if i < len(args) else Any
+            item_tp = (
+                args[0]
+                if len(args) == 2 and args[1] is Ellipsis
+                else (args[i] if i < len(args) else Any)
             )
             yield from _walk(item, item_tp, [], (*loc, i))
     elif isinstance(value, str):

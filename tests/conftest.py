@@ -9,11 +9,11 @@ import pytest
 ROOT = Path(__file__).resolve().parent.parent
 CELLS = ROOT / "cells"
 DATA = Path(__file__).resolve().parent / "data"
-REMODEL = ROOT.parent.parent / "shared" / "remodel"
+REMODEL = ROOT.parent / "shared" / "remodel"
 
 
 @pytest.fixture
-def write(tmp_path: Path):  # type: ignore[no-untyped-def]
+def write(tmp_path: Path):
     """Write a text file under tmp_path and return its path."""
 
     def _write(name: str, text: str) -> Path:

@@ -13,8 +13,13 @@ from cellengine.info.platform import Element, Keypoint, Platform
 from cellengine.world import World
 
 
-def element(name: str, xyz: tuple[float, float, float], keypoints: dict[str, g.Mat],
-            dims: dict[str, float] | None = None, note: str = "") -> Element:
+def element(
+    name: str,
+    xyz: tuple[float, float, float],
+    keypoints: dict[str, g.Mat],
+    dims: dict[str, float] | None = None,
+    note: str = "",
+) -> Element:
     return Element(
         name=name,
         model="m",
@@ -29,24 +34,31 @@ def routing_world() -> World:
     """Platform 'routing' at (0.5, -0.1, 0) turned 90 deg about z, with three guides."""
     slot = g.pose([0.0, 0.0, 0.055])
     guides = {
-        f"guide{i}": element(f"guide{i}", (0.1 * i, 0.0, 0.0), {"slot": slot, "top": np.eye(4)},
-                             {"length": 0.01, "gap": 0.01})
+        f"guide{i}": element(
+            f"guide{i}",
+            (0.1 * i, 0.0, 0.0),
+            {"slot": slot, "top": np.eye(4)},
+            {"length": 0.01, "gap": 0.01},
+        )
         for i in (1, 2, 3)
     }
     guides["plate"] = element("plate", (0, 0, 0), {}, note="model 'x' is not defined")
-    platform = Platform("routing", g.pose([0.5, -0.1, 0.0], [0, 0, np.pi / 2]),
-                        MappingProxyType(guides))
+    platform = Platform(
+        "routing", g.pose([0.5, -0.1, 0.0], [0, 0, np.pi / 2]), MappingProxyType(guides)
+    )
     cell = Cell.model_validate(
         {"name": "c", "robots": {"left": {"model": "ur5e"}, "right": {"model": "ur5e"}}}
     )
     objects = Objects.model_validate(
-        {"cables": {"cable1": {"length": 0.65, "diameter": 0.006}},
-         "containers": {"vial1": {"kind": "vial", "diameter": 0.028, "height": 0.06}}}
+        {
+            "cables": {"cable1": {"length": 0.65, "diameter": 0.006}},
+            "containers": {"vial1": {"kind": "vial", "diameter": 0.028, "height": 0.06}},
+        }
     )
     return World(cell, Path_("cell.yaml"), MappingProxyType({"routing": platform}), objects)
 
 
-def Path_(p: str):  # type: ignore[no-untyped-def]
+def Path_(p: str):
     from pathlib import Path
 
     return Path(p)

@@ -27,17 +27,32 @@ def test_dimensions_and_objects() -> None:
 @pytest.mark.parametrize(
     ("ref", "kind", "message"),
     [
-        ("routing.guide9", "guide",
-         "unknown guide 'routing.guide9'; known: guide1, guide2, guide3, plate"),
-        ("routing.guide9", "keypoint",
-         "unknown element 'routing.guide9'; known: guide1, guide2, guide3, plate"),
+        (
+            "routing.guide9",
+            "guide",
+            "unknown guide 'routing.guide9'; known: guide1, guide2, guide3, plate",
+        ),
+        (
+            "routing.guide9",
+            "keypoint",
+            "unknown element 'routing.guide9'; known: guide1, guide2, guide3, plate",
+        ),
         ("board.J3.1", "keypoint", "unknown platform 'board' in 'board.J3.1'; known: routing"),
-        ("routing.guide1.bottom", "keypoint",
-         "unknown keypoint 'routing.guide1.bottom'; known: slot, top"),
-        ("routing", "keypoint",
-         "'routing' is not a keypoint reference; write platform.element[.keypoint]"),
-        ("routing.plate", "keypoint",
-         "element 'routing.plate' has no keypoints: model 'x' is not defined"),
+        (
+            "routing.guide1.bottom",
+            "keypoint",
+            "unknown keypoint 'routing.guide1.bottom'; known: slot, top",
+        ),
+        (
+            "routing",
+            "keypoint",
+            "'routing' is not a keypoint reference; write platform.element[.keypoint]",
+        ),
+        (
+            "routing.plate",
+            "keypoint",
+            "element 'routing.plate' has no keypoints: model 'x' is not defined",
+        ),
         ("cable9", "cable", "unknown cable 'cable9'; known: cable1"),
         ("vial9", "object", "unknown object 'vial9'; known: cable1, vial1"),
     ],

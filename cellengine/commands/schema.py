@@ -20,8 +20,11 @@ BASE = "https://cellengine.dev/schemas/"
 
 
 def add_parser(sub: Any, name: str) -> None:
-    p = sub.add_parser(name, help="write JSON Schemas of the YAML files",
-                       description="Write cell, objects and plan JSON Schemas into a folder.")
+    p = sub.add_parser(
+        name,
+        help="write JSON Schemas of the YAML files",
+        description="Write cell, objects and plan JSON Schemas into a folder.",
+    )
     p.add_argument("--out", type=Path, default=Path("schemas"), help="folder (default: schemas)")
     p.set_defaults(run=run)
 

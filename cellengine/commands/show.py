@@ -14,9 +14,12 @@ from cellengine.info.load import load_world
 
 
 def add_parser(sub: Any, name: str) -> None:
-    p = sub.add_parser(name, help="print every keypoint of a cell in the cell frame",
-                       description="Print every keypoint in the cell frame: a table with xyz "
-                       "in mm and rpy in deg, or JSON in metres and radians.")
+    p = sub.add_parser(
+        name,
+        help="print every keypoint of a cell in the cell frame",
+        description="Print every keypoint in the cell frame: a table with xyz "
+        "in mm and rpy in deg, or JSON in metres and radians.",
+    )
     p.add_argument("cell", type=Path, metavar="CELL", help="a cell.yaml, or its folder")
     p.add_argument("--json", action="store_true", help="print JSON (metres, radians)")
     p.set_defaults(run=run)
@@ -31,8 +34,10 @@ def run(args: argparse.Namespace) -> int:
     world = load_world(path)
     rows = {name: xyz_rpy(T) for name, T in world.keypoints().items()}
     if args.json:
-        out = {n: {"xyz": [round(float(v), 9) for v in xyz],
-                   "rpy": [round(float(v), 9) for v in rpy]} for n, (xyz, rpy) in rows.items()}
+        out = {
+            n: {"xyz": [round(float(v), 9) for v in xyz], "rpy": [round(float(v), 9) for v in rpy]}
+            for n, (xyz, rpy) in rows.items()
+        }
         print(json.dumps({"keypoints": out}, indent=2))
         return EXIT_OK
     width = max([len("keypoint"), *map(len, rows)])

@@ -19,8 +19,11 @@ _KEYS = {"plan": ("steps",), "cell": ("robots",), "objects": ("cables", "contain
 
 
 def add_parser(sub: Any, name: str) -> None:
-    p = sub.add_parser(name, help="check cell, objects and plan files",
-                       description="Check cell, objects and plan files, or every one in folders.")
+    p = sub.add_parser(
+        name,
+        help="check cell, objects and plan files",
+        description="Check cell, objects and plan files, or every one in folders.",
+    )
     p.add_argument("paths", nargs="+", metavar="PATH", type=Path)
     p.add_argument("--format", choices=("text", "json", "github"), default="text")
     p.set_defaults(run=run)
@@ -82,8 +85,10 @@ def _validate_file(f: Path, explicit: bool, world_of: Any) -> Result | None:
     if kind is None:
         if not explicit:
             return None  # not one of ours: other YAML may live in a folder
-        msg = ("cannot tell what this file is: a cell has 'robots', objects have 'cables' or "
-               "'containers', a plan has 'steps'")
+        msg = (
+            "cannot tell what this file is: a cell has 'robots', objects have 'cables' or "
+            "'containers', a plan has 'steps'"
+        )
         return Result(f, None, [Problem(msg, str(f), 1, 1)])
     result = Result(f, kind)
     try:
@@ -143,8 +148,12 @@ def _json(results: list[Result]) -> None:
                 "kind": r.kind,
                 "ok": not r.problems,
                 "problems": [
-                    {"file": display_path(p.file) if p.file else None, "line": p.line,
-                     "col": p.col, "message": p.message}
+                    {
+                        "file": display_path(p.file) if p.file else None,
+                        "line": p.line,
+                        "col": p.col,
+                        "message": p.message,
+                    }
                     for p in r.problems
                 ],
             }

@@ -36,16 +36,19 @@ def resolve_inside(
     base = root.resolve()
     target = (base / ref).resolve()
     if not target.is_relative_to(base):
-        raise InputError.at(
-            f"file reference '{ref}' points outside the cell folder", *where
-        )
+        raise InputError.at(f"file reference '{ref}' points outside the cell folder", *where)
     if not target.is_file():
         raise InputError.at(f"file '{ref}' not found (looked for {target})", *where)
     return target
 
 
-def read_capped(path: Path, kind: str, file: Path | str | None = None, line: int | None = None,
-                col: int | None = None) -> bytes:
+def read_capped(
+    path: Path,
+    kind: str,
+    file: Path | str | None = None,
+    line: int | None = None,
+    col: int | None = None,
+) -> bytes:
     """Read a whole file, refusing it before reading if it is larger than its kind's cap."""
     cap = MAX_BYTES[kind]
     try:

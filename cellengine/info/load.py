@@ -54,8 +54,12 @@ def _check_cell(cell: Cell, doc: YamlDoc) -> list[Problem]:
 
     for name, robot in cell.robots.items():
         if robot.tool is not None and robot.tool not in cell.tools:
-            err(f"robots.{name}.tool: unknown tool '{robot.tool}'" + known(cell.tools),
-                "robots", name, "tool")
+            err(
+                f"robots.{name}.tool: unknown tool '{robot.tool}'" + known(cell.tools),
+                "robots",
+                name,
+                "tool",
+            )
         if isinstance(robot.model, UrdfModel):
             urdf = ("robots", name, "model", "urdf")
             try:
@@ -63,18 +67,33 @@ def _check_cell(cell: Cell, doc: YamlDoc) -> list[Problem]:
             except InputError as e:
                 out.extend(e.problems)
         elif robot.model not in BUILTIN_ROBOTS:
-            err(f"robots.{name}.model: unknown robot model '{robot.model}'"
-                + known(BUILTIN_ROBOTS) + "; or give {urdf: path, tip: link}",
-                "robots", name, "model")
+            err(
+                f"robots.{name}.model: unknown robot model '{robot.model}'"
+                + known(BUILTIN_ROBOTS)
+                + "; or give {urdf: path, tip: link}",
+                "robots",
+                name,
+                "model",
+            )
         elif robot.home is not None and len(robot.home) != UR_JOINTS:
-            err(f"robots.{name}.home: a {robot.model} has {UR_JOINTS} joints, got "
-                f"{len(robot.home)} angles", "robots", name, "home")
+            err(
+                f"robots.{name}.home: a {robot.model} has {UR_JOINTS} joints, got "
+                f"{len(robot.home)} angles",
+                "robots",
+                name,
+                "home",
+            )
     driver = cell.driver
     if driver.kind == "ur_rtde":
         for arm in driver.arms:
             if arm not in cell.robots:
-                err(f"driver.arms.{arm}: unknown robot '{arm}'" + known(cell.robots),
-                    "driver", "arms", arm, key=True)
+                err(
+                    f"driver.arms.{arm}: unknown robot '{arm}'" + known(cell.robots),
+                    "driver",
+                    "arms",
+                    arm,
+                    key=True,
+                )
         for name in cell.robots:
             if name not in driver.arms:
                 err(f"driver.arms: no address for robot '{name}'", "driver", "arms")

@@ -16,8 +16,13 @@ from cellengine.info.yamlio import Loc, YamlDoc
 M = TypeVar("M", bound=BaseModel)
 
 
-def validate(cls: type[M], doc: YamlDoc, context: dict[str, Any] | None = None,
-             data: Any = None, prefix: Loc = ()) -> M:
+def validate(
+    cls: type[M],
+    doc: YamlDoc,
+    context: dict[str, Any] | None = None,
+    data: Any = None,
+    prefix: Loc = (),
+) -> M:
     """Validate ``data`` (default: the whole document) found at ``prefix`` in ``doc``."""
     value = doc.data if data is None else data
     if value is None:
@@ -49,7 +54,7 @@ def problem(doc: YamlDoc, cls: type[BaseModel], err: ErrorDetails, prefix: Loc =
         if kind == "missing":
             msg = f"missing required key '{name}'"
         else:
-            fields = _fields_at(cls, path[len(prefix):-1])
+            fields = _fields_at(cls, path[len(prefix) : -1])
             msg = f"unknown key '{name}'" + (known(fields) if fields is not None else "")
         loc_text = dotted(parent)
         message = f"{loc_text}: {msg}" if loc_text else msg
@@ -79,9 +84,12 @@ def _describe(err: ErrorDetails, on_key: bool) -> str:
         return f"{what}: use letters, digits, '_' and '-', starting with a letter or '_'"
     msg = err["msg"].removeprefix("Value error, ")
     msg = msg.replace("Input should be", "must be").replace("Input is ", "")
-    if kind in ("literal_error", "enum") or kind.endswith("_type") or kind.endswith("_parsing"):
-        msg += f", got {_show(value)}"
-    elif isinstance(value, str | int | float) and "got" not in msg:
+    if (
+        kind in ("literal_error", "enum")
+        or kind.endswith("_type")
+        or kind.endswith("_parsing")
+        or (isinstance(value, str | int | float) and "got" not in msg)
+    ):
         msg += f", got {_show(value)}"
     return msg
 
@@ -105,15 +113,18 @@ def _data_path(data: Any, prefix: Loc, loc: tuple[int | str, ...]) -> tuple[Loc,
         last = i == len(loc) - 1
         if part == "[key]":
             on_key = True
-        elif isinstance(node, dict) and part in node:
-            node = node[part]
-            path.append(part)
-        elif isinstance(node, list) and isinstance(part, int) and 0 <= part < len(node):
+        elif _has(node, part):
             node = node[part]
             path.append(part)
         elif last and isinstance(node, dict) and isinstance(part, str):
             path.append(part)  # a missing key; anything else not in the data is a union tag
     return tuple(path), on_key
+
+
+def _has(node: Any, part: str | int) -> bool:
+    if isinstance(node, dict):
+        return part in node
+    return isinstance(node, list) and isinstance(part, int) and 0 <= part < len(node)
 
 
 def _fields_at(cls: Any, path: Loc) -> list[str] | None:
@@ -140,7 +151,11 @@ def _step(tp: Any, part: str | int) -> Any:
     if origin is dict:
         return args[1]
     if origin in (list, tuple) and args:
-        return args[0] if origin is list or args[-1] is Ellipsis else args[min(int(part), len(args) - 1)]
+        return (
+            args[0]
+            if origin is list or args[-1] is Ellipsis
+            else args[min(int(part), len(args) - 1)]
+        )
     return None
 
 

@@ -17,8 +17,17 @@ def test_plan_schema_has_one_branch_per_skill() -> None:
     branches = plan["properties"]["steps"]["items"]["oneOf"]
     names = sorted(b["$ref"].rsplit("/", 1)[1] for b in branches)
     assert names == sorted(
-        ["Handover", "Pick", "PickCable", "Place", "PlaceConnector", "Pour", "RouteCable",
-         "Unscrew", "Weigh"]
+        [
+            "Handover",
+            "Pick",
+            "PickCable",
+            "Place",
+            "PlaceConnector",
+            "Pour",
+            "RouteCable",
+            "Unscrew",
+            "Weigh",
+        ]
     )
     pick = plan["$defs"]["PickCable"]
     assert "from" in pick["properties"] and pick["additionalProperties"] is False

@@ -26,19 +26,23 @@ def cell_dir(tmp_path: Path) -> Path:
     return tmp_path
 
 
-def test_folder_passes(cell_dir: Path, capsys: pytest.CaptureFixture[str],
-                       monkeypatch: pytest.MonkeyPatch) -> None:
+def test_folder_passes(
+    cell_dir: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
     monkeypatch.chdir(cell_dir)
     assert main(["validate", "."]) == 0
     out = capsys.readouterr()
     assert out.out.splitlines() == [
-        "cell.yaml: ok (cell)", "objects.yaml: ok (objects)", "plan.yaml: ok (plan)"
+        "cell.yaml: ok (cell)",
+        "objects.yaml: ok (objects)",
+        "plan.yaml: ok (plan)",
     ]
     assert out.err == "3 file(s) checked, 0 with problems\n"
 
 
-def test_explicit_unknown_file_fails(cell_dir: Path, capsys: pytest.CaptureFixture[str],
-                                     monkeypatch: pytest.MonkeyPatch) -> None:
+def test_explicit_unknown_file_fails(
+    cell_dir: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
     monkeypatch.chdir(cell_dir)
     assert main(["validate", "other.yaml"]) == 1
     assert capsys.readouterr().out == (
@@ -47,8 +51,9 @@ def test_explicit_unknown_file_fails(cell_dir: Path, capsys: pytest.CaptureFixtu
     )
 
 
-def test_formats(cell_dir: Path, capsys: pytest.CaptureFixture[str],
-                 monkeypatch: pytest.MonkeyPatch) -> None:
+def test_formats(
+    cell_dir: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
     monkeypatch.chdir(cell_dir)
     (cell_dir / "plan.yaml").write_text(PLAN.replace("object: vial1", "object: vial2"))
     assert main(["validate", "plan.yaml", "cell.yaml", "--format", "github"]) == 1
@@ -60,16 +65,22 @@ def test_formats(cell_dir: Path, capsys: pytest.CaptureFixture[str],
     report = json.loads(capsys.readouterr().out)
     assert report["ok"] is False
     assert [(f["file"], f["kind"], f["ok"]) for f in report["files"]] == [
-        ("plan.yaml", "plan", False), ("cell.yaml", "cell", True)
+        ("plan.yaml", "plan", False),
+        ("cell.yaml", "cell", True),
     ]
     assert report["files"][0]["problems"] == [
-        {"file": "plan.yaml", "line": 4, "col": 28,
-         "message": "steps[0].object: unknown object 'vial2'; known: vial1"}
+        {
+            "file": "plan.yaml",
+            "line": 4,
+            "col": 28,
+            "message": "steps[0].object: unknown object 'vial2'; known: vial1",
+        }
     ]
 
 
-def test_broken_cell_reported_once(cell_dir: Path, capsys: pytest.CaptureFixture[str],
-                                   monkeypatch: pytest.MonkeyPatch) -> None:
+def test_broken_cell_reported_once(
+    cell_dir: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
     monkeypatch.chdir(cell_dir)
     (cell_dir / "cell.yaml").write_text(CELL.replace("ur5e,", "ur6,", 1))
     assert main(["validate", "."]) == 1

@@ -32,17 +32,17 @@ driver: {kind: sim}
 """
 
 
-def load(write, text: str):  # type: ignore[no-untyped-def]
+def load(write, text: str):
     return load_cell(write("cell.yaml", text))[0]
 
 
-def errors(write, text: str) -> list[str]:  # type: ignore[no-untyped-def]
+def errors(write, text: str) -> list[str]:
     with pytest.raises(InputError) as e:
         load(write, text)
     return [str(p).split("cell.yaml", 1)[1] for p in e.value.problems]
 
 
-def test_units_converted_once_at_load(write) -> None:  # type: ignore[no-untyped-def]
+def test_units_converted_once_at_load(write) -> None:
     cell = load(write, CELL)
     left = cell.robots["left"]
     assert left.base.xyz == pytest.approx((0.0, 0.35, 0.0))
@@ -55,31 +55,33 @@ def test_units_converted_once_at_load(write) -> None:  # type: ignore[no-untyped
     np.testing.assert_allclose(left.base.matrix()[:3, 3], [0, 0.35, 0])
 
 
-def test_models_are_immutable(write) -> None:  # type: ignore[no-untyped-def]
+def test_models_are_immutable(write) -> None:
     cell = load(write, CELL)
     with pytest.raises(Exception, match="frozen"):
         cell.robots["left"].tool = "x"  # type: ignore[misc]
 
 
-def test_unknown_tool_lists_known(write) -> None:  # type: ignore[no-untyped-def]
+def test_unknown_tool_lists_known(write) -> None:
     text = CELL.replace("tool: gripper", "tool: grip", 1)
     assert errors(write, text) == [":7:11: robots.left.tool: unknown tool 'grip'; known: gripper"]
 
 
-def test_unknown_model_lists_builtins(write) -> None:  # type: ignore[no-untyped-def]
-    text = CELL.replace("model: ur5e\n    base: {xyz: [0, -350", "model: ur7\n    base: {xyz: [0, -350")
+def test_unknown_model_lists_builtins(write) -> None:
+    text = CELL.replace(
+        "model: ur5e\n    base: {xyz: [0, -350", "model: ur7\n    base: {xyz: [0, -350"
+    )
     assert errors(write, text) == [
         ":10:12: robots.right.model: unknown robot model 'ur7'; known: ur10e, ur3e, ur5, ur5e; "
         "or give {urdf: path, tip: link}"
     ]
 
 
-def test_home_needs_six_angles(write) -> None:  # type: ignore[no-untyped-def]
+def test_home_needs_six_angles(write) -> None:
     text = CELL.replace("home: [0, -90, 90, -90, -90, 0]", "home: [0, -90, 90]")
     assert errors(write, text) == [":8:11: robots.left.home: a ur5e has 6 joints, got 3 angles"]
 
 
-def test_unknown_key_and_bad_values(write) -> None:  # type: ignore[no-untyped-def]
+def test_unknown_key_and_bad_values(write) -> None:
     text = CELL.replace("finger_width: 20", "finger_widht: 20").replace(
         "{kind: sim}", "{kind: simulated}"
     )
@@ -90,17 +92,17 @@ def test_unknown_key_and_bad_values(write) -> None:  # type: ignore[no-untyped-d
     ]
 
 
-def test_missing_required(write) -> None:  # type: ignore[no-untyped-def]
+def test_missing_required(write) -> None:
     text = CELL.replace("    model: ur5e\n    base: {xyz: [0, 350", "    base: {xyz: [0, 350")
     assert errors(write, text) == [":5:5: robots.left: missing required key 'model'"]
 
 
-def test_units_must_be_known(write) -> None:  # type: ignore[no-untyped-def]
+def test_units_must_be_known(write) -> None:
     text = CELL.replace("length: mm", "length: inch")
     assert errors(write, text) == [":2:17: units.length: must be 'm', 'cm' or 'mm', got 'inch'"]
 
 
-def test_ur_rtde_driver_needs_every_arm(write) -> None:  # type: ignore[no-untyped-def]
+def test_ur_rtde_driver_needs_every_arm(write) -> None:
     text = CELL.replace("{kind: sim}", "{kind: ur_rtde, arms: {left: 192.168.1.10, top: 10.0.0.1}}")
     assert errors(write, text) == [
         ":21:52: driver.arms.top: unknown robot 'top'; known: left, right",
@@ -108,7 +110,7 @@ def test_ur_rtde_driver_needs_every_arm(write) -> None:  # type: ignore[no-untyp
     ]
 
 
-def test_bad_ip(write) -> None:  # type: ignore[no-untyped-def]
+def test_bad_ip(write) -> None:
     text = CELL.replace(
         "{kind: sim}", "{kind: ur_rtde, arms: {left: 192.168.1.300, right: 10.0.0.1}}"
     )
@@ -117,17 +119,18 @@ def test_bad_ip(write) -> None:  # type: ignore[no-untyped-def]
     ]
 
 
-def test_platform_file_outside_cell_folder(write, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+def test_platform_file_outside_cell_folder(write, tmp_path: Path) -> None:
     from cellengine.info.load import load_world
 
     text = CELL + "platforms:\n  p: {cad: ../../etc/x.x3d, models: m.xml, map: m.csv}\n"
     with pytest.raises(InputError) as e:
         load_world(write("cell.yaml", text))
     assert str(e.value) == (
-        f"{tmp_path}/cell.yaml:23:12: file reference '../../etc/x.x3d' points outside the cell folder"
+        f"{tmp_path}/cell.yaml:23:12: "
+        "file reference '../../etc/x.x3d' points outside the cell folder"
     )
 
 
-def test_platform_format_needs_its_files(write) -> None:  # type: ignore[no-untyped-def]
+def test_platform_format_needs_its_files(write) -> None:
     text = CELL + "platforms:\n  p: {format: remodel, cad: a.x3d, models: m.xml, map: m.csv}\n"
     assert errors(write, text) == [":23:6: platforms.p: format 'remodel' needs 'ids'"]

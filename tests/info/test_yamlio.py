@@ -50,7 +50,9 @@ def test_alias_bomb_refused_before_expansion() -> None:
 
 def test_too_many_aliases(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(yamlio, "MAX_ALIASES", 3)
-    assert err("a: &a 1\nb: [*a, *a, *a, *a]\n") == "f.yaml:1:4: YAML uses more than 3 aliases"  # at the anchor
+    assert (
+        err("a: &a 1\nb: [*a, *a, *a, *a]\n") == "f.yaml:1:4: YAML uses more than 3 aliases"
+    )  # at the anchor
 
 
 def test_syntax_error_has_line_and_column() -> None:
