@@ -15,10 +15,10 @@ from __future__ import annotations
 import difflib
 import re
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
-from typing import Literal, TypeAlias
+from typing import Literal, NamedTuple, TypeAlias
 
 import numpy as np
 import trimesh
@@ -70,10 +70,13 @@ def _affine(L: Mat, t: Mat) -> Mat:
 
 
 _ZERO3 = np.zeros(3)
+_EYE3 = np.eye(3)
+_EYE3.setflags(write=False)
 _ONE3 = np.ones(3)
 _NO_ROTATION = np.array([0.0, 0.0, 1.0, 0.0])
 _Y_UP = _affine(rot_x(np.pi / 2), _ZERO3)  # T_platform_scene: x3d y (up) -> z, z -> -y
 _Z_TO_Y = _affine(rot_x(-np.pi / 2), _ZERO3)  # trimesh builds round shapes along z, X3D on y
+_QUAD = np.array([[0, 1, 2], [0, 2, 3]])  # a quad's fan
 _SECTIONS = 32  # around cylinders and cones: a multiple of 4, so extents are exact
 
 
@@ -181,8 +184,7 @@ class _Owner:
         return X3DNode(self.name, self.file, self.line, T, _mesh(self.parts))
 
 
-@dataclass(frozen=True)
-class _Ctx:
+class _Ctx(NamedTuple):
     file: _File
     A: Mat  # affine platform <- current element (the full chain, scale included)
     R: Mat  # product of the chain's rotations: the orientation of a rigid frame here
@@ -222,11 +224,11 @@ class _Loader:
         use = el.get("USE")
         if use is not None:
             el = self._use(el, tag, use, ctx.file)
-            ctx = replace(ctx, instancing=True)
+            ctx = ctx._replace(instancing=True)
         if tag in _CONTENT:
             self.active.add(el)
             try:
-                self._dispatch(el, tag, replace(ctx, depth=ctx.depth + 1))
+                self._dispatch(el, tag, ctx._replace(depth=ctx.depth + 1))
             finally:
                 self.active.discard(el)
         elif any(_tag(d) in _CONTENT for d in el.iter(etree.Element)):
@@ -272,10 +274,10 @@ class _Loader:
     def _group(self, el: Element, tag: str, ctx: _Ctx) -> None:
         if tag == "Transform":
             M, R = _transform_fields(el, ctx.file)
-            ctx = replace(ctx, A=ctx.A @ M, R=ctx.R @ R)
+            ctx = ctx._replace(A=ctx.A @ M, R=ctx.R @ R)
         name = _name(el)
         if name is not None and not ctx.instancing:
-            ctx = replace(ctx, owner=self._define(name, el, ctx))
+            ctx = ctx._replace(owner=self._define(name, el, ctx))
         children = _children(el)
         if tag == "Switch":
             children = _chosen(el, children, ctx.file)
@@ -302,7 +304,7 @@ class _Loader:
                 el, f"Inline '{self._rel(path)}' nests files more than {MAX_INLINE_DEPTH} deep"
             )
         inlined, scene = self.open(path, ctx.file.chain)
-        ctx = replace(ctx, file=inlined)
+        ctx = ctx._replace(file=inlined)
         for child in _children(scene):
             self.visit(child, ctx)
 
@@ -513,10 +515,18 @@ def _transform_fields(el: Element, f: _File) -> tuple[Mat, Mat]:
     s = _field(el, "scale", 3, _ONE3, f)
     c = _field(el, "center", 3, _ZERO3, f)
     so = _field(el, "scaleOrientation", 4, _NO_ROTATION, f)
-    R = axis_angle_to_matrix(r[:3].tolist(), float(r[3]))
-    SR = axis_angle_to_matrix(so[:3].tolist(), float(so[3]))
-    L = R @ SR @ np.diag(s) @ SR.T
-    return _affine(L, t + c - L @ c), R
+    R = _rotation(r)
+    L = R if (s == 1.0).all() else R @ _scaling(s, _rotation(so))
+    return _affine(L, t + c - L @ c if c is not _ZERO3 else t), R
+
+
+def _rotation(r: Mat) -> Mat:
+    return _EYE3 if r[3] == 0.0 else axis_angle_to_matrix(r[:3].tolist(), float(r[3]))
+
+
+def _scaling(s: Mat, SR: Mat) -> Mat:
+    """SR·S·SR⁻¹: a scale along the axes of the scaleOrientation."""
+    return (SR * s) @ SR.T
 
 
 # --- geometry, in the geometry node's own frame ----------------------------------------------
@@ -542,6 +552,11 @@ def _fan(idx: Ints) -> Ints:
     """Triangles of -1-separated polygons, each fanned from its first vertex, vectorised."""
     if idx.size and idx[-1] != -1:  # the trailing -1 is optional
         idx = np.append(idx, -1)
+    for k in (4, 5):  # the common cases, all triangles or all quads, without the general fan
+        if idx.size % k == 0 and (idx[k - 1 :: k] == -1).all():
+            faces = idx.reshape(-1, k)[:, : k - 1]
+            if (faces >= 0).all():
+                return faces if k == 4 else faces[:, _QUAD].reshape(-1, 3)
     sep = idx == -1
     pos = np.arange(idx.size)
     starts = np.concatenate(([True], sep[:-1]))
@@ -621,6 +636,8 @@ _BUILDERS: dict[str, Callable[[Element, _File, _Loader], Geometry]] = {
 def _mesh(parts: list[Geometry]) -> trimesh.Trimesh | None:
     if not parts:
         return None
+    if len(parts) == 1:
+        return trimesh.Trimesh(vertices=parts[0][0], faces=parts[0][1], process=False)
     offsets = np.cumsum([0] + [len(V) for V, _ in parts[:-1]])
     V = np.concatenate([V for V, _ in parts])
     F = np.concatenate([F + off for (_, F), off in zip(parts, offsets, strict=True)])

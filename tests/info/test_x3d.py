@@ -408,6 +408,27 @@ def test_primitives(tmp_path: Path) -> None:
     np.testing.assert_allclose(np.linalg.norm(meshes["ball"].vertices, axis=1), 2.0)  # type: ignore[union-attr]
 
 
+@pytest.mark.parametrize(
+    ("index", "faces"),
+    [
+        ("0 1 2 3 -1 4 5 6 7 -1", [[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]]),  # all quads
+        ("0 1 2 3 -1 4 5 6 7", [[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]]),  # no last -1
+        ("0 1 2 -1 5 6 7 -1", [[0, 1, 2], [5, 6, 7]]),  # all triangles
+        ("0 1 -1 2 3 4 -1 -1 0 1 2 3 4", [[2, 3, 4], [0, 1, 2], [0, 2, 3], [0, 3, 4]]),  # mixed
+    ],
+)
+def test_face_sets_are_fanned(tmp_path: Path, index: str, faces: list[list[int]]) -> None:
+    points = " ".join(f"{i} 0 0" for i in range(8))
+    s = load(
+        tmp_path,
+        f"""<Group DEF="G"><Shape><IndexedFaceSet coordIndex="{index}">
+             <Coordinate point="{points}"/></IndexedFaceSet></Shape></Group>""",
+    )
+    mesh = s.nodes["G"].mesh
+    assert mesh is not None
+    np.testing.assert_array_equal(mesh.faces, faces)
+
+
 def test_indexed_triangle_set_and_ccw(tmp_path: Path) -> None:
     s = load(
         tmp_path,
