@@ -6,13 +6,14 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from cellengine.commands import schema, show, validate
+from cellengine.commands import import_remodel, schema, show, validate
 from cellengine.errors import EXIT_USAGE, CellError
 
 COMMANDS = {
     "validate": validate,
     "show": show,
     "schema": schema,
+    "import": import_remodel,
 }
 
 

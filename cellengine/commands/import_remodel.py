@@ -1,0 +1,733 @@
+"""`cellengine import remodel SRC DEST`: turn a REMODEL cable-routing folder into a native
+cell.yaml, objects.yaml and plan.yaml (DESIGN 3.2).
+
+The REMODEL platform files are copied into DEST and used as they are (``format: remodel``);
+the process CSVs become objects and plan steps. Everything is written to a staging folder
+next to DEST, validated there, and moved into place only when it validates, so a failed
+import leaves DEST as it was.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import re
+import shutil
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+import cellengine
+from cellengine.errors import EXIT_OK, InputError, Problem, UsageError, display_path, known
+from cellengine.info.cell import UrdfModel
+from cellengine.info.load import load_cell, load_plan, load_world
+from cellengine.info.remodel import load_ids
+from cellengine.info.remodel_csv import (
+    Components,
+    HarnessCable,
+    Operation,
+    load_components,
+    load_harness,
+    load_sequence,
+)
+from cellengine.world import RefError, World
+
+COMPONENTS = "Components_definition.csv"
+SEQUENCE = "Assembly_sequence.csv"
+HARNESS = "WH_configuration.xml"
+MODELS = "Jigs_definition*.xml"  # the sample has Jigs_definition_v2.xml
+_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_-]*$")
+
+# Without --robots: the two-arm cell of the published method (DESIGN 3.1), in mm and deg.
+_HOME = [0, -90, 90, -90, -90, 0]
+DEFAULT_SETUP: dict[str, Any] = {
+    "units": {"length": "mm", "angle": "deg"},
+    "robots": {
+        arm: {
+            "model": "ur5e",
+            "base": {"xyz": [0, y, 0], "rpy": [0, 0, 0]},
+            "tool": "cable_gripper",
+            "home": _HOME,
+        }
+        for arm, y in (("left", 350), ("right", -350))
+    },
+    "tools": {
+        "cable_gripper": {
+            "kind": "parallel_gripper",
+            "tcp": {"xyz": [0, 0, 200]},
+            "finger_width": 20,
+            "finger_thickness": 8,
+            "jaw": {"open": 60, "slide": 7, "grasp": 4},
+        }
+    },
+    "driver": {"kind": "sim"},
+}
+
+DESCRIPTION = """\
+Turn a REMODEL cable-routing folder into a native cell in DEST:
+
+  cell.yaml     robots, tools and driver of --robots (default: two UR5e 'left' and
+                'right' at y = +-350 mm with a cable gripper, in mm and deg); one
+                platform per <name>_cad.x3d + <name>_ids.wri pair in SRC, copied to
+                DEST/<name>/ with the shared Jigs_definition*.xml, as `format: remodel`
+  objects.yaml  the cables of Components_definition.csv, each with its connector
+                (the CSV's x, y, z are the connector's width, height and length)
+  plan.yaml     Assembly_sequence.csv: EC -> PickCable, PC -> PlaceConnector (the
+                spot's L/R picks robot left/right), RC -> RouteCable. A spot such as
+                C2.1 is guide 1 of element C2 of whichever platform has C2.
+
+The Label column names a connector; each step acts on that connector's cable, from
+WH_configuration.xml, or the only cable there is.
+
+DEST is written only if the result validates; existing files there are kept unless
+--force. Each YAML file starts with a yaml-language-server $schema line naming this
+checkout's schemas/ (relative inside the checkout, absolute outside; left out when
+cellengine is installed without its schemas)."""
+
+
+def add_parser(sub: Any, name: str) -> None:
+    p = sub.add_parser(
+        name,
+        help="turn another tool's files into a native cell",
+        description="Turn another tool's files into a native cell, objects and plan.",
+    )
+    formats = p.add_subparsers(dest="format", metavar="FORMAT", required=True)
+    r = formats.add_parser(
+        "remodel",
+        help="a REMODEL cable-routing folder",
+        description=DESCRIPTION,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    r.add_argument("src", type=Path, metavar="SRC", help="the REMODEL folder")
+    r.add_argument("dest", type=Path, metavar="DEST", help="the cell folder to write")
+    r.add_argument(
+        "--robots",
+        type=Path,
+        metavar="CELL.yaml",
+        help="take robots, tools, driver and units from this cell (or its folder)",
+    )
+    r.add_argument(
+        "--pose",
+        action="append",
+        default=[],
+        metavar='[NAME=]"X Y Z ROLL PITCH YAW"',
+        help="where the platforms are in the cell, in the units of the written "
+        "cell.yaml (those of --robots; by default mm and deg), rpy as in URDF. "
+        "With NAME= for one platform, else for all; repeatable; default all zero. "
+        'Write --pose="-100 0 0 0 0 0" when the first number is negative.',
+    )
+    r.add_argument("--name", help="the cell's name (default: DEST's folder name)")
+    r.add_argument("--force", action="store_true", help="overwrite files that exist in DEST")
+    r.set_defaults(run=run)
+
+
+# --- what SRC holds ----------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Source:
+    folder: Path
+    platforms: Mapping[str, tuple[Path, Path]]  # name -> (cad, ids), sorted by name
+    models: Path
+    components: Path
+    sequence: Path
+    harness: Path | None
+
+    def copies(self) -> dict[str, Path]:
+        """Where each platform file goes, relative to DEST. The models file is shared."""
+        out = {self.models.name: self.models}
+        for name, (cad, ids) in self.platforms.items():
+            out[f"{name}/{cad.name}"] = cad
+            out[f"{name}/{ids.name}"] = ids
+        return out
+
+
+def find_source(src: Path) -> Source:
+    if not src.is_dir():
+        raise UsageError.at("no such folder", src)
+    platforms = _platform_files(src)
+    models = sorted(src.glob(MODELS))
+    if len(models) != 1:
+        what = "none" if not models else ", ".join(m.name for m in models)
+        raise InputError.at(f"expected one {MODELS} (the element models), found {what}", src)
+    for name in (COMPONENTS, SEQUENCE):
+        if not (src / name).is_file():
+            raise InputError.at(f"no {name} in the REMODEL folder", src)
+    harness = src / HARNESS
+    return Source(
+        src,
+        platforms,
+        models[0],
+        src / COMPONENTS,
+        src / SEQUENCE,
+        harness if harness.is_file() else None,
+    )
+
+
+def _platform_files(src: Path) -> dict[str, tuple[Path, Path]]:
+    out: dict[str, tuple[Path, Path]] = {}
+    for cad in sorted(src.glob("*_cad.x3d")):
+        name = cad.name.removesuffix("_cad.x3d")
+        ids = src / f"{name}_ids.wri"
+        if not ids.is_file():
+            raise InputError.at(
+                f"no {ids.name} next to it: a platform is a <name>_cad.x3d and <name>_ids.wri pair",
+                cad,
+            )
+        if not _NAME.match(name):
+            raise InputError.at(
+                f"platform name '{name}' is not a valid name: use letters, "
+                "digits, '_' and '-', starting with a letter or '_'",
+                cad,
+            )
+        out[name] = (cad, ids)
+    for ids in sorted(src.glob("*_ids.wri")):
+        if ids.name.removesuffix("_ids.wri") not in out:
+            raise InputError.at(
+                f"no {ids.name.removesuffix('_ids.wri')}_cad.x3d next to it: "
+                "a platform is a <name>_cad.x3d and <name>_ids.wri pair",
+                ids,
+            )
+    if not out:
+        raise InputError.at("no platforms: expected <name>_cad.x3d and <name>_ids.wri pairs", src)
+    return out
+
+
+def element_platforms(source: Source) -> dict[str, str]:
+    """Element label -> the platform it is on. Spots name elements by label alone, so a
+    label on two platforms could not be told apart."""
+    out: dict[str, str] = {}
+    where: dict[str, tuple[Path, int]] = {}
+    for name, (_, ids) in source.platforms.items():
+        for row in load_ids(ids):
+            if row.label in out:
+                first, line = where[row.label]
+                raise InputError.at(
+                    f"label '{row.label}' is also on platform '{out[row.label]}' "
+                    f"({first.name} line {line}); spots name elements by label alone",
+                    ids,
+                    row.row,
+                )
+            out[row.label] = name
+            where[row.label] = (ids, row.row)
+    return out
+
+
+# --- robots, tools, driver ---------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Setup:
+    data: dict[str, Any]  # units, robots, tools, driver as written in their file
+    origin: str  # for comments and messages
+
+    @property
+    def robots(self) -> list[str]:
+        return list(self.data["robots"])
+
+
+def robot_setup(path: Path | None) -> Setup:
+    """The --robots cell, validated, keeping its units; or the default two-arm setup."""
+    if path is None:
+        return Setup(DEFAULT_SETUP, "the default setup (two UR5e with cable grippers)")
+    if path.is_dir():
+        path = path / "cell.yaml"
+    if not path.is_file():
+        raise UsageError.at("--robots: no such cell file", path)
+    cell, doc = load_cell(path)
+    for name, robot in cell.robots.items():
+        if isinstance(robot.model, UrdfModel):
+            # Its URDF lives in that cell's folder, where DEST's cell may not reach.
+            raise doc.error(
+                f"robots.{name}.model: a URDF robot cannot be imported yet; "
+                "copy the URDF into DEST and edit cell.yaml by hand",
+                ("robots", name, "model"),
+            )
+    raw = doc.data
+    data = {
+        "units": raw.get("units", {"length": "m", "angle": "rad"}),
+        "robots": raw["robots"],
+        "tools": raw.get("tools") or {},
+        "driver": raw.get("driver", {"kind": "sim"}),
+    }
+    return Setup(data, display_path(path))
+
+
+def parse_poses(values: Sequence[str], platforms: Sequence[str]) -> dict[str, dict[str, Any]]:
+    """``--pose`` values -> each platform's pose; NAME= entries win over the general one."""
+    general: list[float] | None = None
+    named: dict[str, list[float]] = {}
+    for value in values:
+        name, sep, text = value.partition("=")
+        if not sep:
+            if general is not None:
+                raise UsageError.at("--pose without a platform name is given twice", None)
+            general = _six_numbers(value)
+            continue
+        name = name.strip()
+        if name not in platforms:
+            raise UsageError.at(f"--pose: unknown platform '{name}'" + known(platforms), None)
+        named[name] = _six_numbers(text)
+    zero = [0.0] * 6
+    out = {}
+    for p in platforms:
+        v = [_plain(x) for x in named.get(p, general or zero)]
+        out[p] = {"xyz": v[:3], "rpy": v[3:]}
+    return out
+
+
+def _six_numbers(text: str) -> list[float]:
+    parts = [t for t in re.split(r"[\s,]+", text.strip()) if t]
+    try:
+        values = [float(t) for t in parts]
+    except ValueError:
+        values = []
+    if len(values) != 6 or not all(math.isfinite(v) for v in values):
+        raise UsageError.at(
+            f"--pose: expected 6 numbers 'x y z roll pitch yaw', got '{text}'", None
+        )
+    return values
+
+
+def _plain(x: float) -> float | int:
+    return int(x) if x.is_integer() else x
+
+
+# --- objects and plan --------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Step:
+    row: int
+    comment: str
+    data: dict[str, Any]
+    refs: tuple[tuple[str, str], ...]  # (reference kind, name): checked against the world
+
+
+@dataclass(frozen=True)
+class CableLink:
+    cable: str
+    why: str  # for the plan's comment
+
+
+def cable_of(
+    op: Operation, sequence: Path, components: Components, harness: Sequence[HarnessCable] | None
+) -> CableLink:
+    """The cable an operation acts on. Its Label names a connector (or the cable itself)."""
+    label = op.label
+
+    def error(message: str) -> InputError:
+        return InputError(Problem(message, str(sequence), op.row))
+
+    if label in components.cables:
+        return CableLink(label, f"{label} is a cable")
+    if label not in components.connectors:
+        raise error(
+            f"unknown Label '{label}': not a connector or cable of {COMPONENTS}"
+            + known(components.labels())
+        )
+    if harness is not None:
+        cables = list(dict.fromkeys(h.cable for h in harness if label in (h.first, h.end)))
+        if len(cables) == 1:
+            return CableLink(cables[0], f"connector {label} is on cable {cables[0]} ({HARNESS})")
+        if cables:
+            raise error(
+                f"connector '{label}' is on {len(cables)} cables in {HARNESS} "
+                f"({', '.join(cables)}); write the cable's label in the Label column"
+            )
+    if len(components.cables) == 1:
+        only = next(iter(components.cables))
+        return CableLink(
+            only, f"connector {label} is taken to be on {only}, the only cable in {COMPONENTS}"
+        )
+    where = f"{HARNESS} does not list it" if harness is not None else f"there is no {HARNESS}"
+    raise error(
+        f"cannot tell which cable connector '{label}' is on: {where}, and "
+        f"{COMPONENTS} has {len(components.cables)} cables" + known(components.cables)
+    )
+
+
+_SKILLS = {"EC": "PickCable", "PC": "PlaceConnector", "RC": "RouteCable"}
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """Everything read from SRC and the command line that the written files depend on."""
+
+    source: Source
+    setup: Setup
+    components: Components
+    operations: tuple[Operation, ...]
+    harness: tuple[HarnessCable, ...] | None
+    elements: Mapping[str, str]  # element label -> platform
+
+
+def read_inputs(source: Source, setup: Setup) -> Inputs:
+    problems: list[Problem] = []
+    parsed: dict[str, Any] = {}
+    readers: dict[str, Callable[[], Any]] = {
+        "components": lambda: load_components(source.components),
+        "operations": lambda: load_sequence(source.sequence),
+        "harness": lambda: load_harness(source.harness) if source.harness else None,
+        "elements": lambda: element_platforms(source),
+    }
+    for key, read in readers.items():  # each file's problems, not only the first file's
+        try:
+            parsed[key] = read()
+        except InputError as e:
+            problems.extend(e.problems)
+    if problems:
+        raise InputError(problems)
+    return Inputs(source, setup, **parsed)
+
+
+def build_steps(inputs: Inputs) -> tuple[list[Step], dict[str, str]]:
+    """Plan steps, and the connector that each cable's steps name (for objects.yaml)."""
+    steps: list[Step] = []
+    connectors: dict[str, str] = {}
+    problems: list[Problem] = []
+    for op in inputs.operations:
+        try:
+            link = cable_of(op, inputs.source.sequence, inputs.components, inputs.harness)
+            steps.append(_step(op, link, inputs))
+        except InputError as e:
+            problems.extend(e.problems)
+            continue
+        if op.label in inputs.components.connectors:
+            connectors.setdefault(link.cable, op.label)
+    if problems:
+        raise InputError(problems)
+    return steps, connectors
+
+
+def _step(op: Operation, link: CableLink, inputs: Inputs) -> Step:
+    refs = [_ref(op, i, inputs) for i in range(len(op.spots))]
+    data = Block(skill=_SKILLS[op.kind], cable=link.cable)
+    if op.kind == "EC":
+        data["from"] = refs  # the Spot writes the connector end first, as PickCable does
+    elif op.kind == "PC":
+        data["guide"] = refs[0]
+        arm = op.spots[0].arm
+        if arm is not None:
+            _check_arm(op, arm, inputs)
+            data["arm"] = arm
+    else:
+        data["guides"] = refs
+    kind = "keypoint" if op.kind == "EC" else "guide"
+    comment = f"row {op.row}: {op.kind} {op.label} {op.spot}; {link.why}"
+    return Step(op.row, comment, data, tuple((kind, r) for r in refs))
+
+
+def _ref(op: Operation, i: int, inputs: Inputs) -> str:
+    spot = op.spots[i]
+    platform = inputs.elements.get(spot.element)
+    if platform is None:
+        raise InputError.at(
+            f"unknown label '{spot.element}' in Spot '{op.spot}'" + known(inputs.elements),
+            inputs.source.sequence,
+            op.row,
+        )
+    return f"{platform}.{spot.element}.{spot.couple}"
+
+
+def _check_arm(op: Operation, arm: str, inputs: Inputs) -> None:
+    robots = inputs.setup.robots
+    if arm not in robots:
+        raise InputError.at(
+            f"Spot '{op.spot}' names robot '{arm}', which {inputs.setup.origin} "
+            "does not have" + known(robots),
+            inputs.source.sequence,
+            op.row,
+        )
+
+
+def cable_connectors(inputs: Inputs, from_plan: Mapping[str, str]) -> dict[str, str]:
+    """Each cable's connector: the one its plan steps name; else its harness's first
+    connector; else, with one connector and one cable, that connector."""
+    out = dict(from_plan)
+    for h in inputs.harness or ():
+        connector = h.first or h.end
+        if connector is not None and connector in inputs.components.connectors:
+            out.setdefault(h.cable, connector)
+    c = inputs.components
+    if len(c.connectors) == 1 and len(c.cables) == 1:
+        out.setdefault(next(iter(c.cables)), next(iter(c.connectors)))
+    return out
+
+
+# --- writing -----------------------------------------------------------------------------
+
+
+def schema_line(kind: str, dest: Path) -> list[str]:
+    """The yaml-language-server line naming this checkout's schema: relative when DEST is
+    inside the checkout (so a committed cell works on any clone), absolute outside it (a
+    cell elsewhere is on this machine anyway); none if cellengine has no schemas folder."""
+    folder = Path(cellengine.__file__).resolve().parents[1] / "schemas"
+    schema = folder / f"{kind}.schema.json"
+    if not schema.is_file():
+        return []
+    target = dest.resolve()
+    inside = target.is_relative_to(folder.parent)
+    ref = Path(os.path.relpath(schema, target)).as_posix() if inside else schema.as_posix()
+    return [f"# yaml-language-server: $schema={ref}"]
+
+
+class Block(dict[str, Any]):
+    """A mapping always written in block style (a plan step, a cable)."""
+
+
+class _Dumper(yaml.SafeDumper):
+    def ignore_aliases(self, data: Any) -> bool:
+        return True  # write a repeated value (two robots' home) out, not as &id001
+
+
+def _scalar(v: Any) -> bool:
+    return not isinstance(v, dict | list | tuple)
+
+
+def _leaf(v: Any) -> bool:
+    return _scalar(v) or (isinstance(v, list | tuple) and all(map(_scalar, v)))
+
+
+def _represent_dict(dumper: yaml.SafeDumper, data: dict[str, Any]) -> yaml.Node:
+    # Short mappings of numbers and number lists on one line, as people write them:
+    # base: {xyz: [0, 350, 0], rpy: [0, 0, 0]}
+    flow = (
+        not isinstance(data, Block)
+        and all(map(_leaf, data.values()))
+        and len(yaml.safe_dump(data, default_flow_style=True, width=1000)) <= 60
+    )
+    return dumper.represent_mapping("tag:yaml.org,2002:map", data, flow_style=flow)
+
+
+def _represent_list(dumper: yaml.SafeDumper, data: list[Any]) -> yaml.Node:
+    return dumper.represent_sequence(
+        "tag:yaml.org,2002:seq", data, flow_style=all(map(_scalar, data))
+    )
+
+
+_Dumper.add_representer(dict, _represent_dict)
+_Dumper.add_representer(Block, _represent_dict)
+_Dumper.add_representer(list, _represent_list)
+
+
+def _dump(data: Any) -> str:
+    return yaml.dump(data, Dumper=_Dumper, sort_keys=False, width=100, allow_unicode=True)
+
+
+def _document(kind: str, dest: Path, comments: Sequence[str], body: str) -> str:
+    head = [*schema_line(kind, dest), *(f"# {c}" for c in comments)]
+    return "\n".join(head) + "\n" + body
+
+
+def _commented(items: Sequence[tuple[str, Any]]) -> str:
+    """Entries of a mapping or list, indented two spaces, each after its comment line."""
+    out = []
+    for comment, data in items:
+        text = _dump(data)
+        out.append(f"  # {comment}\n" + "".join(f"  {line}" for line in text.splitlines(True)))
+    return "".join(out)
+
+
+def cell_text(inputs: Inputs, name: str, poses: Mapping[str, Any], dest: Path) -> str:
+    source, setup = inputs.source, inputs.setup
+    platforms = {
+        p: {
+            "pose": poses[p],
+            "format": "remodel",
+            "cad": f"{p}/{cad.name}",
+            "ids": f"{p}/{ids.name}",
+            "models": source.models.name,
+        }
+        for p, (cad, ids) in source.platforms.items()
+    }
+    data: dict[str, Any] = {
+        "name": name,
+        "units": setup.data["units"],
+        "robots": setup.data["robots"],
+    }
+    if setup.data["tools"]:
+        data["tools"] = setup.data["tools"]
+    data["platforms"] = platforms
+    data["driver"] = setup.data["driver"]
+    comments = [
+        f"Imported from the REMODEL folder {source.folder} by `cellengine import remodel`.",
+        f"Robots, tools and driver: {setup.origin}.",
+        "Platform poses are in the units above; the REMODEL files they name are used as is.",
+    ]
+    return _document("cell", dest, comments, _dump(data))
+
+
+def objects_text(inputs: Inputs, connectors: Mapping[str, str], dest: Path) -> str:
+    c = inputs.components
+    entries = []
+    for label, cable in c.cables.items():
+        data = Block(length=cable.length, diameter=cable.diameter)
+        if cable.color:
+            data["color"] = cable.color
+        comment = f"{COMPONENTS} row {cable.row}"
+        if label in connectors:
+            k = c.connectors[connectors[label]]
+            data["connector"] = {
+                "type": k.type,
+                "length": k.length,
+                "width": k.width,
+                "height": k.height,
+            }
+            comment += f"; connector {k.label}, row {k.row}"
+        entries.append((comment, {label: data}))
+    comments = [
+        f"Imported from {c.file.name}. A connector's size is the CSV's x, y, z:",
+        "width = x (across its wide face), height = y (its thickness), "
+        "length = z (along the cable).",
+    ]
+    body = "units: {length: mm, mass: g}\n" + ("cables:\n" + _commented(entries) if entries else "")
+    return _document("objects", dest, comments, body)
+
+
+def plan_text(steps: Sequence[Step], source: Source, dest: Path) -> str:
+    comments = [f"Imported from {source.sequence.name}; each step says the row it comes from."]
+    body = "cell: cell.yaml\nobjects: objects.yaml\nsteps:\n"
+    body += _commented([(s.comment, [s.data]) for s in steps])
+    return _document("plan", dest, comments, body)
+
+
+def cell_name(given: str | None, dest: Path) -> str:
+    if given is not None:
+        if not _NAME.match(given):
+            raise UsageError.at(
+                f"--name '{given}' is not a valid name: use letters, digits, "
+                "'_' and '-', starting with a letter or '_'",
+                None,
+            )
+        return given
+    name = re.sub(r"[^A-Za-z0-9_-]", "_", dest.name) or "remodel"
+    return name if _NAME.match(name) else f"_{name}"
+
+
+# --- staging, validating, moving into place ----------------------------------------------
+
+
+def check_free(dest: Path, paths: Sequence[str], force: bool) -> None:
+    if dest.exists() and not dest.is_dir():
+        raise UsageError.at("DEST exists and is not a folder", dest)
+    taken = [p for p in paths if (dest / p).exists() or (dest / p).is_symlink()]
+    if taken and not force:
+        raise UsageError.at(f"would overwrite {', '.join(taken)}; give --force to overwrite", dest)
+
+
+@contextmanager
+def staging(dest: Path) -> Iterator[Path]:
+    """A fresh folder next to DEST (same file system, so moving is a rename), removed
+    afterwards whatever happens. Made with mkdir, not mkdtemp, so that renamed to DEST it
+    has the user's usual permissions rather than mkdtemp's 0700."""
+    if not dest.parent.is_dir():
+        raise UsageError.at("no such folder (DEST's parent)", dest.parent)
+    tmp = dest.parent / f".{dest.name}.import-{os.getpid()}-{os.urandom(4).hex()}"
+    tmp.mkdir()
+    try:
+        yield tmp
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def write_files(tmp: Path, texts: Mapping[str, str], copies: Mapping[str, Path]) -> None:
+    for rel, text in texts.items():
+        (tmp / rel).write_text(text, encoding="utf-8")
+    for rel, src in copies.items():
+        (tmp / rel).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(src, tmp / rel)  # not copy2: REMODEL files are often read-only
+
+
+def check_staged(tmp: Path, dest: Path, inputs: Inputs, steps: Sequence[Step]) -> None:
+    """Load what was written as `cellengine validate` would. Spot references are checked
+    first, so that a missing guide is reported at its row of the sequence CSV."""
+    copies = inputs.source.copies()
+
+    def remap(p: Problem) -> Problem:
+        # Problems in the staged copies point at the SRC files a user would edit; those
+        # in the written YAML at where it would have been written.
+        if p.file is None or not Path(p.file).resolve().is_relative_to(tmp.resolve()):
+            return p
+        rel = Path(p.file).resolve().relative_to(tmp.resolve()).as_posix()
+        return replace(p, file=str(copies.get(rel, dest / rel)))
+
+    try:
+        world = load_world(tmp / "cell.yaml")
+        _check_refs(world, steps, inputs)
+        load_plan(tmp / "plan.yaml", lambda _: world)
+    except InputError as e:
+        note = Problem("nothing was written: the imported cell does not validate", str(dest))
+        raise InputError([*map(remap, e.problems), note]) from None
+
+
+def _check_refs(world: World, steps: Sequence[Step], inputs: Inputs) -> None:
+    problems = []
+    for step in steps:
+        for kind, ref in step.refs:
+            try:
+                world.check(kind, ref)
+            except RefError as e:
+                problems.append(Problem(str(e), str(inputs.source.sequence), step.row))
+    if problems:
+        raise InputError(problems)
+
+
+def move_into_place(tmp: Path, dest: Path) -> None:
+    """A new DEST is one rename; into an existing one, file by file (after validation,
+    so only an OS failure can stop it half-way)."""
+    if not dest.exists():
+        tmp.rename(dest)
+        return
+    for f in sorted(tmp.rglob("*")):
+        if f.is_file():
+            target = dest / f.relative_to(tmp)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(f, target)
+
+
+# --- the command -------------------------------------------------------------------------
+
+
+def run(args: argparse.Namespace) -> int:
+    dest = Path(os.path.abspath(args.dest))
+    source = find_source(args.src)
+    setup = robot_setup(args.robots)
+    poses = parse_poses(args.pose, list(source.platforms))
+    name = cell_name(args.name, dest)
+    copies = source.copies()
+    texts_names = ("cell.yaml", "objects.yaml", "plan.yaml")
+    check_free(dest, [*texts_names, *copies], args.force)
+
+    inputs = read_inputs(source, setup)
+    steps, connectors = build_steps(inputs)
+    texts = dict(
+        zip(
+            texts_names,
+            (
+                cell_text(inputs, name, poses, dest),
+                objects_text(inputs, cable_connectors(inputs, connectors), dest),
+                plan_text(steps, source, dest),
+            ),
+            strict=True,
+        )
+    )
+    with staging(dest) as tmp:
+        write_files(tmp, texts, copies)
+        check_staged(tmp, dest, inputs, steps)
+        move_into_place(tmp, dest)
+    print(
+        f"{display_path(dest)}: cell.yaml (platforms {', '.join(source.platforms)}), "
+        f"objects.yaml ({_count(len(inputs.components.cables), 'cable')}), "
+        f"plan.yaml ({_count(len(steps), 'step')})"
+    )
+    return EXIT_OK
+
+
+def _count(n: int, what: str) -> str:
+    return f"{n} {what}{'' if n == 1 else 's'}"
