@@ -36,7 +36,7 @@ Element: TypeAlias = etree._Element
 MAX_INLINE_DEPTH = 8
 MAX_NESTING = 200  # keeps recursion far below Python's limit, even through Inlines
 MAX_VISITS = 1_000_000  # elements visited, counting every USE instance
-MAX_TRIANGLES = 5_000_000
+MAX_TRIANGLES = 5_000_000  # and as many vertices, counting every USE instance
 
 GROUPS = ("Anchor", "Collision", "Group", "StaticGroup", "Switch", "Transform")
 GEOMETRY = (
@@ -133,10 +133,9 @@ class _File:
         self.path = path
         self.chain = (*chain, path.resolve())  # the Inline chain down to this file
         self.defs: dict[str, Element] = {}  # DEF and id names; a USE looks only in its file
-        self._order: dict[Element, int] = {}
+        self._order = {el: i for i, el in enumerate(root.iter(etree.Element))}
         self._lines: Ints | None = None
-        for i, el in enumerate(root.iter(etree.Element)):
-            self._order[el] = i
+        for el in self._order:
             self._define(el)
 
     def _define(self, el: Element) -> None:
@@ -156,7 +155,7 @@ class _File:
             newlines = np.flatnonzero(np.frombuffer(data, np.uint8) == ord("\n"))
             self._lines = np.searchsorted(newlines, starts) + 1
         i = self._order.get(el)
-        if i is None or len(self._lines) < len(self._order):  # changed since it was parsed
+        if i is None or len(self._lines) != len(self._order):  # changed since it was parsed
             return int(el.sourceline or 0)
         return int(self._lines[i])
 
@@ -204,6 +203,7 @@ class _Loader:
         self.points: dict[Element, Mat] = {}  # Coordinate nodes, often USE'd
         self.visits = 0
         self.triangles = 0
+        self.vertices = 0
 
     def open(self, path: Path, chain: tuple[Path, ...]) -> tuple[_File, Element]:
         """The file and its Scene element."""
@@ -369,8 +369,11 @@ class _Loader:
         if len(F) == 0:
             return
         self.triangles += len(F)
-        if self.triangles > MAX_TRIANGLES:
-            raise ctx.file.error(el, f"the scene has more than {MAX_TRIANGLES} triangles")
+        self.vertices += len(V)
+        if max(self.triangles, self.vertices) > MAX_TRIANGLES:
+            raise ctx.file.error(
+                el, f"the scene has more than {MAX_TRIANGLES} triangles or vertices"
+            )
         owner = ctx.owner or self.loose
         M = owner.T_inv @ ctx.A  # the shape's frame -> the owner's rigid frame
         owner.parts.append((V @ M[:3, :3].T + M[:3, 3], F))

@@ -290,6 +290,16 @@ def test_duplicate_names(tmp_path: Path) -> None:
     assert (message, line) == (f"duplicate name 'A' (first defined at {path}:4)", 5)
 
 
+def test_lines_are_where_start_tags_begin(tmp_path: Path) -> None:
+    # libxml2 would say 5 and 8, where the start tags end.
+    body = '<Group\n DEF="A"/>\n<!-- <Group DEF="A"/> -->\n<Transform\n id="A"\n/>'
+    message, line = error(tmp_path, body)
+    assert (message, line) == (
+        f"duplicate name 'A' (first defined at {tmp_path / 'scene.x3d'}:4)",
+        7,
+    )
+
+
 def test_use_repetition_is_capped(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(x3d, "MAX_VISITS", 30)
     body = '<Group DEF="a"><Shape><Box/></Shape></Group>' + "".join(
@@ -300,6 +310,12 @@ def test_use_repetition_is_capped(tmp_path: Path, monkeypatch: pytest.MonkeyPatc
     assert (
         message == "the scene expands to more than 30 nodes (DEF/USE or Inline repeated too often)"
     )
+
+
+def test_geometry_is_capped(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(x3d, "MAX_TRIANGLES", 20)
+    body = '<Group DEF="a"><Shape><Box/></Shape></Group>\n<Group USE="a"/>'  # 12 + 12 triangles
+    assert error(tmp_path, body) == ("the scene has more than 20 triangles or vertices", 4)
 
 
 # --- Inline ---------------------------------------------------------------------------------
