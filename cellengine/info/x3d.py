@@ -330,8 +330,13 @@ class _Loader:
             if not target.is_relative_to(self.root):
                 raise f.error(el, f"Inline url '{url}' points outside the cell folder {self.root}")
             targets.append(target)
-        found = next((t for t in targets if t.is_file()), targets[0])
-        return resolve_inside(self.root, self._rel(found), f.name, f.line(el))
+        try:  # a name too long for the file system raises rather than "not found"
+            found = next((t for t in targets if t.is_file()), targets[0])
+            return resolve_inside(self.root, self._rel(found), f.name, f.line(el))
+        except OSError as e:
+            raise f.error(
+                el, f"Inline url '{_shown(urls[0])}' cannot be read: {e.strerror}"
+            ) from None
 
     def _shape(self, el: Element, ctx: _Ctx) -> None:
         for child in el:

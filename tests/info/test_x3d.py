@@ -396,6 +396,14 @@ def test_inline_missing_file(tmp_path: Path) -> None:
     assert line == 4
 
 
+def test_inline_url_too_long(tmp_path: Path) -> None:
+    url = "a" * 300
+    assert error(tmp_path, f'<Inline url="{url}"/>') == (
+        f"Inline url '{url[:57]}...' cannot be read: File name too long",
+        4,
+    )
+
+
 # --- geometry -------------------------------------------------------------------------------
 
 
