@@ -48,8 +48,9 @@ OPERATIONS: dict[str, tuple[str, str]] = {
     "RC": ("1+", "J3.1-J4.1 (guides in routing order)"),
 }
 
-COMPONENT_COLUMNS = ("type", "model", "label", "length", "diameter", "x", "y", "z")
-SEQUENCE_COLUMNS = ("order", "type of operation", "label", "spot")
+# Required columns as REMODEL spells them; matched ignoring case and extra spaces.
+COMPONENT_COLUMNS = ("Type", "Model", "Label", "length", "Diameter", "x", "y", "z")
+SEQUENCE_COLUMNS = ("Order", "Type of operation", "Label", "Spot")
 
 # Names become YAML keys and parts of dotted plan references (see cellengine.info.cell).
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_-]*$")
@@ -70,7 +71,7 @@ class Table:
     rows: tuple[tuple[int, tuple[str, ...]], ...]
 
     def cell(self, cells: Sequence[str], column: str) -> str:
-        i = self.columns.get(column)
+        i = self.columns.get(_norm(column))
         return cells[i].strip() if i is not None else ""
 
 
@@ -90,7 +91,7 @@ def read_table(path: Path, required: Sequence[str]) -> Table:
     columns: dict[str, int] = {}
     for i, name in enumerate(header):
         columns.setdefault(_norm(name), i)
-    missing = [c for c in required if c not in columns]
+    missing = [c for c in required if _norm(c) not in columns]
     if missing:
         has = ", ".join(h.strip() for h in header)
         raise InputError.at(
