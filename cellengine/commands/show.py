@@ -45,5 +45,6 @@ def run(args: argparse.Namespace) -> int:
     print(f"{'keypoint':<{width}}  " + "  ".join(f"{h:>9}" for h in head))
     for name, (xyz, rpy) in rows.items():
         values = [*(v * 1000.0 for v in xyz), *(math.degrees(v) for v in rpy)]
-        print(f"{name:<{width}}  " + "  ".join(f"{v:9.2f}" for v in values))
+        # round, then + 0.0 turns -0.0 into 0.0: the table never shows "-0.00"
+        print(f"{name:<{width}}  " + "  ".join(f"{round(v, 2) + 0.0:9.2f}" for v in values))
     return EXIT_OK
