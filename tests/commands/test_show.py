@@ -1,0 +1,51 @@
+import json
+import math
+
+import pytest
+
+from cellengine.cli import main
+from tests.conftest import CELLS
+
+# routing.guide2 is Blender's Guide_U_001 at (150, 260, 10) mm turned +90 deg about Blender z.
+# Blender's root rotation and the y-up -> z-up turn map (x, y, z) -> (-x, -y, z); the platform
+# pose (280, -210, 0) mm, yaw 180 deg, maps that back to (x + 280, y - 210, z): (430, 50, 10).
+# The slot is 55 mm above the element origin: (430, 50, 65) mm, yaw 180 + 180 + 90 = 90 deg.
+
+
+def test_json_in_metres_and_radians(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["show", str(CELLS / "cable_routing" / "cell.yaml"), "--json"]) == 0
+    keypoints = json.loads(capsys.readouterr().out)["keypoints"]
+    kp = keypoints["routing.guide2.slot"]
+    assert kp["xyz"] == pytest.approx([0.43, 0.05, 0.065], abs=1e-9)
+    assert kp["rpy"] == pytest.approx([0.0, 0.0, math.pi / 2], abs=1e-6)
+    assert {k.split(".")[1] for k in keypoints if k.startswith("routing.")} == {
+        "connector",
+        *(f"guide{i}" for i in range(1, 8)),
+    }
+
+
+def test_table_in_mm_and_degrees(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["show", str(CELLS / "cable_routing")]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].split() == [
+        "keypoint",
+        "x",
+        "mm",
+        "y",
+        "mm",
+        "z",
+        "mm",
+        "roll",
+        "deg",
+        "pitch",
+        "deg",
+        "yaw",
+        "deg",
+    ]
+    row = next(line for line in lines if line.startswith("routing.guide2.slot "))
+    assert row.split()[1:] == ["430.00", "50.00", "65.00", "0.00", "0.00", "90.00"]
+
+
+def test_missing_cell_is_usage_error(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["show", "no/such/cell.yaml"]) == 2
+    assert capsys.readouterr().err == "no/such/cell.yaml: no such cell file\n"
