@@ -1,0 +1,384 @@
+"""`cellengine import remodel`: the shared sample becomes a cell, objects and plan that
+validate; every mistake is reported at its file and row, and a failed import writes nothing."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from cellengine.cli import main
+from cellengine.commands.import_remodel import schema_line
+from cellengine.info.load import load_cell, load_objects
+from cellengine.info.xmlsafe import parse_xml
+
+REMODEL = Path(__file__).resolve().parents[3] / "shared" / "remodel"
+ROOT = Path(__file__).resolve().parents[2]
+ROBOTS = ROOT / "tests" / "data" / "remodel_import" / "robots.yaml"
+SEQUENCE_HEAD = "Order;Type of operation;Label;Spot\n"
+
+
+@pytest.fixture
+def src(tmp_path: Path) -> Path:
+    """The shared sample, copied. Its platform_cad.x3d has damaged Coordinate lists (numbers
+    run together, e.g. '16.0735072.688004'), which the X3D loader rightly refuses; the
+    copy drops the Shapes and keeps the Transform chain, which is all the poses need."""
+    folder = tmp_path / "src"
+    shutil.copytree(REMODEL, folder)
+    for f in folder.iterdir():
+        f.chmod(0o644)  # the shared copy is read-only
+    tree = parse_xml(folder / "platform_cad.x3d")
+    for shape in list(tree.iter("Shape")):
+        shape.getparent().remove(shape)
+    tree.write(str(folder / "platform_cad.x3d"))
+    return folder
+
+
+def run(*args: str | Path) -> int:
+    return main(["import", "remodel", *map(str, args)])
+
+
+def read(path: Path) -> dict:  # type: ignore[type-arg]
+    data = yaml.safe_load(path.read_text())
+    assert isinstance(data, dict)
+    return data
+
+
+def errors(capsys: pytest.CaptureFixture[str]) -> list[str]:
+    return capsys.readouterr().err.splitlines()
+
+
+def sequence(src: Path, *rows: str) -> None:
+    (src / "Assembly_sequence.csv").write_text(SEQUENCE_HEAD + "".join(r + "\n" for r in rows))
+
+
+def leftovers(tmp_path: Path) -> list[str]:
+    return sorted(p.name for p in tmp_path.iterdir() if p.name.startswith("."))
+
+
+# --- the sample --------------------------------------------------------------------------
+
+
+def test_sample_plan_steps(src: Path, tmp_path: Path) -> None:
+    dest = tmp_path / "cell"
+    assert run(src, dest) == 0
+    plan = read(dest / "plan.yaml")
+    assert plan == {
+        "cell": "cell.yaml",
+        "objects": "objects.yaml",
+        "steps": [
+            {"skill": "PickCable", "cable": "CA1", "from": ["combs.C2.1", "combs.C1.1"]},
+            {"skill": "PlaceConnector", "cable": "CA1", "guide": "platform.J8.1", "arm": "left"},
+            {
+                "skill": "RouteCable",
+                "cable": "CA1",
+                "guides": ["platform.J3.1", "platform.J4.1", "platform.J1.1", "platform.J2.1"],
+            },
+        ],
+    }
+    text = (dest / "plan.yaml").read_text()
+    assert "# row 3: PC CON1 J8.1.L; connector CON1 is on cable CA1 (WH_configuration.xml)" in text
+
+
+def test_sample_objects(src: Path, tmp_path: Path) -> None:
+    dest = tmp_path / "cell"
+    assert run(src, dest) == 0
+    cable = load_objects(dest / "objects.yaml").cables["CA1"]
+    assert cable.length == pytest.approx(0.5)
+    assert cable.diameter == pytest.approx(0.0051)
+    assert cable.color == "Grey"
+    assert cable.connector is not None
+    assert cable.connector.type == "VGA"
+    # width = x, height = y, length = z (along the cable)
+    assert cable.connector.width == pytest.approx(0.0329)
+    assert cable.connector.height == pytest.approx(0.01464)
+    assert cable.connector.length == pytest.approx(0.04655)
+    assert read(dest / "objects.yaml")["units"] == {"length": "mm", "mass": "g"}
+
+
+def test_sample_validates_and_platform_files_are_copied(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    dest = tmp_path / "cell"
+    assert run(src, dest) == 0
+    assert capsys.readouterr().out.endswith(
+        "cell: cell.yaml (platforms combs, platform), objects.yaml (1 cable), plan.yaml (3 steps)\n"
+    )
+    assert main(["validate", str(dest)]) == 0
+    cell = read(dest / "cell.yaml")
+    assert cell["platforms"]["combs"] == {
+        "pose": {"xyz": [0, 0, 0], "rpy": [0, 0, 0]},
+        "format": "remodel",
+        "cad": "combs/combs_cad.x3d",
+        "ids": "combs/combs_ids.wri",
+        "models": "Jigs_definition_v2.xml",
+    }
+    for rel in (
+        cell["platforms"]["platform"]["cad"],
+        "combs/combs_ids.wri",
+        "Jigs_definition_v2.xml",
+    ):
+        name = Path(rel).name
+        assert (dest / rel).read_bytes() == (src / name).read_bytes()
+    assert leftovers(tmp_path) == []  # the staging folder is gone
+
+
+def test_default_robots_in_mm_and_deg(src: Path, tmp_path: Path) -> None:
+    dest = tmp_path / "my cell"
+    assert run(src, dest) == 0
+    cell, _ = load_cell(dest / "cell.yaml")
+    assert cell.name == "my_cell"
+    assert list(cell.robots) == ["left", "right"]
+    assert cell.robots["left"].model == "ur5e"
+    assert cell.robots["left"].base.xyz == pytest.approx((0, 0.35, 0))
+    assert cell.robots["right"].base.xyz == pytest.approx((0, -0.35, 0))
+    assert cell.robots["right"].home == pytest.approx(np.radians([0, -90, 90, -90, -90, 0]))
+    assert cell.tools["cable_gripper"].jaw["slide"] == pytest.approx(0.007)
+    assert cell.driver.kind == "sim"
+    assert read(dest / "cell.yaml")["units"] == {"length": "mm", "angle": "deg"}
+
+
+def test_every_file_starts_with_its_schema_line(src: Path, tmp_path: Path) -> None:
+    dest = tmp_path / "cell"
+    assert run(src, dest) == 0
+    for kind in ("cell", "objects", "plan"):
+        first = (dest / f"{kind}.yaml").read_text().splitlines()[0]
+        # outside the checkout: the absolute path of its schemas folder
+        assert first == f"# yaml-language-server: $schema={ROOT}/schemas/{kind}.schema.json"
+
+
+def test_schema_line_is_relative_inside_the_checkout() -> None:
+    assert schema_line("plan", ROOT / "cells" / "imported") == [
+        "# yaml-language-server: $schema=../../schemas/plan.schema.json"
+    ]
+
+
+# --- --robots, --pose, --name ------------------------------------------------------------
+
+
+def test_robots_from_a_cell_keep_its_units_and_driver(src: Path, tmp_path: Path) -> None:
+    dest = tmp_path / "cell"
+    pose = "0.4 -0.1 0 0 0 3.14159"
+    assert run(src, dest, "--robots", ROBOTS, "--pose", pose, "--name", "lab") == 0
+    raw = read(dest / "cell.yaml")
+    assert raw["units"] == {"length": "m", "angle": "rad"}
+    assert set(raw) == {"name", "units", "robots", "tools", "platforms", "driver"}  # no obstacles
+    assert raw["platforms"]["platform"]["pose"] == {"xyz": [0.4, -0.1, 0], "rpy": [0, 0, 3.14159]}
+    cell, _ = load_cell(dest / "cell.yaml")
+    assert cell.name == "lab"
+    assert cell.robots["left"].model == "ur10e"
+    assert cell.robots["left"].base.xyz == pytest.approx((0, 0.4, 0.02))
+    assert cell.driver.kind == "ur_rtde"
+    assert cell.platforms["combs"].pose.xyz == pytest.approx((0.4, -0.1, 0))
+    assert main(["validate", str(dest)]) == 0
+
+
+def test_pose_for_all_and_for_one_platform(src: Path, tmp_path: Path) -> None:
+    dest = tmp_path / "cell"
+    args = ["--pose", "-400 0 10 0 0 180", "--pose", "combs=100,-200,0,0,0,90.5"]
+    assert run(src, dest, *args) == 0
+    platforms = read(dest / "cell.yaml")["platforms"]
+    assert platforms["platform"]["pose"] == {"xyz": [-400, 0, 10], "rpy": [0, 0, 180]}
+    assert platforms["combs"]["pose"] == {"xyz": [100, -200, 0], "rpy": [0, 0, 90.5]}
+    cell, _ = load_cell(dest / "cell.yaml")
+    assert cell.platforms["platform"].pose.rpy == pytest.approx((0, 0, np.pi))
+
+
+def test_bad_pose_and_name_are_usage_errors(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    dest = tmp_path / "cell"
+    for bad in (["--pose", "1 2 3"], ["--pose", "x=1 2 3 4 5 six"], ["--name", "a.b"]):
+        with pytest.raises(SystemExit) as e:
+            run(src, dest, *bad)
+        assert e.value.code == 2
+    assert "expected [NAME=]\"x y z roll pitch yaw\" (6 numbers), got '1 2 3'" in (
+        capsys.readouterr().err
+    )
+    assert run(src, dest, "--pose", "board=0 0 0 0 0 0") == 2
+    assert errors(capsys) == [f"{src}: --pose: unknown platform 'board'; known: combs, platform"]
+    assert not dest.exists()
+
+
+def test_urdf_robots_are_refused_at_their_line(
+    tmp_path: Path, src: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    (tmp_path / "arm.urdf").write_text("<robot name='a'/>")
+    robots = tmp_path / "robots.yaml"
+    robots.write_text("name: c\nrobots:\n  left:\n    model: {urdf: arm.urdf, tip: tool0}\n")
+    assert run(src, tmp_path / "cell", "--robots", robots) == 1
+    assert errors(capsys) == [
+        f"{robots}:4:12: robots.left.model: a URDF robot cannot be imported yet; copy the "
+        "URDF into DEST and edit cell.yaml by hand"
+    ]
+
+
+def test_arm_letter_needs_a_robot_of_that_name(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    robots = tmp_path / "robots.yaml"
+    robots.write_text("name: c\nrobots: {a: {model: ur5e}, b: {model: ur5e}}\n")
+    monkeypatch.chdir(tmp_path)
+    assert run(src, tmp_path / "cell", "--robots", robots) == 1
+    assert errors(capsys) == [
+        "src/Assembly_sequence.csv:3: Spot 'J8.1.L' names robot 'left', which robots.yaml "
+        "does not have; known: a, b"
+    ]
+
+
+# --- labels and cables -------------------------------------------------------------------
+
+
+def test_label_may_name_the_cable(src: Path, tmp_path: Path) -> None:
+    sequence(src, "1;EC;CA1;C2.1-C1.1", "2;RC;CA1;J3.1")
+    assert run(src, tmp_path / "cell") == 0
+    text = (tmp_path / "cell" / "plan.yaml").read_text()
+    assert "# row 2: EC CA1 C2.1-C1.1; CA1 is a cable" in text
+
+
+def test_without_harness_the_only_cable(src: Path, tmp_path: Path) -> None:
+    (src / "WH_configuration.xml").unlink()
+    assert run(src, tmp_path / "cell") == 0
+    text = (tmp_path / "cell" / "plan.yaml").read_text()
+    assert (
+        "connector CON1 is taken to be on CA1, the only cable in Components_definition.csv" in text
+    )
+    assert read(tmp_path / "cell" / "objects.yaml")["cables"]["CA1"]["connector"]["type"] == "VGA"
+
+
+def test_without_harness_two_cables_is_an_error(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    (src / "WH_configuration.xml").unlink()
+    with (src / "Components_definition.csv").open("a") as f:
+        f.write("Cable;;;CA2;Red;300;4;;;;\r\n")
+    monkeypatch.chdir(src)
+    assert run(src, tmp_path / "cell") == 1
+    message = (
+        "cannot tell which cable connector 'CON1' is on: there is no WH_configuration.xml, "
+        "and Components_definition.csv has 2 cables; known: CA1, CA2"
+    )
+    assert errors(capsys) == [f"Assembly_sequence.csv:{row}: {message}" for row in (2, 3, 4)]
+
+
+def test_unknown_label_names_the_row(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    sequence(src, "1;EC;CON1;C2.1-C1.1", "2;RC;CON9;J3.1")
+    monkeypatch.chdir(src)
+    assert run(src, tmp_path / "cell") == 1
+    assert errors(capsys) == [
+        "Assembly_sequence.csv:3: unknown Label 'CON9': not a connector or cable of "
+        "Components_definition.csv; known: CA1, CON1"
+    ]
+
+
+# --- errors at the row, and nothing written ----------------------------------------------
+
+
+def test_unknown_operation(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    sequence(src, "1;EC;CON1;C2.1-C1.1", "2;PC;CON1;J8.1.L", "3;XX;CON1;J3.1")
+    monkeypatch.chdir(src)
+    assert run(src, tmp_path / "cell") == 1
+    assert errors(capsys) == ["Assembly_sequence.csv:4: unknown operation 'XX'; known: EC, PC, RC"]
+    assert not (tmp_path / "cell").exists()
+
+
+def test_unknown_element_label(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    sequence(src, "1;EC;CON1;C9.1-C1.1")
+    monkeypatch.chdir(src)
+    assert run(src, tmp_path / "cell") == 1
+    assert errors(capsys) == [
+        "Assembly_sequence.csv:2: unknown label 'C9' in Spot 'C9.1-C1.1'; "
+        "known: C1, C2, J1, J2, J3, J4, J8, T1, T2"
+    ]
+
+
+def test_bad_arm_letter(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    sequence(src, "1;EC;CON1;C2.1-C1.1", "2;PC;CON1;J8.1.B")
+    monkeypatch.chdir(src)
+    assert run(src, tmp_path / "cell") == 1
+    assert errors(capsys) == [
+        "Assembly_sequence.csv:3: unknown arm letter 'B' in 'J8.1.B'; known: L, R (left, right)"
+    ]
+
+
+def test_unknown_guide_fails_validation_at_its_row_and_writes_nothing(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    sequence(src, "1;EC;CON1;C2.1-C1.1", "2;RC;CON1;J3.1-J4.2")
+    dest = tmp_path / "cell"
+    monkeypatch.chdir(src)
+    assert run(src, dest) == 1
+    assert errors(capsys) == [
+        "Assembly_sequence.csv:3: unknown keypoint 'platform.J4.2'; known: 1",
+        f"{dest}: nothing was written: the imported cell does not validate",
+    ]
+    assert not dest.exists()
+    assert leftovers(tmp_path) == []
+
+
+def test_damaged_platform_file_is_reported_in_src_and_dest_is_untouched(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    dest = tmp_path / "cell"
+    dest.mkdir()
+    (dest / "notes.txt").write_text("mine")
+    assert run(REMODEL, dest) == 1  # the shared sample as it is: damaged geometry
+    problems = errors(capsys)
+    # reported in the SRC file a user would fix, not in the staged copy
+    assert problems[0].startswith(f"{REMODEL}/platform_cad.x3d:45: Coordinate 'coords_ME_J1'")
+    assert problems[-1] == f"{dest}: nothing was written: the imported cell does not validate"
+    assert sorted(p.name for p in dest.iterdir()) == ["notes.txt"]
+    assert leftovers(tmp_path) == []
+
+
+def test_existing_files_need_force(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    dest = tmp_path / "cell"
+    dest.mkdir()
+    (dest / "plan.yaml").write_text("old")
+    (dest / "notes.txt").write_text("mine")
+    assert run(src, dest) == 2
+    assert errors(capsys) == [f"{dest}: would overwrite plan.yaml; give --force to overwrite"]
+    assert (dest / "plan.yaml").read_text() == "old"
+    assert run(src, dest, "--force") == 0
+    assert read(dest / "plan.yaml")["steps"][0]["skill"] == "PickCable"
+    assert (dest / "notes.txt").read_text() == "mine"
+    assert main(["validate", str(dest)]) == 0
+
+
+def test_failed_import_with_force_keeps_the_old_files(src: Path, tmp_path: Path) -> None:
+    dest = tmp_path / "cell"
+    assert run(src, dest) == 0
+    before = {p: p.read_bytes() for p in dest.rglob("*") if p.is_file()}
+    sequence(src, "1;EC;CON1;C2.1-C1.1", "2;RC;CON1;J3.9")  # no guide 9: fails validation
+    assert run(src, dest, "--force") == 1
+    assert {p: p.read_bytes() for p in dest.rglob("*") if p.is_file()} == before
+    assert leftovers(tmp_path) == []
+
+
+def test_missing_src_files(src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert run(tmp_path / "nowhere", tmp_path / "cell") == 2
+    (src / "combs_ids.wri").unlink()
+    assert run(src, tmp_path / "cell") == 1
+    (src / "Assembly_sequence.csv").unlink()
+    errs = errors(capsys)
+    assert errs[0] == f"{tmp_path / 'nowhere'}: no such folder"
+    assert errs[1] == (
+        f"{src / 'combs_cad.x3d'}: no combs_ids.wri next to it: a platform is a "
+        "<name>_cad.x3d and <name>_ids.wri pair"
+    )
+    (src / "combs_cad.x3d").unlink()
+    assert run(src, tmp_path / "cell") == 1
+    assert errors(capsys) == [f"{src}: no Assembly_sequence.csv in the REMODEL folder"]
