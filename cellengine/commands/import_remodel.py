@@ -18,7 +18,7 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import yaml
 
@@ -42,6 +42,8 @@ SEQUENCE = "Assembly_sequence.csv"
 HARNESS = "WH_configuration.xml"
 MODELS = "Jigs_definition*.xml"  # the sample has Jigs_definition_v2.xml
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_-]*$")
+_SKILLS = {"EC": "PickCable", "PC": "PlaceConnector", "RC": "RouteCable"}
+T = TypeVar("T")
 
 # Without --robots: the two-arm cell of the published method (DESIGN 3.1), in mm and deg.
 _HOME = [0, -90, 90, -90, -90, 0]
@@ -115,13 +117,14 @@ def add_parser(sub: Any, name: str) -> None:
         "--pose",
         action="append",
         default=[],
+        type=pose_arg,
         metavar='[NAME=]"X Y Z ROLL PITCH YAW"',
         help="where the platforms are in the cell, in the units of the written "
         "cell.yaml (those of --robots; by default mm and deg), rpy as in URDF. "
-        "With NAME= for one platform, else for all; repeatable; default all zero. "
+        "With NAME= for one platform, else for all; repeatable; default zero. "
         'Write --pose="-100 0 0 0 0 0" when the first number is negative.',
     )
-    r.add_argument("--name", help="the cell's name (default: DEST's folder name)")
+    r.add_argument("--name", type=name_arg, help="the cell's name (default: DEST's folder name)")
     r.add_argument("--force", action="store_true", help="overwrite files that exist in DEST")
     r.set_defaults(run=run)
 
@@ -258,40 +261,54 @@ def robot_setup(path: Path | None) -> Setup:
     return Setup(data, display_path(path))
 
 
-def parse_poses(values: Sequence[str], platforms: Sequence[str]) -> dict[str, dict[str, Any]]:
-    """``--pose`` values -> each platform's pose; NAME= entries win over the general one."""
-    general: list[float] | None = None
-    named: dict[str, list[float]] = {}
-    for value in values:
-        name, sep, text = value.partition("=")
-        if not sep:
-            if general is not None:
-                raise UsageError.at("--pose without a platform name is given twice", None)
-            general = _six_numbers(value)
-            continue
-        name = name.strip()
-        if name not in platforms:
-            raise UsageError.at(f"--pose: unknown platform '{name}'" + known(platforms), None)
-        named[name] = _six_numbers(text)
-    zero = [0.0] * 6
-    out = {}
-    for p in platforms:
-        v = [_plain(x) for x in named.get(p, general or zero)]
-        out[p] = {"xyz": v[:3], "rpy": v[3:]}
-    return out
+PoseArg = tuple[str | None, list[float]]
 
 
-def _six_numbers(text: str) -> list[float]:
+def pose_arg(value: str) -> PoseArg:
+    """One --pose value: ``[NAME=]x y z roll pitch yaw`` (spaces or commas)."""
+    name, sep, text = value.partition("=")
+    if not sep:
+        name, text = "", value
     parts = [t for t in re.split(r"[\s,]+", text.strip()) if t]
     try:
-        values = [float(t) for t in parts]
+        numbers = [float(t) for t in parts]
     except ValueError:
-        values = []
-    if len(values) != 6 or not all(math.isfinite(v) for v in values):
-        raise UsageError.at(
-            f"--pose: expected 6 numbers 'x y z roll pitch yaw', got '{text}'", None
+        numbers = []
+    if len(numbers) != 6 or not all(math.isfinite(v) for v in numbers):
+        raise argparse.ArgumentTypeError(
+            f"expected [NAME=]\"x y z roll pitch yaw\" (6 numbers), got '{value}'"
         )
-    return values
+    return (name.strip() or None), numbers
+
+
+def name_arg(value: str) -> str:
+    if not _NAME.match(value):
+        raise argparse.ArgumentTypeError(
+            f"'{value}' is not a valid name: use letters, digits, '_' and '-', "
+            "starting with a letter or '_'"
+        )
+    return value
+
+
+def platform_poses(
+    values: Sequence[PoseArg], platforms: Sequence[str], src: Path
+) -> dict[str, dict[str, Any]]:
+    """Each platform's pose: its own --pose NAME=..., else the last --pose without a name,
+    else zero."""
+    general = [0.0] * 6
+    named: dict[str, list[float]] = {}
+    for name, numbers in values:
+        if name is None:
+            general = numbers
+        elif name in platforms:
+            named[name] = numbers
+        else:
+            raise UsageError.at(f"--pose: unknown platform '{name}'" + known(platforms), src)
+    out = {}
+    for p in platforms:
+        v = [_plain(x) for x in named.get(p, general)]
+        out[p] = {"xyz": v[:3], "rpy": v[3:]}
+    return out
 
 
 def _plain(x: float) -> float | int:
@@ -333,6 +350,11 @@ def cable_of(
         )
     if harness is not None:
         cables = list(dict.fromkeys(h.cable for h in harness if label in (h.first, h.end)))
+        if len(cables) == 1 and cables[0] not in components.cables:
+            raise error(
+                f"{HARNESS} puts connector {label} on cable '{cables[0]}', which {COMPONENTS} "
+                "does not define" + known(components.cables)
+            )
         if len(cables) == 1:
             return CableLink(cables[0], f"connector {label} is on cable {cables[0]} ({HARNESS})")
         if cables:
@@ -352,9 +374,6 @@ def cable_of(
     )
 
 
-_SKILLS = {"EC": "PickCable", "PC": "PlaceConnector", "RC": "RouteCable"}
-
-
 @dataclass(frozen=True)
 class Inputs:
     """Everything read from SRC and the command line that the written files depend on."""
@@ -368,22 +387,24 @@ class Inputs:
 
 
 def read_inputs(source: Source, setup: Setup) -> Inputs:
+    """Read every process file; report the problems of all of them, not only the first's."""
     problems: list[Problem] = []
-    parsed: dict[str, Any] = {}
-    readers: dict[str, Callable[[], Any]] = {
-        "components": lambda: load_components(source.components),
-        "operations": lambda: load_sequence(source.sequence),
-        "harness": lambda: load_harness(source.harness) if source.harness else None,
-        "elements": lambda: element_platforms(source),
-    }
-    for key, read in readers.items():  # each file's problems, not only the first file's
+
+    def attempt(read: Callable[[], T]) -> T | None:
         try:
-            parsed[key] = read()
+            return read()
         except InputError as e:
             problems.extend(e.problems)
-    if problems:
+            return None
+
+    components = attempt(lambda: load_components(source.components))
+    operations = attempt(lambda: load_sequence(source.sequence))
+    wh = source.harness
+    harness = attempt(lambda: load_harness(wh)) if wh is not None else None
+    elements = attempt(lambda: element_platforms(source))
+    if problems or components is None or operations is None or elements is None:
         raise InputError(problems)
-    return Inputs(source, setup, **parsed)
+    return Inputs(source, setup, components, operations, harness, elements)
 
 
 def build_steps(inputs: Inputs) -> tuple[list[Step], dict[str, str]]:
@@ -598,13 +619,8 @@ def plan_text(steps: Sequence[Step], source: Source, dest: Path) -> str:
 
 
 def cell_name(given: str | None, dest: Path) -> str:
+    """--name, else DEST's folder name made into a valid name."""
     if given is not None:
-        if not _NAME.match(given):
-            raise UsageError.at(
-                f"--name '{given}' is not a valid name: use letters, digits, "
-                "'_' and '-', starting with a letter or '_'",
-                None,
-            )
         return given
     name = re.sub(r"[^A-Za-z0-9_-]", "_", dest.name) or "remodel"
     return name if _NAME.match(name) else f"_{name}"
@@ -698,7 +714,7 @@ def run(args: argparse.Namespace) -> int:
     dest = Path(os.path.abspath(args.dest))
     source = find_source(args.src)
     setup = robot_setup(args.robots)
-    poses = parse_poses(args.pose, list(source.platforms))
+    poses = platform_poses(args.pose, list(source.platforms), args.src)
     name = cell_name(args.name, dest)
     copies = source.copies()
     texts_names = ("cell.yaml", "objects.yaml", "plan.yaml")

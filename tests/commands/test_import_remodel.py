@@ -327,17 +327,19 @@ def test_unknown_guide_fails_validation_at_its_row_and_writes_nothing(
     assert leftovers(tmp_path) == []
 
 
-def test_damaged_platform_file_is_reported_in_src_and_dest_is_untouched(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+def test_bad_platform_file_is_reported_in_src_and_dest_is_untouched(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
+    with (src / "platform_ids.wri").open("a") as f:
+        f.write("ID0099\tJ9\t0011\r\n")  # line 7: no such DEF in platform_cad.x3d
     dest = tmp_path / "cell"
     dest.mkdir()
     (dest / "notes.txt").write_text("mine")
-    assert run(REMODEL, dest) == 1  # the shared sample as it is: damaged geometry
+    assert run(src, dest) == 1
     problems = errors(capsys)
     # reported in the SRC file a user would fix, not in the staged copy
-    assert problems[0].startswith(f"{REMODEL}/platform_cad.x3d:45: Coordinate 'coords_ME_J1'")
-    assert problems[-1] == f"{dest}: nothing was written: the imported cell does not validate"
+    assert problems[0].startswith(f"{src}/platform_ids.wri:7: unknown CAD name 'ID0099'")
+    assert problems[1:] == [f"{dest}: nothing was written: the imported cell does not validate"]
     assert sorted(p.name for p in dest.iterdir()) == ["notes.txt"]
     assert leftovers(tmp_path) == []
 
@@ -382,3 +384,66 @@ def test_missing_src_files(src: Path, tmp_path: Path, capsys: pytest.CaptureFixt
     (src / "combs_cad.x3d").unlink()
     assert run(src, tmp_path / "cell") == 1
     assert errors(capsys) == [f"{src}: no Assembly_sequence.csv in the REMODEL folder"]
+
+
+def harness(src: Path, body: str) -> None:
+    (src / "WH_configuration.xml").write_text(f"<data>\n{body}\n</data>\n")
+
+
+def test_harness_cable_must_be_a_component(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    harness(src, '<wiring_harness first_connector="CON1"><cable>CA9</cable></wiring_harness>')
+    sequence(src, "1;EC;CON1;C2.1-C1.1")
+    monkeypatch.chdir(src)
+    assert run(src, tmp_path / "cell") == 1
+    assert errors(capsys) == [
+        "Assembly_sequence.csv:2: WH_configuration.xml puts connector CON1 on cable 'CA9', "
+        "which Components_definition.csv does not define; known: CA1"
+    ]
+
+
+def test_connector_on_two_cables_needs_the_cable_label(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    with (src / "Components_definition.csv").open("a") as f:
+        f.write("Cable;;;CA2;Red;300;4;;;;\r\n")
+    harness(
+        src,
+        '<wiring_harness first_connector="CON1"><end_connector label="Free">'
+        "<cable>CA1</cable><cable>CA2</cable></end_connector></wiring_harness>",
+    )
+    sequence(src, "1;EC;CON1;C2.1-C1.1", "2;EC;CA2;C2.1-C1.1")
+    monkeypatch.chdir(src)
+    assert run(src, tmp_path / "cell") == 1
+    assert errors(capsys) == [
+        "Assembly_sequence.csv:2: connector 'CON1' is on 2 cables in WH_configuration.xml "
+        "(CA1, CA2); write the cable's label in the Label column"
+    ]
+    sequence(src, "1;EC;CA1;C2.1-C1.1", "2;EC;CA2;C2.1-C1.1")
+    assert run(src, tmp_path / "cell") == 0
+    cables = read(tmp_path / "cell" / "objects.yaml")["cables"]
+    # both leave the harness's first connector
+    assert cables["CA1"]["connector"] == cables["CA2"]["connector"]
+    assert cables["CA2"] == {
+        "length": 300,
+        "diameter": 4,
+        "color": "Red",
+        "connector": {"type": "VGA", "length": 46.55, "width": 32.9, "height": 14.64},
+    }
+
+
+def test_problems_of_every_file_together(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    with (src / "Components_definition.csv").open("a") as f:
+        f.write("Cable;;;CA2;Red;;4;;;;\r\n")
+    sequence(src, "1;EC;CON1;C2.1", "2;ZZ;CON1;J3.1")
+    monkeypatch.chdir(src)
+    assert run(src, tmp_path / "cell") == 1
+    assert errors(capsys) == [
+        "Components_definition.csv:4: empty length of cable CA2",
+        "Assembly_sequence.csv:2: EC names 2 guides, e.g. C2.1-C1.1 (connector end first); "
+        "'C2.1' names 1",
+        "Assembly_sequence.csv:3: unknown operation 'ZZ'; known: EC, PC, RC",
+    ]
