@@ -86,6 +86,10 @@ Turn a REMODEL cable-routing folder into a native cell in DEST:
 The Label column names a connector; each step acts on that connector's cable, from
 WH_configuration.xml, or the only cable there is.
 
+Platforms are placed with --pose (default: at the cell origin). REMODEL's Blender
+exports come out turned 180 deg about z in the z-up cell frame; a yaw of 180 lays
+a platform's own axes along the cell's (as cells/cable_routing/cell.yaml does).
+
 DEST is written only if the result validates; existing files there are kept unless
 --force. Each YAML file starts with a yaml-language-server $schema line naming this
 checkout's schemas/ (relative inside the checkout, absolute outside; left out when
