@@ -73,7 +73,9 @@ def load_remodel_platform(
     """Read a REMODEL platform; paths are already resolved inside the cell folder."""
     rows = load_ids(ids)
     jigs = load_jigs(models)
-    scene = load_x3d(cad, root, up)
+    # A REMODEL element's collision model is its box in the Jigs file, so a damaged CAD mesh
+    # (the published sample has some) is dropped for modelled elements, not fatal.
+    scene = load_x3d(cad, root, up, bad_geometry="skip")
     return assemble(name, T_cell_platform, scene, rows, jigs, ids, models)
 
 
@@ -97,6 +99,11 @@ def assemble(
                 row.row,
             )
         model = models.get(row.model)
+        if node.mesh_problem is not None and model is None:
+            raise InputError(node.mesh_problem)  # nothing else describes its shape
+        notes = [] if model else [f"model '{row.model}' is not defined in {models_file.name}"]
+        if node.mesh_problem is not None:
+            notes.append(f"its CAD mesh was dropped ({node.mesh_problem})")
         elements[row.label] = Element(
             name=row.label,
             model=row.model,
@@ -106,8 +113,8 @@ def assemble(
             mesh=node.mesh,
             boxes=model.boxes if model else (),
             source=Source(str(ids), row.row),
-            # A plan that names a keypoint of this element then gets a clear error.
-            note="" if model else f"model '{row.model}' is not defined in {models_file.name}",
+            # A plan that names a keypoint of an unmodelled element then gets a clear error.
+            note="; ".join(notes),
         )
     return Platform(name, frozen_array(T_cell_platform), MappingProxyType(elements))
 
@@ -218,7 +225,7 @@ def _guide_model(doc: _Doc, el: Any) -> RemodelModel:
     name = _model_name(doc, el)
     dims = _numeric_attributes(doc, el, skip=("model",))
     keypoints: dict[str, Keypoint] = {}
-    boxes: list[CollisionBox] = []
+    boxes: list[CollisionBox] = list(_body_box(dims))
     first: dict[str, int] = {}
     for child in _children(el):
         if child.tag != "guide":
@@ -243,6 +250,19 @@ def _guide_model(doc: _Doc, el: Any) -> RemodelModel:
         tuple(boxes),
         Source(str(doc.path), el.sourceline),
     )
+
+
+def _body_box(dims: Mapping[str, float]) -> tuple[CollisionBox, ...]:
+    """The body's collision extent: x in [xcol1, xcol2], y in [ycol1, ycol2], z in [0, zdim]."""
+    if not {"xcol1", "xcol2", "ycol1", "ycol2", "zdim"} <= dims.keys():
+        return ()
+    lo = (dims["xcol1"], dims["ycol1"], 0.0)
+    hi = (dims["xcol2"], dims["ycol2"], dims["zdim"])
+    size = (hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2])
+    if min(size) <= 0:
+        return ()
+    centre = [(a + b) / 2 for a, b in zip(lo, hi, strict=True)]
+    return (CollisionBox(size, frozen_array(transform(t=centre))),)
 
 
 def _guide(doc: _Doc, el: Any) -> tuple[Keypoint, CollisionBox | None]:

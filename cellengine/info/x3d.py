@@ -25,7 +25,7 @@ import trimesh
 from lxml import etree
 from numpy.typing import NDArray
 
-from cellengine.errors import CellError, InputError, display_path
+from cellengine.errors import CellError, InputError, Problem, display_path
 from cellengine.geometry import Mat, axis_angle_to_matrix, inverse, rot_x
 from cellengine.info.files import read_capped, resolve_inside
 from cellengine.info.xmlsafe import parse_xml
@@ -87,6 +87,8 @@ class X3DNode:
     line: int  # source line of its element
     T_scene_node: Mat  # 4x4 rigid transform, metres, in the z-up platform frame
     mesh: trimesh.Trimesh | None  # this node's own geometry, in the node frame, metres
+    # with bad_geometry="skip": why this node's geometry was dropped (mesh is then None)
+    mesh_problem: Problem | None = None
 
 
 @dataclass(frozen=True)
@@ -97,17 +99,24 @@ class X3DScene:
 
 
 def load_x3d(
-    path: Path, root: Path, up: Literal["y", "z"] = "y", *, meshes: bool = True
+    path: Path,
+    root: Path,
+    up: Literal["y", "z"] = "y",
+    *,
+    meshes: bool = True,
+    bad_geometry: Literal["error", "skip"] = "error",
 ) -> X3DScene:
     """Load ``path``; Inline urls must resolve inside ``root`` (the cell folder).
 
     ``up="y"`` (X3D's convention) turns the scene +90° about x into the z-up platform
     frame; ``up="z"`` leaves it as it is. ``meshes=False`` reads poses only: geometry is
     neither parsed nor checked, so a damaged mesh cannot stop the poses from loading.
+    ``bad_geometry="skip"`` drops the geometry of a node whose mesh is malformed and says why
+    in ``X3DNode.mesh_problem``; for formats whose collision model lies elsewhere.
     """
     if up not in ("y", "z"):
         raise ValueError(f"up must be 'y' or 'z', got {up!r}")
-    loader = _Loader(Path(root).resolve(), meshes)
+    loader = _Loader(Path(root).resolve(), meshes, bad_geometry == "skip")
     top, scene = loader.open(Path(path), ())
     T = _Y_UP if up == "y" else np.eye(4)
     ctx = _Ctx(top, T, T[:3, :3].copy(), None, False, 0)
@@ -176,11 +185,13 @@ class _Owner:
     T: Mat  # rigid platform <- node
     T_inv: Mat
     parts: list[tuple[Mat, Ints]] = field(default_factory=list)
+    problem: Problem | None = None  # the first malformed geometry, when skipped
 
     def node(self) -> X3DNode:
         T = self.T.copy()
         T.setflags(write=False)
-        return X3DNode(self.name, self.file, self.line, T, _mesh(self.parts))
+        mesh = None if self.problem else _mesh(self.parts)  # never half a mesh
+        return X3DNode(self.name, self.file, self.line, T, mesh, self.problem)
 
 
 class _Ctx(NamedTuple):
@@ -193,9 +204,10 @@ class _Ctx(NamedTuple):
 
 
 class _Loader:
-    def __init__(self, root: Path, meshes: bool) -> None:
+    def __init__(self, root: Path, meshes: bool, skip_bad: bool = False) -> None:
         self.root = root
         self.meshes = meshes
+        self.skip_bad = skip_bad
         self.owners: dict[str, _Owner] = {}
         self.loose = _Owner("", "", 0, np.eye(4), np.eye(4))
         self.active: set[Element] = set()  # elements being visited: USE cycles
@@ -349,7 +361,15 @@ class _Loader:
                 )
             use = child.get("USE")
             geom = self._use(child, tag, use, ctx.file) if use is not None else child
-            self._add(*self._geometry(geom, tag, ctx.file), ctx, child)
+            try:
+                V, F = self._geometry(geom, tag, ctx.file)
+            except CellError as e:
+                owner = ctx.owner or self.loose
+                if not self.skip_bad:
+                    raise
+                owner.problem = owner.problem or e.problems[0]
+                continue
+            self._add(V, F, ctx, child)
 
     def _geometry(self, el: Element, tag: str, f: _File) -> tuple[Mat, Ints]:
         cached = self.cache.get(el)

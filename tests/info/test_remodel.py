@@ -13,7 +13,6 @@ from cellengine.errors import InputError
 from cellengine.geometry import Mat, rot_x, rot_y, rot_z, transform
 from cellengine.info.platform import Platform
 from cellengine.info.remodel import IdsRow, load_ids, load_jigs, load_remodel_platform
-from cellengine.info.xmlsafe import parse_xml
 
 REMODEL = Path(__file__).resolve().parents[3] / "shared" / "remodel"
 JIGS = REMODEL / "Jigs_definition_v2.xml"
@@ -65,14 +64,19 @@ def test_sample_models_dimensions_and_boxes_in_metres() -> None:
         {"length": 0.010, "gap": 0.010, "height": 0.0545, "height_corner": 0.0545,
          "xcol1": 0.0, "xcol2": 0.010, "ycol1": -0.014, "ycol2": 0.024}
     )  # fmt: skip
-    (box,) = jig.boxes
+    body, box = jig.boxes
+    # the body: x in [xcol1, xcol2] = [0, 10], y in [ycol1, ycol2] = [-8, 22], z in [0, 100] mm
+    assert body.size == pytest.approx((0.010, 0.030, 0.100))
+    np.testing.assert_allclose(body.T_element_box[:3, 3], [0.005, 0.007, 0.050])
     assert box.size == pytest.approx((0.0072, 0.0198, 0.010))
     np.testing.assert_allclose(box.T_element_box, transform(np.eye(3), [0.0184, 0, 0.055]))
-    (box,) = models["0012"].boxes  # yaw 0.2883 rad about its z
+    _, box = models["0012"].boxes  # yaw 0.2883 rad about its z
     np.testing.assert_allclose(
         box.T_element_box, transform(rot_z(0.2883), [0.01444, 0.00795, 0.055]), atol=1e-15
     )
-    assert models["0000210"].boxes == ()  # its collision box is all zeros: none
+    # the comb: only its body; its guide's collision box is all zeros
+    (body,) = models["0000210"].boxes
+    assert body.size == pytest.approx((0.010, 0.034, 0.065))
 
 
 def test_sample_atc_stations_are_models_with_tool_keypoints() -> None:
@@ -88,25 +92,13 @@ def test_sample_atc_stations_are_models_with_tool_keypoints() -> None:
     assert atc.dimensions["tool_z"] == pytest.approx(0.265)
 
 
-def poses_only(src: Path, dst: Path) -> Path:
-    """The sample X3D without its Shapes. Three Coordinate point lists in the sample's
-    platform_cad.x3d hold glued numbers ('16.0735072.688004', line 47), which the X3D
-    loader rightly refuses; the Transform chain, which gives the poses, is left as it is."""
-    tree = parse_xml(src)
-    for shape in list(tree.iter("Shape")):
-        shape.getparent().remove(shape)
-    tree.write(str(dst))
-    return dst
-
-
 def board(tmp_path: Path) -> Platform:
-    for name in ("platform_ids.wri", "Jigs_definition_v2.xml"):
+    for name in ("platform_cad.x3d", "platform_ids.wri", "Jigs_definition_v2.xml"):
         shutil.copy(REMODEL / name, tmp_path / name)
-    cad = poses_only(REMODEL / "platform_cad.x3d", tmp_path / "platform_cad.x3d")
     return load_remodel_platform(
         "board",
         np.eye(4),
-        cad,
+        tmp_path / "platform_cad.x3d",
         tmp_path / "platform_ids.wri",
         tmp_path / "Jigs_definition_v2.xml",
         tmp_path,
@@ -135,6 +127,22 @@ def test_sample_board_slot_centres_in_the_platform_frame(tmp_path: Path) -> None
     assert dict(p.elements["J3"].keypoints["1"].dimensions)["gap"] == pytest.approx(0.010)
 
 
+def test_sample_damaged_meshes_are_dropped_for_modelled_elements(tmp_path: Path) -> None:
+    """Three Coordinate lists of the sample hold glued numbers ('16.0735072.688004') and
+    indices past their points: those jigs keep their poses, keypoints and Jigs boxes, lose
+    the mesh, and say why; the tray T1, with no model, keeps its (sound) plate mesh."""
+    p = board(tmp_path)
+    j1 = p.elements["J1"]
+    assert j1.mesh is None and len(j1.boxes) == 2
+    assert j1.note == (
+        f"its CAD mesh was dropped ({tmp_path}/platform_cad.x3d:45: Coordinate 'coords_ME_J1': "
+        "point must be x y z triples of numbers, got '16.0735072.688004' (item 211 of 348))"
+    )
+    assert p.elements["T1"].mesh is not None
+    # the plate spans 600 x 250 x 5 mm in its (scaled) frame
+    assert p.elements["T1"].mesh.bounds[1] == pytest.approx([0.6, 0.25, 0.005], abs=1e-6)
+
+
 def test_sample_tray_without_a_model_loads_with_a_note(tmp_path: Path) -> None:
     t1 = board(tmp_path).elements["T1"]
     assert t1.model == "0001"
@@ -161,7 +169,7 @@ def test_sample_combs_load_unchanged() -> None:
     # C2 = ID000003: (8.77, 23, 3) + (5, 17, 80) mm -> (-13.77, -40, 83) / 1000.
     np.testing.assert_allclose(keypoint(p, "C2", "1")[:3, 3], [-0.01377, -0.040, 0.083], atol=1e-6)
     c1 = p.elements["C1"]
-    assert c1.mesh is not None and c1.boxes == ()
+    assert c1.mesh is not None and len(c1.boxes) == 1  # its body; the guide box is all zeros
     # The comb's mesh spans 10 x 34 x 95.004974 mm in its own frame.
     np.testing.assert_allclose(c1.mesh.extents, [0.010, 0.034, 0.095004974], atol=1e-9)
     assert c1.source is not None and c1.source.line == 2

@@ -233,6 +233,28 @@ def test_remodel_platform_sample_has_damaged_geometry() -> None:
     )
 
 
+def test_bad_geometry_skip_drops_only_the_bad_nodes_mesh(tmp_path: Path) -> None:
+    body = (
+        '<Transform DEF="good" translation="1 0 0"><Shape><Box size="2 2 2"/></Shape></Transform>\n'
+        '<Transform DEF="bad" translation="0 1 0"><Shape><Box size="2 2 2"/></Shape>\n'
+        '<Shape><IndexedFaceSet coordIndex="0 1 5"><Coordinate point="0 0 0 1 0 0 0 1 0"/>'
+        "</IndexedFaceSet></Shape></Transform>"
+    )
+    path = write(tmp_path, "scene.x3d", body)
+    s = load_x3d(path, tmp_path, "z", bad_geometry="skip")
+    assert s.nodes["good"].mesh is not None and s.nodes["good"].mesh_problem is None
+    bad = s.nodes["bad"]
+    np.testing.assert_allclose(bad.T_scene_node[:3, 3], [0, 1, 0])
+    assert bad.mesh is None  # never half a mesh: its sound Box is dropped too
+    assert bad.mesh_problem is not None
+    assert (bad.mesh_problem.line, bad.mesh_problem.message) == (
+        6,
+        "IndexedFaceSet: coordIndex refers to point 5, but there are 3 points (0..2)",
+    )
+    with pytest.raises(InputError):  # the default refuses it
+        load_x3d(path, tmp_path, "z")
+
+
 def test_remodel_combs_with_meshes() -> None:
     s = load_x3d(REMODEL / "combs_cad.x3d", REMODEL)
     # (458, 23, 3) mm -> (-0.458, -0.023, 0.003) m, as for the platform.
