@@ -18,6 +18,7 @@ import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
+from importlib.resources import files
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
@@ -30,7 +31,8 @@ from cellengine.info.files import read_capped
 from cellengine.info.platform import Keypoint, Source, frozen_array
 from cellengine.info.xmlsafe import parse_xml
 
-SCHEMA = Path(__file__).resolve().parents[2] / "schemas" / "element-models.xsd"
+# The repo's schemas/ folder, installed as the package cellengine.schemas.
+SCHEMA = Path(str(files("cellengine.schemas") / "element-models.xsd"))
 
 LENGTH = {"m": 1.0, "cm": 1e-2, "mm": 1e-3}
 ANGLE = {"rad": 1.0, "deg": math.pi / 180.0}
