@@ -20,7 +20,7 @@ DESIGN = REMODEL.parent / "DESIGN.md"
 
 def example(heading: str) -> str:
     text = DESIGN.read_text()
-    section = text[text.index(heading):]
+    section = text[text.index(heading) :]
     return re.search(r"```yaml\n(.*?)```", section, re.S).group(1)  # type: ignore[union-attr]
 
 
