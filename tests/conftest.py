@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
@@ -9,7 +10,21 @@ import pytest
 ROOT = Path(__file__).resolve().parent.parent
 CELLS = ROOT / "cells"
 DATA = Path(__file__).resolve().parent / "data"
-REMODEL = ROOT.parent / "shared" / "remodel"
+
+
+def _shared() -> Path:
+    """The team's shared folder (DESIGN.md, the REMODEL sample): $CELLENGINE_SHARED, or the
+    nearest 'shared' folder beside the checkout or one of its parents."""
+    if "CELLENGINE_SHARED" in os.environ:
+        return Path(os.environ["CELLENGINE_SHARED"])
+    for parent in ROOT.parents:
+        if (parent / "shared" / "remodel").is_dir():
+            return parent / "shared"
+    return ROOT.parent / "shared"
+
+
+SHARED = _shared()
+REMODEL = SHARED / "remodel"
 
 
 @pytest.fixture

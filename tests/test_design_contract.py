@@ -13,9 +13,9 @@ from pathlib import Path
 import pytest
 
 from cellengine.cli import main
-from tests.conftest import CELLS, REMODEL
+from tests.conftest import CELLS, REMODEL, SHARED
 
-DESIGN = REMODEL.parent / "DESIGN.md"
+DESIGN = SHARED / "DESIGN.md"
 
 
 def example(heading: str) -> str:

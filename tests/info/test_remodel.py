@@ -13,8 +13,8 @@ from cellengine.errors import InputError
 from cellengine.geometry import Mat, rot_x, rot_y, rot_z, transform
 from cellengine.info.platform import Platform
 from cellengine.info.remodel import IdsRow, load_ids, load_jigs, load_remodel_platform
+from tests.conftest import REMODEL
 
-REMODEL = Path(__file__).resolve().parents[3] / "shared" / "remodel"
 JIGS = REMODEL / "Jigs_definition_v2.xml"
 DATA = Path(__file__).parents[1] / "data" / "platforms" / "remodel"
 MM = 1e-3

@@ -14,7 +14,8 @@ from cellengine.info import x3d
 from cellengine.info.x3d import X3DScene, load_x3d
 
 DATA = Path(__file__).parents[1] / "data" / "x3d"
-REMODEL = Path("/work/shared/remodel")
+from tests.conftest import REMODEL  # noqa: E402
+
 Q = 1.5707963267948966  # pi/2, as an exporter would write it
 
 # Rx(+90°), the y-up to z-up turn: (x, y, z) -> (x, -z, y)
