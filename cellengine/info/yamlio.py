@@ -7,6 +7,7 @@ keys are errors, and an alias bomb is refused from its node graph before it is e
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -62,7 +63,12 @@ def load_yaml(path: Path) -> YamlDoc:
 
 
 def parse_yaml(text: str, path: Path) -> YamlDoc:
-    loader = yaml.SafeLoader(text)
+    try:
+        loader = yaml.SafeLoader(text)  # checks every character first
+    except yaml.reader.ReaderError as e:
+        line, col = _line_col(text, e.position)
+        msg = f"character U+{e.character:04X} is not allowed in YAML"
+        raise InputError.at(msg, path, line, col) from None
     try:
         node = loader.get_single_node()
     except yaml.MarkedYAMLError as e:
@@ -74,15 +80,26 @@ def parse_yaml(text: str, path: Path) -> YamlDoc:
     except yaml.YAMLError as e:
         raise InputError.at(f"YAML error: {e}", path) from None
     except RecursionError:
-        raise InputError.at("YAML is nested too deeply", path) from None
+        mark = loader.get_mark()  # where the reader had got to
+        raise InputError.at(
+            "YAML is nested too deeply", path, mark.line + 1, mark.column + 1
+        ) from None
     finally:
         loader.dispose()
     doc = YamlDoc(path, None)
     if node is None:
         return doc
     builder = _Builder(doc, loader)
-    builder.check_size(node)
-    return YamlDoc(path, builder.build(node, ()), doc.values, doc.keys)
+    try:
+        builder.check_size(node)
+        data = builder.build(node, ())
+    except RecursionError:
+        raise InputError.at("YAML is nested too deeply", path, *_pos(node)) from None
+    return YamlDoc(path, data, doc.values, doc.keys)
+
+
+def _line_col(text: str, index: int) -> Pos:
+    return text.count("\n", 0, index) + 1, index - text.rfind("\n", 0, index)
 
 
 def _pos(node: yaml.Node) -> Pos:
@@ -123,7 +140,11 @@ class _Builder:
             active.add(key)
             total = 1
             if isinstance(n, yaml.MappingNode):
-                self.loader.flatten_mapping(n)  # resolve '<<' merge keys in place
+                try:
+                    self.loader.flatten_mapping(n)  # resolve '<<' merge keys in place
+                except yaml.MarkedYAMLError as e:
+                    merge = next((k for k, _ in n.value if k.tag == _STD + "merge"), n)
+                    raise self._fail(f"YAML merge key '<<': {e.problem}", merge) from None
                 total += sum(size(k) + size(v) for k, v in n.value)
             elif isinstance(n, yaml.SequenceNode):
                 total += sum(size(v) for v in n.value)
@@ -147,6 +168,7 @@ class _Builder:
                 if not isinstance(k, yaml.ScalarNode):
                     raise self._fail("mapping keys must be plain names", k)
                 name = str(k.value)
+                self._check_text(name, k)
                 if name in first:
                     line = _pos(first[name])[0]
                     raise self._fail(f"duplicate key '{name}' (first given at line {line})", k)
@@ -157,6 +179,29 @@ class _Builder:
         if isinstance(node, yaml.SequenceNode):
             return [self.build(v, (*loc, i)) for i, v in enumerate(node.value)]
         try:
-            return self.loader.construct_object(node, deep=True)
+            value = self.loader.construct_object(node, deep=True)
         except yaml.YAMLError as e:
             raise self._fail(f"bad YAML value: {e}", node) from None
+        except ValueError:  # an integer of thousands of digits
+            raise self._fail(
+                f"bad YAML value: the number {_shown(node.value)} is too long", node
+            ) from None
+        if isinstance(value, str):
+            self._check_text(value, node)
+        return value
+
+    def _check_text(self, text: str, node: yaml.Node) -> None:
+        """A \\u escape can give half a surrogate pair: no character, and unprintable."""
+        if _SURROGATE.search(text):
+            raise self._fail(
+                "bad YAML value: a \\u escape gives an unpaired surrogate (D800-DFFF), "
+                "which is not a character",
+                node,
+            )
+
+
+_SURROGATE = re.compile(r"[\ud800-\udfff]")
+
+
+def _shown(text: str) -> str:
+    return text if len(text) <= 40 else text[:37] + "..."
