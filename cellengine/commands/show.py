@@ -44,7 +44,9 @@ def run(args: argparse.Namespace) -> int:
     head = ["x mm", "y mm", "z mm", "roll deg", "pitch deg", "yaw deg"]
     print(f"{'keypoint':<{width}}  " + "  ".join(f"{h:>9}" for h in head))
     for name, (xyz, rpy) in rows.items():
-        values = [*(v * 1000.0 for v in xyz), *(math.degrees(v) for v in rpy)]
+        degrees = [math.degrees(v) for v in rpy]
+        degrees = [180.0 if round(d, 2) == -180.0 else d for d in degrees]  # one way to say it
+        values = [*(v * 1000.0 for v in xyz), *degrees]
         # round, then + 0.0 turns -0.0 into 0.0: the table never shows "-0.00"
         print(f"{name:<{width}}  " + "  ".join(f"{round(v, 2) + 0.0:9.2f}" for v in values))
     return EXIT_OK
