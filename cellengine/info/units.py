@@ -9,7 +9,15 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal
 
-from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Strict, ValidationInfo
+from pydantic import (
+    AfterValidator,
+    AllowInfNan,
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Strict,
+    ValidationInfo,
+)
 
 LENGTH = {"m": 1.0, "cm": 1e-2, "mm": 1e-3}
 ANGLE = {"rad": 1.0, "deg": math.pi / 180.0}
@@ -50,9 +58,10 @@ def count(n: int, what: str) -> BeforeValidator:
     return BeforeValidator(check)
 
 
-Number = Annotated[float, Strict()]  # ints welcome; strings and booleans are not numbers
-Length = Annotated[float, Strict(), _scaler("length")]
-Angle = Annotated[float, Strict(), _scaler("angle")]
-Mass = Annotated[float, Strict(), _scaler("mass")]
+# ints welcome; strings, booleans and YAML's .nan and .inf are not numbers
+Number = Annotated[float, Strict(), AllowInfNan(False)]
+Length = Annotated[float, Strict(), AllowInfNan(False), _scaler("length")]
+Angle = Annotated[float, Strict(), AllowInfNan(False), _scaler("angle")]
+Mass = Annotated[float, Strict(), AllowInfNan(False), _scaler("mass")]
 Vec3Length = Annotated[tuple[Length, Length, Length], count(3, "numbers [x, y, z]")]
 Vec3Angle = Annotated[tuple[Angle, Angle, Angle], count(3, "numbers [roll, pitch, yaw]")]
