@@ -12,10 +12,9 @@ import yaml
 
 from cellengine.cli import main
 from cellengine.commands.import_remodel import schema_line
-from cellengine.info.load import load_cell, load_objects
-from cellengine.info.xmlsafe import parse_xml
+from cellengine.info.load import load_cell, load_objects, load_world
+from tests.conftest import REMODEL
 
-REMODEL = Path(__file__).resolve().parents[3] / "shared" / "remodel"
 ROOT = Path(__file__).resolve().parents[2]
 ROBOTS = ROOT / "tests" / "data" / "remodel_import" / "robots.yaml"
 SEQUENCE_HEAD = "Order;Type of operation;Label;Spot\n"
@@ -23,17 +22,11 @@ SEQUENCE_HEAD = "Order;Type of operation;Label;Spot\n"
 
 @pytest.fixture
 def src(tmp_path: Path) -> Path:
-    """The shared sample, copied. Its platform_cad.x3d has damaged Coordinate lists (numbers
-    run together, e.g. '16.0735072.688004'), which the X3D loader rightly refuses; the
-    copy drops the Shapes and keeps the Transform chain, which is all the poses need."""
+    """The shared sample, copied as it is (tests change their copy, never the sample)."""
     folder = tmp_path / "src"
     shutil.copytree(REMODEL, folder)
     for f in folder.iterdir():
         f.chmod(0o644)  # the shared copy is read-only
-    tree = parse_xml(folder / "platform_cad.x3d")
-    for shape in list(tree.iter("Shape")):
-        shape.getparent().remove(shape)
-    tree.write(str(folder / "platform_cad.x3d"))
     return folder
 
 
@@ -185,6 +178,9 @@ def test_pose_for_all_and_for_one_platform(src: Path, tmp_path: Path) -> None:
     assert platforms["combs"]["pose"] == {"xyz": [100, -200, 0], "rpy": [0, 0, 90.5]}
     cell, _ = load_cell(dest / "cell.yaml")
     assert cell.platforms["platform"].pose.rpy == pytest.approx((0, 0, np.pi))
+    # J3.1 is (-323, -156.33, 112.25) mm in the platform frame (tests/info/test_remodel.py)
+    T = load_world(dest / "cell.yaml").pose("platform.J3.1")
+    np.testing.assert_allclose(T[:3, 3], [-0.4 + 0.323, 0.15633, 0.01 + 0.11225], atol=1e-6)
 
 
 def test_bad_pose_and_name_are_usage_errors(

@@ -17,8 +17,7 @@ from cellengine.info.remodel_csv import (
     load_harness,
     load_sequence,
 )
-
-REMODEL = Path(__file__).resolve().parents[3] / "shared" / "remodel"
+from tests.conftest import REMODEL
 
 COMPONENTS_HEAD = "Type;Model;Reference;Label;Color;length;Diameter;x;y;z;Type\n"
 SEQUENCE_HEAD = "Order;Type of operation;Label;Spot\n"
