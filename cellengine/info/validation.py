@@ -30,7 +30,8 @@ def validate(
     try:
         return cls.model_validate(value, context=context)
     except ValidationError as e:
-        raise InputError([problem(doc, cls, err, prefix) for err in e.errors()]) from None
+        errors = _prune_unions(doc.data, prefix, e.errors())
+        raise InputError([problem(doc, cls, err, prefix) for err in errors]) from None
 
 
 def dotted(loc: Loc) -> str:
@@ -54,7 +55,8 @@ def problem(doc: YamlDoc, cls: type[BaseModel], err: ErrorDetails, prefix: Loc =
         if kind == "missing":
             msg = f"missing required key '{name}'"
         else:
-            fields = _fields_at(cls, path[len(prefix) : -1])
+            branch = _branch(doc.data, prefix, err)
+            fields = _fields_at(cls, path[len(prefix) : -1], branch[1] if branch else None)
             msg = f"unknown key '{name}'" + (known(fields) if fields is not None else "")
         loc_text = dotted(parent)
         message = f"{loc_text}: {msg}" if loc_text else msg
@@ -82,8 +84,15 @@ def _describe(err: ErrorDetails, on_key: bool) -> str:
     if kind == "string_pattern_mismatch":
         what = f"'{value}' is not a valid name" if isinstance(value, str) else "not a valid name"
         return f"{what}: use letters, digits, '_' and '-', starting with a letter or '_'"
+    if kind == "union_kinds":
+        return f"must be {' or '.join(ctx['kinds'])}, got {_show(value)}"
+    if kind == "too_short":
+        least = ctx.get("min_length", 1)
+        return f"must have at least {least} item{'s' if least != 1 else ''}, got {_count(value)}"
     msg = err["msg"].removeprefix("Value error, ")
     msg = msg.replace("Input should be", "must be").replace("Input is ", "")
+    if kind in _KINDS:  # name the YAML kind, not the Python type
+        msg = f"must be {_KINDS[kind]}"
     if (
         kind in ("literal_error", "enum")
         or kind.endswith("_type")
@@ -94,12 +103,100 @@ def _describe(err: ErrorDetails, on_key: bool) -> str:
     return msg
 
 
+_KINDS = {
+    "dict_type": "a mapping",
+    "model_type": "a mapping",
+    "model_attributes_type": "a mapping",
+    "list_type": "a list",
+    "tuple_type": "a list",
+}
+_MORE_KINDS = {
+    "string_type": "a string",
+    "float_type": "a number",
+    "int_type": "an integer",
+    "bool_type": "true or false",
+}
+
+
+def _kind(error_type: str) -> str:
+    return _KINDS.get(error_type) or _MORE_KINDS.get(error_type) or error_type.removesuffix("_type")
+
+
+def _count(value: Any) -> str:
+    return str(len(value)) if isinstance(value, list | dict | tuple) else "fewer"
+
+
 def _show(value: Any) -> str:
     if isinstance(value, dict):
         return "a mapping"
     if isinstance(value, list):
         return "a list"
+    if isinstance(value, bool) or value is None:  # as YAML writes them
+        return {True: "true", False: "false", None: "null"}[value]
     return repr(value) if isinstance(value, str) else str(value)
+
+
+def _branch(data: Any, prefix: Loc, err: ErrorDetails) -> tuple[Loc, str, int] | None:
+    """The outermost union member an error is about: (data path of the union, the member's
+    tag in pydantic's loc, the tag's index in loc), or None if the error is in no union."""
+    path: list[str | int] = list(prefix)
+    node = data
+    for part in prefix:
+        node = node[part]
+    loc = err["loc"]
+    for i, part in enumerate(loc):
+        if part == "[key]":
+            continue
+        if _has(node, part):
+            node = node[part]
+            path.append(part)
+        elif isinstance(part, str) and (i < len(loc) - 1 or err["type"] != "missing"):
+            return tuple(path), part, i  # not in the data, and not a missing key
+        else:
+            return None
+    return None
+
+
+def _prune_unions(data: Any, prefix: Loc, errors: list[ErrorDetails]) -> list[ErrorDetails]:
+    """Where a value fits none of a union's members, pydantic reports every member's
+    errors. Keep one member's: not one whose kind the value is not (a string member for
+    a mapping), preferring the member that knows every key given, then the fewest errors."""
+    branches = [_branch(data, prefix, err) for err in errors]
+    members: dict[Loc, dict[str, list[tuple[ErrorDetails, int]]]] = {}
+    for err, b in zip(errors, branches, strict=True):
+        if b is not None:
+            members.setdefault(b[0], {}).setdefault(b[1], []).append((err, b[2]))
+    keep: dict[Loc, str] = {}
+    for at, by_member in members.items():
+        if len(by_member) < 2:
+            continue
+        names = list(by_member)
+
+        # a member whose only error is that the value is not even of its kind
+        wrong_kind = {
+            m
+            for m, errs in by_member.items()
+            if all(len(e["loc"]) == i + 1 and e["type"].endswith("_type") for e, i in errs)
+        }
+        if len(wrong_kind) == len(names):  # one problem: the kinds it could be
+            kinds = [_kind(e["type"]) for m in names for e, _ in by_member[m]]
+            first = by_member[names[0]][0][0]
+            first["type"] = "union_kinds"
+            first["ctx"] = {"kinds": list(dict.fromkeys(kinds))}
+        fitting = [m for m in names if m not in wrong_kind] or names[:1]
+        keep[at] = min(
+            fitting,
+            key=lambda m: (
+                any(e["type"] == "extra_forbidden" for e, _ in by_member[m]),
+                len(by_member[m]),
+                names.index(m),
+            ),
+        )
+    return [
+        err
+        for err, b in zip(errors, branches, strict=True)
+        if b is None or b[0] not in keep or keep[b[0]] == b[1]
+    ]
 
 
 def _data_path(data: Any, prefix: Loc, loc: tuple[int | str, ...]) -> tuple[Loc, bool]:
@@ -127,14 +224,15 @@ def _has(node: Any, part: str | int) -> bool:
     return isinstance(node, list) and isinstance(part, int) and 0 <= part < len(node)
 
 
-def _fields_at(cls: Any, path: Loc) -> list[str] | None:
-    """The keys a model accepts at ``path`` (relative to ``cls``), or None if unknown."""
+def _fields_at(cls: Any, path: Loc, member: str | None = None) -> list[str] | None:
+    """The keys a model accepts at ``path`` (relative to ``cls``; at a union, those of the
+    member named ``member``), or None if unknown."""
     node: Any = cls
     for part in path:
         node = _step(node, part)
         if node is None:
             return None
-    model = _model_in(node)
+    model = _model_in(node, name=member)
     return [f.alias or n for n, f in model.model_fields.items()] if model else None
 
 
@@ -159,15 +257,21 @@ def _step(tp: Any, part: str | int) -> Any:
     return None
 
 
-def _model_in(tp: Any, field: str | int | None = None) -> type[BaseModel] | None:
-    """The model class ``tp`` is, or the first union member model with ``field``."""
+def _model_in(
+    tp: Any, field: str | int | None = None, name: str | None = None
+) -> type[BaseModel] | None:
+    """The model class ``tp`` is, or the union member model called ``name``, or the first
+    with ``field``."""
     if isinstance(tp, type) and issubclass(tp, BaseModel):
         return tp
     origin, args = typing.get_origin(tp), typing.get_args(tp)
     if origin is typing.Annotated:
-        return _model_in(args[0], field)
+        return _model_in(args[0], field, name)
     if origin is typing.Union or origin is types.UnionType:
         models = [a for a in args if isinstance(a, type) and issubclass(a, BaseModel)]
+        for m in models:
+            if m.__name__ == name:
+                return m
         for m in models:
             if field is None or field in m.model_fields:
                 return m
