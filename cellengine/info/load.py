@@ -163,9 +163,11 @@ def load_plan(path: Path, load_cell_world: Callable[[Path], World] | None = None
     plan = parse_plan(doc)
     root = path.parent
     cell_path = resolve_inside(root, plan.cell, path, *_at(doc, ("cell",)))
+    _expect_kind(cell_path, "cell", doc)
     objects_path = None
     if plan.objects is not None:
         objects_path = resolve_inside(root, plan.objects, path, *_at(doc, ("objects",)))
+        _expect_kind(objects_path, "objects", doc)
     world = (load_cell_world or load_world)(cell_path)
     if objects_path is not None:
         world = replace(world, objects=load_objects(objects_path))
@@ -173,6 +175,26 @@ def load_plan(path: Path, load_cell_world: Callable[[Path], World] | None = None
     if problems:
         raise InputError(problems)
     return LoadedPlan(plan, world)
+
+
+# The top-level keys that tell the kinds of file apart.
+_KIND_KEYS = {"cell": ("robots",), "objects": ("cables", "containers"), "plan": ("steps",)}
+
+
+def _expect_kind(path: Path, kind: str, plan: YamlDoc) -> None:
+    """A plan's ``cell`` or ``objects`` naming another kind of file is the plan's mistake:
+    say so at the plan's key rather than list the other file's keys as unknown."""
+    data = load_yaml(path).data
+    if not isinstance(data, dict) or any(k in data for k in _KIND_KEYS[kind]):
+        return
+    for other, keys in _KIND_KEYS.items():
+        found = next((k for k in keys if k in data), None)
+        if other != kind and found is not None:
+            raise plan.error(
+                f"{kind}: '{plan.data[kind]}' is {'an' if other[0] == 'o' else 'a'} {other} "
+                f"file (it has '{found}'), not {'an' if kind[0] == 'o' else 'a'} {kind} file",
+                (kind,),
+            )
 
 
 def check_plan(plan: Plan, world: World, doc: YamlDoc) -> list[Problem]:
