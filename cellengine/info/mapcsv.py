@@ -11,13 +11,12 @@ Rows are CSV line numbers (the header is row 1), so errors point where an editor
 
 from __future__ import annotations
 
-import csv
-import io
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 from cellengine.errors import InputError
+from cellengine.info.csvrows import records
 from cellengine.info.files import read_capped
 
 HEADER = ("cad_name", "model", "name")
@@ -61,18 +60,7 @@ def _rows(path: Path) -> Iterator[tuple[int, list[str]]]:
         raise InputError.at(
             "file is not valid UTF-8", path, raw.count(b"\n", 0, e.start) + 1
         ) from None
-    reader = csv.reader(io.StringIO(text, newline=""), strict=True)
-    line = 1
-    while True:
-        try:
-            cells = next(reader)
-        except StopIteration:
-            return
-        except csv.Error as e:
-            raise InputError.at(f"malformed CSV: {e}", path, line) from None
-        if any(c.strip() for c in cells):
-            yield line, cells
-        line = reader.line_num + 1
+    yield from records(text, path)
 
 
 def _entry(cells: list[str], path: Path, row: int) -> MapRow:

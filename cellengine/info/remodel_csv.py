@@ -20,8 +20,6 @@ editor does. Lengths stay in the file's millimetres: the importer writes them in
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 import re
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -30,6 +28,7 @@ from pathlib import Path
 from typing import TypeVar
 
 from cellengine.errors import InputError, Problem, known
+from cellengine.info.csvrows import records
 from cellengine.info.files import read_capped
 from cellengine.info.xmlsafe import parse_xml
 
@@ -129,18 +128,7 @@ def _decode(raw: bytes, path: Path) -> str:
 def _records(path: Path) -> Iterator[tuple[int, list[str]]]:
     """Non-blank records with the line they start on (a quoted cell may span lines)."""
     text = _decode(read_capped(path, "csv"), path)
-    reader = csv.reader(io.StringIO(text, newline=""), delimiter=SEP, strict=True)
-    line = 1
-    while True:
-        try:
-            cells = next(reader)
-        except StopIteration:
-            return
-        except csv.Error as e:
-            raise InputError.at(f"malformed CSV: {e}", path, line) from None
-        if any(c.strip() for c in cells):
-            yield line, cells
-        line = reader.line_num + 1
+    yield from records(text, path, SEP)
 
 
 def _parse_rows(table: Table, parse: Callable[[Table, Sequence[str], int], T]) -> list[T]:
