@@ -302,6 +302,10 @@ class _Loader:
             where = f"{display_path(first.file)}:{first.line}"
             raise ctx.file.error(el, f"duplicate name '{name}' (first defined at {where})")
         T = _affine(ctx.R, ctx.A[:3, 3])
+        if not np.isfinite(T).all():  # each field is finite; their product need not be
+            raise ctx.file.error(
+                el, f"the pose of '{name}' overflows: its Transform chain has numbers too large"
+            )
         owner = _Owner(name, ctx.file.name, ctx.file.line(el), T, inverse(T))
         self.owners[name] = owner
         return owner
@@ -401,7 +405,12 @@ class _Loader:
             )
         owner = ctx.owner or self.loose
         M = owner.T_inv @ ctx.A  # the shape's frame -> the owner's rigid frame
-        owner.parts.append((V @ M[:3, :3].T + M[:3, 3], F))
+        V = V @ M[:3, :3].T + M[:3, 3]
+        if not np.isfinite(V).all():
+            raise ctx.file.error(
+                el, f"{_label(el)}: coordinates overflow: the Transform chain has numbers too large"
+            )
+        owner.parts.append((V, F))
 
 
 # --- elements and fields ---------------------------------------------------------------------
