@@ -22,6 +22,29 @@ Pos = tuple[int, int]
 
 MAX_NODES = 100_000  # after alias expansion
 MAX_ALIASES = 1_000
+MAX_DEPTH = 100  # nested maps and lists; cells need fewer than 10
+
+
+class _TooDeep(Exception):
+    def __init__(self, mark: Any) -> None:
+        self.mark = mark
+
+
+class _Loader(yaml.SafeLoader):
+    """The safe loader, refusing deep nesting before Python's recursion limit is near, so
+    the error and its place do not depend on how deep the caller's stack is."""
+
+    depth = 0
+
+    def compose_node(self, parent: yaml.Node | None, index: int) -> yaml.Node | None:
+        self.depth += 1
+        try:
+            if self.depth > MAX_DEPTH:
+                raise _TooDeep(self.peek_event().start_mark)  # type: ignore[no-untyped-call]
+            return super().compose_node(parent, index)
+        finally:
+            self.depth -= 1
+
 
 _STD = "tag:yaml.org,2002:"
 _ALLOWED_TAGS = {_STD + t for t in ("str", "int", "float", "bool", "null", "map", "seq")}
@@ -64,13 +87,16 @@ def load_yaml(path: Path) -> YamlDoc:
 
 def parse_yaml(text: str, path: Path) -> YamlDoc:
     try:
-        loader = yaml.SafeLoader(text)  # checks every character first
+        loader = _Loader(text)  # checks every character first
     except yaml.reader.ReaderError as e:
         line, col = _line_col(text, e.position)
         msg = f"character U+{e.character:04X} is not allowed in YAML"
         raise InputError.at(msg, path, line, col) from None
     try:
         node = loader.get_single_node()
+    except _TooDeep as e:
+        msg = f"YAML nests maps and lists more than {MAX_DEPTH} levels deep"
+        raise InputError.at(msg, path, e.mark.line + 1, e.mark.column + 1) from None
     except yaml.MarkedYAMLError as e:
         mark = e.problem_mark or e.context_mark
         msg = f"YAML syntax error: {e.problem or e.context}"
@@ -79,7 +105,7 @@ def parse_yaml(text: str, path: Path) -> YamlDoc:
         ) from None
     except yaml.YAMLError as e:
         raise InputError.at(f"YAML error: {e}", path) from None
-    except RecursionError:
+    except RecursionError:  # not expected below MAX_DEPTH; kept as a last resort
         mark = loader.get_mark()  # where the reader had got to
         raise InputError.at(
             "YAML is nested too deeply", path, mark.line + 1, mark.column + 1
