@@ -15,7 +15,7 @@ from __future__ import annotations
 import difflib
 import re
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import MappingProxyType
 from typing import Literal, NamedTuple, TypeAlias
@@ -319,7 +319,14 @@ class _Loader:
             raise ctx.file.error(
                 el, f"Inline '{self._rel(path)}' nests files more than {MAX_INLINE_DEPTH} deep"
             )
-        inlined, scene = self.open(path, ctx.file.chain)
+        try:
+            inlined, scene = self.open(path, ctx.file.chain)
+        except CellError as e:  # not X3D at all, perhaps: say which Inline brought it in
+            where = f"{display_path(ctx.file.name)}:{ctx.file.line(el)}"
+            raise InputError(
+                replace(p, message=f"{p.message} (in the file of the Inline at {where})")
+                for p in e.problems
+            ) from None
         ctx = ctx._replace(file=inlined)
         for child in _children(scene):
             self.visit(child, ctx)
