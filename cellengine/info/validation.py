@@ -109,8 +109,6 @@ _KINDS = {
     "model_attributes_type": "a mapping",
     "list_type": "a list",
     "tuple_type": "a list",
-}
-_MORE_KINDS = {
     "string_type": "a string",
     "float_type": "a number",
     "int_type": "an integer",
@@ -119,7 +117,7 @@ _MORE_KINDS = {
 
 
 def _kind(error_type: str) -> str:
-    return _KINDS.get(error_type) or _MORE_KINDS.get(error_type) or error_type.removesuffix("_type")
+    return _KINDS.get(error_type) or error_type.removesuffix("_type")
 
 
 def _count(value: Any) -> str:

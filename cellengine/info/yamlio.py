@@ -99,7 +99,7 @@ def parse_yaml(text: str, path: Path) -> YamlDoc:
         raise InputError.at(msg, path, e.mark.line + 1, e.mark.column + 1) from None
     except yaml.MarkedYAMLError as e:
         mark = e.problem_mark or e.context_mark
-        msg = f"YAML syntax error: {e.problem or e.context}"
+        msg = f"YAML syntax error: {_syntax(e.context, e.problem)}"
         raise InputError.at(
             msg, path, mark.line + 1 if mark else None, mark.column + 1 if mark else None
         ) from None
@@ -122,6 +122,15 @@ def parse_yaml(text: str, path: Path) -> YamlDoc:
     except RecursionError:
         raise InputError.at("YAML is nested too deeply", path, *_pos(node)) from None
     return YamlDoc(path, data, doc.values, doc.keys)
+
+
+def _syntax(context: str | None, problem: str | None) -> str:
+    """PyYAML's problem, whole: 'but found another document' needs what was expected."""
+    if problem and "'\\t'" in problem:
+        return "a tab character; YAML needs spaces here, not tabs"
+    if context and problem and context.startswith("expected"):
+        return f"{context}, {problem}"
+    return problem or context or "unreadable YAML"
 
 
 def _line_col(text: str, index: int) -> Pos:
