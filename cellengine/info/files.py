@@ -37,6 +37,8 @@ def resolve_inside(
     target = (base / ref).resolve()
     if not target.is_relative_to(base):
         raise InputError.at(f"file reference '{ref}' points outside the cell folder", *where)
+    if target.is_dir():
+        raise InputError.at(f"file reference '{ref}' is a folder, not a file", *where)
     if not target.is_file():
         raise InputError.at(f"file '{ref}' not found (looked for {target})", *where)
     return target
