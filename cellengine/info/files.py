@@ -33,15 +33,28 @@ def resolve_inside(
             f"file reference '{ref}' is a URL; only paths inside the cell folder are allowed",
             *where,
         )
-    base = root.resolve()
-    target = (base / ref).resolve()
-    if not target.is_relative_to(base):
-        raise InputError.at(f"file reference '{ref}' points outside the cell folder", *where)
-    if target.is_dir():
-        raise InputError.at(f"file reference '{ref}' is a folder, not a file", *where)
-    if not target.is_file():
-        raise InputError.at(f"file '{ref}' not found (looked for {target})", *where)
+    if "\0" in ref:  # YAML's "\0" escape; no file system takes it
+        raise InputError.at(f"file reference {_shown(ref)} contains a NUL character", *where)
+    try:
+        base = root.resolve()
+        target = (base / ref).resolve()
+        if not target.is_relative_to(base):
+            raise InputError.at(
+                f"file reference {_shown(ref)} points outside the cell folder", *where
+            )
+        if target.is_dir():
+            raise InputError.at(f"file reference {_shown(ref)} is a folder, not a file", *where)
+        if not target.is_file():
+            raise InputError.at(f"file {_shown(ref)} not found (looked for {target})", *where)
+    except OSError as e:  # a name too long for the file system, a loop of links
+        raise InputError.at(
+            f"file reference {_shown(ref)} cannot be used: {e.strerror}", *where
+        ) from None
     return target
+
+
+def _shown(ref: str) -> str:
+    return repr(ref) if len(ref) <= 80 else repr(ref[:77] + "...")
 
 
 def read_capped(
