@@ -120,8 +120,9 @@ def load_x3d(
     top, scene = loader.open(Path(path), ())
     T = _Y_UP if up == "y" else np.eye(4)
     ctx = _Ctx(top, T, T[:3, :3].copy(), None, False, 0)
-    for child in _children(scene):
-        loader.visit(child, ctx)
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow is checked, and refused
+        for child in _children(scene):
+            loader.visit(child, ctx)
     nodes = {o.name: o.node() for o in loader.owners.values()}
     return X3DScene(str(path), MappingProxyType(nodes), _mesh(loader.loose.parts))
 
