@@ -33,7 +33,8 @@ def _units(doc: YamlDoc) -> Units:
 
 def _require_mapping(doc: YamlDoc, what: str) -> None:
     if not isinstance(doc.data, dict):
-        raise InputError.at(f"a {what} file must be a mapping of keys", doc.file, 1, 1)
+        article = "an" if what[0] in "aeiou" else "a"
+        raise InputError.at(f"{article} {what} file must be a mapping of keys", doc.file, 1, 1)
 
 
 def load_cell(path: Path) -> tuple[Cell, YamlDoc]:

@@ -585,7 +585,7 @@ def _in_range(el: Element, attr: str, idx: Ints, n: int, f: _File) -> None:
         raise f.error(
             el,
             f"{_label(el)}: {attr} refers to point {int(bad[0])}, "
-            f"but there are {n} points (0..{n - 1})",
+            + (f"but there are {n} points (0..{n - 1})" if n else "but there are no points"),
         )
 
 

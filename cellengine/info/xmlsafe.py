@@ -36,7 +36,7 @@ def parse_xml(path: Path, kind: str = "xml") -> etree._ElementTree:
         # laughs) fails the parse: say why, where it is declared.
         _refuse_entities(data, path)
         line, col = e.position if e.position else (None, None)
-        msg = str(e.msg or e).split(f", line {line}")[0]
+        msg = " ".join(str(e.msg or e).split(f", line {line}")[0].split())  # one line
         for pattern, readable in _REWRITES:
             msg = pattern.sub(readable, msg)
         raise InputError.at(f"XML syntax error: {msg}", path, line, col) from None
