@@ -40,8 +40,15 @@ def parse_plan(doc: YamlDoc) -> Plan:
     skills = registry()
     for i, raw in enumerate(head.steps):
         name = raw.get("skill")
-        if name not in skills:
-            what = "missing required key 'skill'" if name is None else f"unknown skill '{name}'"
+        if not isinstance(name, str) or name not in skills:
+            if name is None:
+                what = "missing required key 'skill'"
+            elif not isinstance(name, str):
+                kinds = {dict: "a mapping", list: "a list"}
+                kind = kinds.get(type(name)) or repr(name)
+                what = f"skill must be a skill's name, got {kind}"
+            else:
+                what = f"unknown skill '{name}'"
             loc = ("steps", i) if name is None else ("steps", i, "skill")
             problems.append(doc.error(f"steps[{i}]: {what}" + known(skills), loc).problems[0])
             continue
