@@ -44,8 +44,8 @@ def parse_plan(doc: YamlDoc) -> Plan:
             if name is None:
                 what = "missing required key 'skill'"
             elif not isinstance(name, str):
-                kinds = {dict: "a mapping", list: "a list"}
-                kind = kinds.get(type(name)) or repr(name)
+                kind = {"dict": "a mapping", "list": "a list"}.get(type(name).__name__)
+                kind = kind or repr(name)
                 what = f"skill must be a skill's name, got {kind}"
             else:
                 what = f"unknown skill '{name}'"
