@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from typing import Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator
 
 from cellengine.info.units import Angle, Number
 from cellengine.skill import KeypointRef, ObjectRef, Skill, register
@@ -58,9 +58,10 @@ class Pour(Skill):
     into: ObjectRef
     angle: Angle = Field(math.radians(100.0), gt=0)
 
-    @model_validator(mode="after")
-    def _at_most_half_turn(self) -> Pour:
-        # checked here, after unit conversion, so degrees and radians both work
-        if self.angle > math.pi:
-            raise ValueError("angle: a pour tilts at most 180 deg (pi rad)")
-        return self
+    @field_validator("angle")
+    @classmethod
+    def _at_most_half_turn(cls, angle: float) -> float:
+        # runs after unit conversion, so degrees and radians both work
+        if angle > math.pi:
+            raise ValueError("a pour tilts at most 180 deg (pi rad)")
+        return angle
