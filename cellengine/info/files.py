@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import re
 from pathlib import Path
 
@@ -39,8 +40,10 @@ def resolve_inside(
         base = root.resolve()
         target = (base / ref).resolve()
         if not target.is_relative_to(base):
+            link = Path(os.path.normpath(base / ref)).is_relative_to(base)
+            how = "is a link that leads" if link else "points"
             raise InputError.at(
-                f"file reference {_shown(ref)} points outside the cell folder", *where
+                f"file reference {_shown(ref)} {how} outside the cell folder", *where
             )
         if target.is_dir():
             raise InputError.at(f"file reference {_shown(ref)} is a folder, not a file", *where)
