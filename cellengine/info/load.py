@@ -164,14 +164,20 @@ def load_plan(path: Path, load_cell_world: Callable[[Path], World] | None = None
     plan = parse_plan(doc)
     root = path.parent
     cell_path = resolve_inside(root, plan.cell, path, *_at(doc, ("cell",)))
-    _expect_kind(cell_path, "cell", doc)
     objects_path = None
     if plan.objects is not None:
         objects_path = resolve_inside(root, plan.objects, path, *_at(doc, ("objects",)))
-        _expect_kind(objects_path, "objects", doc)
-    world = (load_cell_world or load_world)(cell_path)
+    try:
+        world = (load_cell_world or load_world)(cell_path)
+    except InputError:
+        _expect_kind(cell_path, "cell", doc)
+        raise
     if objects_path is not None:
-        world = replace(world, objects=load_objects(objects_path))
+        try:
+            world = replace(world, objects=load_objects(objects_path))
+        except InputError:
+            _expect_kind(objects_path, "objects", doc)
+            raise
     problems = check_plan(plan, world, doc)
     if problems:
         raise InputError(problems)
@@ -183,8 +189,9 @@ _KIND_KEYS = {"cell": ("robots",), "objects": ("cables", "containers"), "plan": 
 
 
 def _expect_kind(path: Path, kind: str, plan: YamlDoc) -> None:
-    """A plan's ``cell`` or ``objects`` naming another kind of file is the plan's mistake:
-    say so at the plan's key rather than list the other file's keys as unknown."""
+    """When a plan's ``cell`` or ``objects`` file did not load: if it is another kind of
+    file, that is the plan's mistake; say so at the plan's key rather than list the other
+    file's keys as unknown."""
     data = load_yaml(path).data
     if not isinstance(data, dict) or any(k in data for k in _KIND_KEYS[kind]):
         return
