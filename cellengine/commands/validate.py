@@ -51,13 +51,21 @@ def validate_paths(paths: list[Path]) -> list[Result]:
             files.append((p, True))
         else:
             raise UsageError.at("no such file or folder", p)
-    worlds: dict[Path, World] = {}
+    worlds: dict[Path, World | InputError] = {}
 
     def world_of(cell: Path) -> World:
+        """Each cell loaded once, whether it loads or not: plans sharing a broken cell
+        do not load it again each."""
         key = cell.resolve()
         if key not in worlds:
-            worlds[key] = load_world(cell)
-        return worlds[key]
+            try:
+                worlds[key] = load_world(cell)
+            except InputError as e:
+                worlds[key] = e
+        world = worlds[key]
+        if isinstance(world, InputError):
+            raise InputError(world.problems)
+        return world
 
     results = []
     seen: set[Path] = set()
