@@ -55,8 +55,8 @@ def load_models(path: Path) -> Mapping[str, ElementModel]:
     if not schema.validate(tree):
         raise InputError(_schema_problems(schema.error_log, path, source_lines(path)))
     root = tree.getroot()
-    length = LENGTH[root.get("units", "m")]
-    angle = ANGLE[root.get("angles", "rad")]
+    length = LENGTH[root.get("units", "m").strip()]  # xs:token: the schema allows spaces
+    angle = ANGLE[root.get("angles", "rad").strip()]
     models: dict[str, ElementModel] = {}
     first: dict[str, int] = {}
     for el in root.iterchildren("element"):
