@@ -30,7 +30,11 @@ lint: $(VENV)/.installed-test
 	$(BIN)/ruff format --check cellengine skills tests
 	$(BIN)/mypy
 
-bench: $(VENV)/.installed-test
+$(VENV)/.installed-bench: pyproject.toml | $(BIN)/python
+	$(BIN)/pip install -q -e '.[test,bench]'
+	touch $@ $(VENV)/.installed $(VENV)/.installed-test
+
+bench: $(VENV)/.installed-bench
 	$(BIN)/python bench/validate_speed.py
 	$(BIN)/python bench/bench_x3d.py
 
