@@ -145,6 +145,7 @@ class _File:
         self.defs: dict[str, Element] = {}  # DEF and id names; a USE looks only in its file
         self._order = {el: i for i, el in enumerate(root.iter(etree.Element))}
         self._lines: Ints | None = None
+        self._cols: Ints = np.zeros(0, dtype=np.int64)
         for el in self._order:
             self._define(el)
 
@@ -159,18 +160,25 @@ class _File:
                 raise self.error(el, f"duplicate name '{name}' (first defined at {where})")
 
     def line(self, el: Element) -> int:
+        return self.position(el)[0]
+
+    def position(self, el: Element) -> tuple[int, int | None]:
+        """(line, column) where the element's start tag begins."""
         if self._lines is None:
             data = read_capped(self.path, "x3d")
-            starts = [m.start() for m in _MARKUP.finditer(data) if m.group(1) is not None]
+            starts = np.array([m.start() for m in _MARKUP.finditer(data) if m.group(1) is not None])
             newlines = np.flatnonzero(np.frombuffer(data, np.uint8) == ord("\n"))
-            self._lines = np.searchsorted(newlines, starts) + 1
+            before = np.searchsorted(newlines, starts)  # newlines before each start tag
+            line_start = np.where(before > 0, newlines[np.maximum(before - 1, 0)] + 1, 0)
+            self._lines = before + 1
+            self._cols = starts - line_start + 1  # in bytes: exact for ASCII, as CAD writes
         i = self._order.get(el)
         if i is None or len(self._lines) != len(self._order):  # changed since it was parsed
-            return int(el.sourceline or 0)
-        return int(self._lines[i])
+            return int(el.sourceline or 0), None
+        return int(self._lines[i]), int(self._cols[i])
 
     def error(self, el: Element, message: str) -> CellError:
-        return InputError.at(message, self.name, self.line(el))
+        return InputError.at(message, self.name, *self.position(el))
 
 
 # --- traversal -------------------------------------------------------------------------------

@@ -135,7 +135,7 @@ def test_sample_damaged_meshes_are_dropped_for_modelled_elements(tmp_path: Path)
     j1 = p.elements["J1"]
     assert j1.mesh is None and len(j1.boxes) == 2
     assert j1.note == (
-        f"its CAD mesh was dropped ({tmp_path}/platform_cad.x3d:45: Coordinate 'coords_ME_J1': "
+        f"its CAD mesh was dropped ({tmp_path}/platform_cad.x3d:45:9: Coordinate 'coords_ME_J1': "
         "point must be x y z triples of numbers, got '16.0735072.688004' (item 211 of 348))"
     )
     assert p.elements["T1"].mesh is not None
