@@ -1,0 +1,443 @@
+"""Closed-form inverse kinematics of the Universal Robots family (UR3e, UR5e, UR10e, UR5, ...).
+
+Conventions are the controller's: standard DH, ``T_i = Rz(q_i) @ Tz(d_i) @ Tx(a_i) @ Rx(alpha_i)``,
+from the controller base frame to the flange (``tool0``). Callers with a mounted base or a
+tool transform their targets first: ``T_base_flange = inv(T_world_base) @ T_world_tcp @
+inv(T_flange_tcp)``.
+
+Eight branches per pose, indexed ``4 * shoulder + 2 * wrist + elbow`` (each bit 0 or 1):
+
+- shoulder 0: ``q1 = psi + atan2(d4, +sqrt(r^2 - d4^2))``, 1: the ``-sqrt`` root, where
+  ``r, psi`` are the polar coordinates of the wrist point ``p5`` in the base xy-plane;
+- wrist 0: ``sin(q5) >= 0``, 1: ``sin(q5) <= 0``;
+- elbow 0: ``sin(q3) >= 0``, 1: ``sin(q3) <= 0``.
+
+Two code paths share these formulas: :meth:`URKinematics.solve` runs numpy over N poses at once
+(per-call overhead amortised), and :meth:`URKinematics.ik` / :meth:`URKinematics.ik_all` run pure
+Python ``math`` for one pose, because a numpy call costs about a microsecond and one pose would
+need a few hundred of them.
+
+Every angle comes from ``atan2`` of two well-conditioned quantities rather than ``acos``, so the
+residual stays at rounding level even near ``q5 = 0`` (``acos`` near 1 loses half the digits).
+Singular poses give a valid solution, never NaN: at the wrist singularity (``sin q5 = 0``) only
+``q4 + q6`` is determined, and ``q6`` is taken from the seed; at the shoulder singularity
+(``r = |d4|``) both shoulder roots coincide.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+Array = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+TWO_PI = 2.0 * math.pi
+HALF_PI = 0.5 * math.pi
+
+# Below this |sin q5| the wrist is treated as singular and q6 is taken from the seed. The
+# orientation error this adds is at most 2 * |sin q5|, far under the 1e-9 residual goal.
+WRIST_EPS = 1e-12
+# Round-off slack: a wrist point this far (m^2) inside the d4 cylinder, or an elbow cosine this
+# far beyond 1, is taken as on the boundary rather than unreachable.
+SHOULDER_SLACK = 1e-12
+ELBOW_SLACK = 1e-9
+# A wrapped angle this close outside a joint limit is clamped onto it (round-off, not a violation).
+LIMIT_SLACK = 1e-10
+
+
+@dataclass(frozen=True)
+class DH:
+    """A standard DH table: six d (m), a (m) and alpha (rad)."""
+
+    d: tuple[float, float, float, float, float, float]
+    a: tuple[float, float, float, float, float, float]
+    alpha: tuple[float, float, float, float, float, float]
+
+
+def _dh(d: Sequence[float], a: Sequence[float]) -> DH:
+    alpha = (HALF_PI, 0.0, 0.0, HALF_PI, -HALF_PI, 0.0)
+    return DH(tuple(d), tuple(a), alpha)  # type: ignore[arg-type]
+
+
+# Published DH parameters (Universal Robots), controller base frame to flange.
+UR_DH: dict[str, DH] = {
+    "ur3e": _dh((0.15185, 0, 0, 0.13105, 0.08535, 0.0921), (0, -0.24355, -0.2132, 0, 0, 0)),
+    "ur5e": _dh((0.1625, 0, 0, 0.1333, 0.0997, 0.0996), (0, -0.425, -0.3922, 0, 0, 0)),
+    "ur10e": _dh((0.1807, 0, 0, 0.17415, 0.11985, 0.11655), (0, -0.6127, -0.57155, 0, 0, 0)),
+    "ur5": _dh((0.089159, 0, 0, 0.10915, 0.09465, 0.0823), (0, -0.425, -0.39225, 0, 0, 0)),
+}
+
+
+def _check_structure(d: Sequence[float], a: Sequence[float], alpha: Sequence[float]) -> None:
+    """The closed form assumes the UR geometry: three parallel middle axes and a spherical-less
+    wrist with offsets d4, d5, d6. Anything else must use the numerical solver."""
+    if len(d) != 6 or len(a) != 6 or len(alpha) != 6:
+        raise ValueError("a UR DH table has six rows")
+    zero_d = (d[1], d[2])
+    zero_a = (a[0], a[3], a[4], a[5])
+    want_alpha = (HALF_PI, 0.0, 0.0, HALF_PI, -HALF_PI, 0.0)
+    if any(abs(x) > 1e-12 for x in (*zero_d, *zero_a)):
+        raise ValueError("not a UR geometry: d2, d3, a1, a4, a5, a6 must be 0")
+    if any(abs(x - y) > 1e-9 for x, y in zip(alpha, want_alpha, strict=True)):
+        raise ValueError("not a UR geometry: alpha must be (pi/2, 0, 0, pi/2, -pi/2, 0)")
+    if abs(d[3]) < 1e-9 or abs(a[1]) < 1e-9 or abs(a[2]) < 1e-9:
+        raise ValueError("not a UR geometry: d4, a2 and a3 must be non-zero")
+
+
+def _limits(value: ArrayLike | None, default: float) -> list[float]:
+    if value is None:
+        return [default] * 6
+    out = [float(x) for x in np.asarray(value, dtype=float).reshape(6)]
+    return out
+
+
+class URKinematics:
+    """Forward and closed-form inverse kinematics of one UR arm from its DH table.
+
+    ``lower``/``upper`` are the default joint limits (rad) for :meth:`ik` and :meth:`ik_batch`;
+    UR arms allow +-2 pi on every joint, which is the default.
+    """
+
+    def __init__(
+        self,
+        d: Sequence[float],
+        a: Sequence[float],
+        alpha: Sequence[float],
+        lower: ArrayLike | None = None,
+        upper: ArrayLike | None = None,
+    ) -> None:
+        _check_structure(d, a, alpha)
+        self.d = np.array(d, dtype=float)
+        self.a = np.array(a, dtype=float)
+        self.alpha = np.array(alpha, dtype=float)
+        self.lower = np.array(_limits(lower, -TWO_PI))
+        self.upper = np.array(_limits(upper, TWO_PI))
+        self._lower = self.lower.tolist()
+        self._upper = self.upper.tolist()
+        d1, d4, d5, d6 = float(d[0]), float(d[3]), float(d[4]), float(d[5])
+        a2, a3 = float(a[1]), float(a[2])
+        self._d1, self._d4, self._d5, self._d6, self._a2, self._a3 = d1, d4, d5, d6, a2, a3
+        self._elbow_k = a2 * a2 + a3 * a3
+        self._elbow_den = 2.0 * a2 * a3
+
+    @classmethod
+    def from_name(
+        cls, name: str, lower: ArrayLike | None = None, upper: ArrayLike | None = None
+    ) -> URKinematics:
+        """A built-in model by name: ``ur3e``, ``ur5e``, ``ur10e`` or ``ur5``."""
+        dh = UR_DH[name]
+        return cls(dh.d, dh.a, dh.alpha, lower, upper)
+
+    # ------------------------------------------------------------------ forward kinematics
+
+    def fk(self, q: ArrayLike) -> Array:
+        """T_base_flange (4, 4) for one configuration (6,)."""
+        T: Array = self.fk_batch(np.asarray(q, dtype=float).reshape(1, 6))[0]
+        return T
+
+    def fk_batch(self, q: ArrayLike) -> Array:
+        """T_base_flange (N, 4, 4) for N configurations (N, 6)."""
+        qa = np.asarray(q, dtype=float).reshape(-1, 6)
+        n = qa.shape[0]
+        T = np.broadcast_to(np.eye(4), (n, 4, 4)).copy()
+        for i in range(6):
+            T = T @ _dh_matrices(qa[:, i], self.d[i], self.a[i], self.alpha[i])
+        return T
+
+    # ------------------------------------------------------------------ batched (numpy)
+
+    def solve(
+        self, T_base_flange: ArrayLike, seed6: ArrayLike | None = None
+    ) -> tuple[Array, BoolArray]:
+        """All eight branches for N poses: q (N, 8, 6) in (-pi, pi] and valid (N, 8).
+
+        ``seed6`` (scalar or (N,)) is q6 at wrist singularities (default 0). Invalid branches
+        (pose out of reach of that branch) hold finite garbage and ``valid`` False.
+        """
+        Ts = np.asarray(T_base_flange, dtype=float).reshape(-1, 4, 4)
+        n = Ts.shape[0]
+        q6_sing = np.broadcast_to(np.asarray(0.0 if seed6 is None else seed6, float), (n,))
+        d1, d4, d5, d6, a2, a3 = self._d1, self._d4, self._d5, self._d6, self._a2, self._a3
+        R, p = Ts[:, :3, :3], Ts[:, :3, 3]
+        x6, y6, z6 = R[:, :, 0], R[:, :, 1], R[:, :, 2]  # (N, 3) each
+
+        # Shoulder: the wrist point p5 lies on the plane p . z1 = d4, two roots for q1. Axis
+        # layout from here on: (N, shoulder, wrist, elbow).
+        p5 = p - d6 * z6
+        r2 = p5[:, 0] ** 2 + p5[:, 1] ** 2
+        disc = r2 - d4 * d4
+        ok1 = disc > -SHOULDER_SLACK
+        sq = np.sqrt(np.maximum(disc, 0.0))[:, None] * np.array([1.0, -1.0])  # (N, 2)
+        inv_r2 = 1.0 / np.where(r2 > 0.0, r2, 1.0)
+        p5x, p5y = p5[:, 0:1], p5[:, 1:2]
+        c1 = (p5x * sq - p5y * d4) * inv_r2[:, None]
+        s1 = (p5y * sq + p5x * d4) * inv_r2[:, None]
+        q1 = np.arctan2(s1, c1)
+
+        # Wrist: z1 = (s1, -c1, 0) seen from the flange gives (s5 c6, -s5 s6, c5).
+        xz = x6[:, 0:1] * s1 - x6[:, 1:2] * c1
+        yz = y6[:, 0:1] * s1 - y6[:, 1:2] * c1
+        zz = z6[:, 0:1] * s1 - z6[:, 1:2] * c1
+        s5abs = np.hypot(xz, yz)
+        sgn = np.array([1.0, -1.0])
+        s5 = s5abs[:, :, None] * sgn  # (N, 2, 2)
+        c5 = np.broadcast_to(zz[:, :, None], s5.shape)
+        q5 = np.arctan2(s5, c5)
+        singular = s5abs < WRIST_EPS
+        q6_reg = np.arctan2(-yz, xz)
+        q6_0 = np.where(singular, q6_sing[:, None], q6_reg)
+        # The flipped wrist is q5 -> -q5, q6 -> q6 + pi (same q6 when singular).
+        q6 = np.stack([q6_0, np.where(singular, q6_0, q6_0 + math.pi)], axis=2)
+        c6, s6 = np.cos(q6), np.sin(q6)
+
+        # Frame 4 from the flange: z4 = -s6 x6 - c6 y6, x4 = c5 c6 x6 - c5 s6 y6 - s5 z6.
+        def comp(v: Array, k: int) -> Array:
+            return v[:, k, None, None]
+
+        def z4(k: int) -> Array:
+            v: Array = -s6 * comp(x6, k) - c6 * comp(y6, k)
+            return v
+
+        def x4(k: int) -> Array:
+            v: Array = c5 * (c6 * comp(x6, k) - s6 * comp(y6, k)) - s5 * comp(z6, k)
+            return v
+
+        c1w, s1w = c1[:, :, None], s1[:, :, None]
+        p4x = comp(p5, 0) - d5 * z4(0)
+        p4y = comp(p5, 1) - d5 * z4(1)
+        p4z = comp(p5, 2) - d5 * z4(2)
+        X = p4x * c1w + p4y * s1w
+        Y = p4z - d1
+        q234 = np.arctan2(x4(2), x4(0) * c1w + x4(1) * s1w)
+
+        # Elbow: planar two-link (a2, a3) to (X, Y).
+        c3 = (X * X + Y * Y - self._elbow_k) / self._elbow_den
+        ok3 = np.abs(c3) <= 1.0 + ELBOW_SLACK
+        c3 = np.clip(c3, -1.0, 1.0)
+        s3 = np.sqrt(1.0 - c3 * c3)[..., None] * sgn  # (N, 2, 2, 2)
+        c3e = c3[..., None]
+        q3 = np.arctan2(s3, c3e)
+        q2 = np.arctan2(Y, X)[..., None] - np.arctan2(a3 * s3, a2 + a3 * c3e)
+        q4 = q234[..., None] - q2 - q3
+
+        shape = (n, 2, 2, 2)
+        q = np.empty((*shape, 6))
+        q[..., 0] = q1[:, :, None, None]
+        q[..., 1] = q2
+        q[..., 2] = q3
+        q[..., 3] = q4
+        q[..., 4] = q5[..., None]
+        q[..., 5] = q6[..., None]
+        q = _wrap(q)
+        valid = ok1[:, None, None, None] & ok3[..., None]
+        return q.reshape(n, 8, 6), np.broadcast_to(valid, shape).reshape(n, 8)
+
+    def ik_batch(
+        self,
+        T_base_flange: ArrayLike,
+        seed: ArrayLike,
+        lower: ArrayLike | None = None,
+        upper: ArrayLike | None = None,
+    ) -> tuple[Array, BoolArray]:
+        """For each of N poses the solution nearest ``seed`` ((6,) or (N, 6)) within limits:
+        q (N, 6) and ok (N,). Rows where ok is False are NaN."""
+        Ts = np.asarray(T_base_flange, dtype=float).reshape(-1, 4, 4)
+        n = Ts.shape[0]
+        sd = np.broadcast_to(np.asarray(seed, dtype=float), (n, 6))
+        lo = self.lower if lower is None else np.asarray(lower, dtype=float)
+        hi = self.upper if upper is None else np.asarray(upper, dtype=float)
+        q, valid = self.solve(Ts, sd[:, 5])
+        q, within = _wrap_near(q, sd[:, None, :], lo, hi)
+        valid = valid & within
+        dist = np.where(valid, np.sum((q - sd[:, None, :]) ** 2, axis=2), np.inf)
+        best = np.argmin(dist, axis=1)
+        rows = np.arange(n)
+        out = q[rows, best]
+        ok = valid[rows, best]
+        out[~ok] = np.nan
+        return out, ok
+
+    # ------------------------------------------------------------------ one pose (pure Python)
+
+    def ik_all(self, T_base_flange: ArrayLike, seed6: float = 0.0) -> tuple[Array, BoolArray]:
+        """All eight branches for one pose: q (8, 6) in (-pi, pi] and valid (8,)."""
+        branches = self._branches(_rows(T_base_flange), seed6)
+        q = np.zeros((8, 6))
+        valid = np.zeros(8, dtype=bool)
+        for i, b in enumerate(branches):
+            if b is not None:
+                q[i] = [_wrap1(x) for x in b]
+                valid[i] = True
+        return q, valid
+
+    def ik(
+        self,
+        T_base_flange: ArrayLike,
+        seed: ArrayLike | None = None,
+        lower: ArrayLike | None = None,
+        upper: ArrayLike | None = None,
+    ) -> Array | None:
+        """The solution nearest ``seed`` (Euclidean in joint space, each angle moved by a
+        multiple of 2 pi to the representative nearest the seed within limits), or None when no
+        branch reaches the pose within the limits."""
+        sd = [0.0] * 6 if seed is None else _floats6(seed)
+        lo = self._lower if lower is None else _floats6(lower)
+        hi = self._upper if upper is None else _floats6(upper)
+        best = self._nearest(self._branches(_rows(T_base_flange), sd[5]), sd, lo, hi)
+        return None if best is None else np.array(best)
+
+    def _nearest(
+        self,
+        branches: list[tuple[float, ...] | None],
+        sd: list[float],
+        lo: list[float],
+        hi: list[float],
+    ) -> list[float] | None:
+        best: list[float] | None = None
+        best_d = math.inf
+        for b in branches:
+            if b is None:
+                continue
+            cand: list[float] = []
+            dist = 0.0
+            for j in range(6):
+                w = _near(b[j], sd[j], lo[j], hi[j])
+                if w is None:
+                    break
+                e = w - sd[j]
+                dist += e * e
+                if dist >= best_d:
+                    break
+                cand.append(w)
+            else:
+                best, best_d = cand, dist
+        return best
+
+    def _branches(self, m: list[list[float]], seed6: float) -> list[tuple[float, ...] | None]:
+        """The eight branches of one pose in branch order, None where a branch cannot reach."""
+        d1, d4, d5, d6, a2, a3 = self._d1, self._d4, self._d5, self._d6, self._a2, self._a3
+        (nx, ox, ax, px), (ny, oy, ay, py), (nz, oz, az, pz) = m[0], m[1], m[2]
+        p5x, p5y, p5z = px - d6 * ax, py - d6 * ay, pz - d6 * az
+        r2 = p5x * p5x + p5y * p5y
+        disc = r2 - d4 * d4
+        if disc < -SHOULDER_SLACK or r2 == 0.0:
+            return [None] * 8
+        sq = math.sqrt(disc) if disc > 0.0 else 0.0
+        out: list[tuple[float, ...] | None] = []
+        atan2, hypot, sqrt = math.atan2, math.hypot, math.sqrt
+        for sq1 in (sq, -sq):
+            c1 = (p5x * sq1 - p5y * d4) / r2
+            s1 = (p5y * sq1 + p5x * d4) / r2
+            q1 = atan2(s1, c1)
+            xz = nx * s1 - ny * c1
+            yz = ox * s1 - oy * c1
+            c5 = ax * s1 - ay * c1
+            s5a = hypot(xz, yz)
+            if s5a < WRIST_EPS:
+                q6a = seed6
+                c6a, s6a = math.cos(seed6), math.sin(seed6)
+            else:
+                q6a = atan2(-yz, xz)
+                c6a, s6a = xz / s5a, -yz / s5a
+            q5a = atan2(s5a, c5)
+            for s5, c6, s6, q5, q6 in (
+                (s5a, c6a, s6a, q5a, q6a),
+                (-s5a, -c6a, -s6a, -q5a, q6a + math.pi),
+            ):
+                if s5a < WRIST_EPS:  # flipping q6 means nothing at the singularity
+                    c6, s6, q6 = c6a, s6a, q6a
+                z4x = -s6 * nx - c6 * ox
+                z4y = -s6 * ny - c6 * oy
+                z4z = -s6 * nz - c6 * oz
+                c5c6, c5s6 = c5 * c6, c5 * s6
+                x4x = c5c6 * nx - c5s6 * ox - s5 * ax
+                x4y = c5c6 * ny - c5s6 * oy - s5 * ay
+                x4z = c5c6 * nz - c5s6 * oz - s5 * az
+                X = (p5x - d5 * z4x) * c1 + (p5y - d5 * z4y) * s1
+                Y = p5z - d5 * z4z - d1
+                q234 = atan2(x4z, x4x * c1 + x4y * s1)
+                c3 = (X * X + Y * Y - self._elbow_k) / self._elbow_den
+                if abs(c3) > 1.0 + ELBOW_SLACK:
+                    out += (None, None)
+                    continue
+                s3a = sqrt(1.0 - c3 * c3) if abs(c3) < 1.0 else 0.0
+                phi = atan2(Y, X)
+                A = a2 + a3 * c3
+                for s3 in (s3a, -s3a):
+                    q3 = atan2(s3, c3)
+                    q2 = phi - atan2(a3 * s3, A)
+                    out.append((q1, q2, q3, q234 - q2 - q3, q5, q6))
+        return out
+
+
+# ---------------------------------------------------------------------- helpers
+
+
+def _rows(T: Any) -> list[list[float]]:
+    """A 4x4 pose as nested Python lists (indexing a numpy array costs ~100 ns per element)."""
+    if isinstance(T, np.ndarray):
+        rows: list[list[float]] = T.tolist()
+        return rows
+    return [[float(x) for x in r] for r in T]
+
+
+def _floats6(v: Any) -> list[float]:
+    if isinstance(v, np.ndarray):
+        out: list[float] = v.tolist()
+        return out
+    return [float(x) for x in v]
+
+
+def _wrap1(x: float) -> float:
+    """x moved by a multiple of 2 pi into (-pi, pi]."""
+    y = math.fmod(x + math.pi, TWO_PI)
+    if y <= 0.0:
+        y += TWO_PI
+    return y - math.pi
+
+
+def _near(v: float, s: float, lo: float, hi: float) -> float | None:
+    """v moved by a multiple of 2 pi to the representative nearest s inside [lo, hi]."""
+    w = v + TWO_PI * round((s - v) / TWO_PI)
+    if w < lo:
+        w += TWO_PI
+    elif w > hi:
+        w -= TWO_PI
+    if w < lo:
+        return lo if w > lo - LIMIT_SLACK else None
+    if w > hi:
+        return hi if w < hi + LIMIT_SLACK else None
+    return w
+
+
+def _wrap(q: Array) -> Array:
+    out: Array = q - TWO_PI * np.round(q / TWO_PI)
+    return out
+
+
+def _wrap_near(q: Array, seed: Array, lo: Array, hi: Array) -> tuple[Array, BoolArray]:
+    """Vectorised :func:`_near` over (..., 6) arrays: (moved q, all six within limits)."""
+    w = q + TWO_PI * np.round((seed - q) / TWO_PI)
+    w = np.where(w < lo, w + TWO_PI, np.where(w > hi, w - TWO_PI, w))
+    w = np.where((w < lo) & (w > lo - LIMIT_SLACK), lo, w)
+    w = np.where((w > hi) & (w < hi + LIMIT_SLACK), hi, w)
+    within = np.all((w >= lo) & (w <= hi), axis=-1)
+    return w, within
+
+
+def _dh_matrices(theta: Array, d: float, a: float, alpha: float) -> Array:
+    """Rz(theta) Tz(d) Tx(a) Rx(alpha) for each theta: (N, 4, 4)."""
+    ct, st = np.cos(theta), np.sin(theta)
+    ca, sa = math.cos(alpha), math.sin(alpha)
+    T = np.zeros((theta.shape[0], 4, 4))
+    T[:, 0, 0], T[:, 0, 1], T[:, 0, 2], T[:, 0, 3] = ct, -st * ca, st * sa, a * ct
+    T[:, 1, 0], T[:, 1, 1], T[:, 1, 2], T[:, 1, 3] = st, ct * ca, -ct * sa, a * st
+    T[:, 2, 1], T[:, 2, 2], T[:, 2, 3] = sa, ca, d
+    T[:, 3, 3] = 1.0
+    return T
