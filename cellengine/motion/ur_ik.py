@@ -62,7 +62,7 @@ class DH:
 
 def _dh(d: Sequence[float], a: Sequence[float]) -> DH:
     alpha = (HALF_PI, 0.0, 0.0, HALF_PI, -HALF_PI, 0.0)
-    return DH(tuple(d), tuple(a), alpha)  # type: ignore[arg-type]
+    return DH(tuple(float(x) for x in d), tuple(float(x) for x in a), alpha)  # type: ignore[arg-type]
 
 
 # Published DH parameters (Universal Robots), controller base frame to flange.
