@@ -1,0 +1,294 @@
+"""The timed joint trajectory that the motion layer, the executor and the drivers share.
+
+A `Trajectory` is a list of knots (time, positions, velocities, accelerations) with a
+quintic Hermite polynomial per segment between consecutive knots: the interpolation that
+ROS's joint_trajectory_controller uses when a point carries positions, velocities and
+accelerations, so `sample` here and a ROS controller playing `to_json()` move alike.
+
+The quintic matches position, velocity and acceleration at both ends of a segment, so a
+producer must store derivatives that belong to one C2 motion: a trajectory whose
+acceleration jumps at a knot (a bang-bang profile) cannot be represented without the
+polynomial overshooting next to that knot. Jerk-limited producers (timing.py) satisfy this.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+FloatArray = NDArray[np.float64]
+
+# Junctions of concatenated trajectories must agree to this (rad or m, and per second).
+JOIN_TOLERANCE = 1e-6
+
+
+def _frozen(value: ArrayLike, name: str, ndim: int) -> FloatArray:
+    try:
+        arr = np.array(value, dtype=np.float64)  # a copy: the caller's array stays theirs
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be numeric: {exc}") from None
+    if arr.ndim != ndim:
+        raise ValueError(f"{name} must have {ndim} dimension(s), got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        bad = np.argwhere(~np.isfinite(arr))[0]
+        raise ValueError(f"{name} holds a non-finite value at index {tuple(int(i) for i in bad)}")
+    arr.flags.writeable = False
+    return arr
+
+
+def _quintic_coefficients(
+    t: FloatArray, q: FloatArray, qd: FloatArray, qdd: FloatArray
+) -> FloatArray:
+    """Per segment, the coefficients c0..c5 of p(tau) = sum c_k tau^k, tau in [0, 1].
+
+    Shape (N-1, 6, n). Matching q, qd, qdd at both ends fixes c0..c2 from the start and
+    c3..c5 from the three end-point residuals (the closed form of the 3x3 solve).
+    """
+    h = np.diff(t)[:, None]
+    q0, q1, v0, v1, a0, a1 = q[:-1], q[1:], qd[:-1], qd[1:], qdd[:-1], qdd[1:]
+    c2 = 0.5 * a0 * h * h
+    dq = q1 - q0 - v0 * h - c2
+    dv = (v1 - v0 - a0 * h) * h
+    da = (a1 - a0) * h * h
+    c3 = 10.0 * dq - 4.0 * dv + 0.5 * da
+    c4 = -15.0 * dq + 7.0 * dv - da
+    c5 = 6.0 * dq - 3.0 * dv + 0.5 * da
+    return np.stack([q0, v0 * h, c2, c3, c4, c5], axis=1)
+
+
+@dataclass(frozen=True, eq=False)
+class Trajectory:
+    """An immutable timed joint trajectory: knots at strictly increasing times `t` (s), with
+    positions `q`, velocities `qd` and accelerations `qdd` (N knots x n joints, SI units).
+
+    Arrays are copied and made read-only at construction; shapes, finiteness and the strict
+    increase of `t` are checked there (ValueError naming what is wrong).
+    """
+
+    joint_names: tuple[str, ...]
+    t: FloatArray
+    q: FloatArray
+    qd: FloatArray
+    qdd: FloatArray
+    _coef: FloatArray = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        names = tuple(self.joint_names)
+        if not names or not all(isinstance(n, str) and n for n in names):
+            raise ValueError("joint_names must be a non-empty sequence of non-empty strings")
+        if len(set(names)) != len(names):
+            dup = sorted({n for n in names if names.count(n) > 1})
+            raise ValueError(f"joint_names repeats {', '.join(dup)}")
+        t = _frozen(self.t, "t", 1)
+        arrays = {k: _frozen(getattr(self, k), k, 2) for k in ("q", "qd", "qdd")}
+        if t.size == 0:
+            raise ValueError("a trajectory needs at least one point; t is empty")
+        for key, arr in arrays.items():
+            if arr.shape != (t.size, len(names)):
+                raise ValueError(
+                    f"{key} has shape {arr.shape}; expected ({t.size}, {len(names)}) "
+                    f"for {t.size} times and {len(names)} joints"
+                )
+        steps = np.diff(t)
+        if np.any(steps <= 0.0):
+            k = int(np.argmax(steps <= 0.0))
+            raise ValueError(
+                f"t must strictly increase; t[{k + 1}] = {float(t[k + 1])!r} "
+                f"follows t[{k}] = {float(t[k])!r}"
+            )
+        for key, value in (("joint_names", names), ("t", t), *arrays.items()):
+            object.__setattr__(self, key, value)
+        coef = _quintic_coefficients(t, arrays["q"], arrays["qd"], arrays["qdd"])
+        coef.flags.writeable = False
+        object.__setattr__(self, "_coef", coef)
+
+    # -- basic properties -------------------------------------------------------------
+
+    @property
+    def dof(self) -> int:
+        return len(self.joint_names)
+
+    @property
+    def start_time(self) -> float:
+        return float(self.t[0])
+
+    @property
+    def end_time(self) -> float:
+        return float(self.t[-1])
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1] - self.t[0])
+
+    def __len__(self) -> int:
+        return int(self.t.size)
+
+    def __repr__(self) -> str:
+        return (
+            f"Trajectory({self.dof} joints, {len(self)} points, "
+            f"t = {self.start_time:g}..{self.end_time:g} s)"
+        )
+
+    # -- sampling ---------------------------------------------------------------------
+
+    def _locate(self, t: ArrayLike) -> tuple[NDArray[np.intp], FloatArray, FloatArray]:
+        """Segment index, normalised time tau in [0, 1] and segment length for each time;
+        times outside [start, end] are clamped to the ends."""
+        ts = np.clip(np.asarray(t, dtype=np.float64), self.t[0], self.t[-1])
+        seg = np.clip(np.searchsorted(self.t, ts, side="right") - 1, 0, self.t.size - 2)
+        h = self.t[seg + 1] - self.t[seg]
+        return seg, (ts - self.t[seg]) / h, h
+
+    def sample(self, t: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Positions, velocities and accelerations at time(s) `t`.
+
+        A scalar gives arrays of shape (n,), an array of M times gives (M, n). Times before
+        the start or after the end are clamped: the end point's stored state is returned.
+        """
+        scalar = np.ndim(t) == 0
+        if self.t.size == 1:
+            m = int(np.size(t))
+            out = tuple(np.repeat(a, m, axis=0) for a in (self.q, self.qd, self.qdd))
+        else:
+            seg, tau, h = self._locate(np.atleast_1d(np.asarray(t, dtype=np.float64)))
+            c = self._coef[seg]  # (M, 6, n)
+            tt = tau[:, None]
+            hh = h[:, None]
+            pos = c[:, 0] + tt * (
+                c[:, 1] + tt * (c[:, 2] + tt * (c[:, 3] + tt * (c[:, 4] + tt * c[:, 5])))
+            )
+            vel = c[:, 1] + tt * (
+                2 * c[:, 2] + tt * (3 * c[:, 3] + tt * (4 * c[:, 4] + tt * 5 * c[:, 5]))
+            )
+            acc = 2 * c[:, 2] + tt * (6 * c[:, 3] + tt * (12 * c[:, 4] + tt * 20 * c[:, 5]))
+            out = (pos, vel / hh, acc / (hh * hh))
+        if scalar:
+            return out[0][0], out[1][0], out[2][0]
+        return out[0], out[1], out[2]
+
+    def jerk(self, t: ArrayLike) -> FloatArray:
+        """Jerk (third derivative) of the interpolation at time(s) `t`; zero outside."""
+        scalar = np.ndim(t) == 0
+        ts = np.atleast_1d(np.asarray(t, dtype=np.float64))
+        if self.t.size == 1:
+            out = np.zeros((ts.size, self.dof))
+        else:
+            seg, tau, h = self._locate(ts)
+            c = self._coef[seg]
+            tt = tau[:, None]
+            out = (6 * c[:, 3] + tt * (24 * c[:, 4] + tt * 60 * c[:, 5])) / (h[:, None] ** 3)
+            out[(ts < self.t[0]) | (ts > self.t[-1])] = 0.0
+        return out[0] if scalar else out
+
+    def resample(self, dt: float) -> Trajectory:
+        """The trajectory sampled every `dt` seconds from its start; the end point is kept
+        (the last step is shorter when the duration is not a multiple of dt)."""
+        if not (np.isfinite(dt) and dt > 0.0):
+            raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
+        count = int(np.floor(self.duration / dt + 1e-9))
+        times = self.t[0] + dt * np.arange(count + 1)
+        if self.end_time - times[-1] > 1e-9 * max(1.0, dt):
+            times = np.append(times, self.end_time)
+        else:
+            times[-1] = self.end_time
+        q, qd, qdd = self.sample(times)
+        return Trajectory(self.joint_names, times, q, qd, qdd)
+
+    def shifted(self, offset: float) -> Trajectory:
+        """The same motion with every time moved by `offset` seconds."""
+        return Trajectory(self.joint_names, self.t + offset, self.q, self.qd, self.qdd)
+
+    # -- ROS JointTrajectory ----------------------------------------------------------
+
+    def to_json(self) -> dict[str, Any]:
+        """DESIGN 3.5's trajectory.json body (ROS JointTrajectory semantics): joint names and
+        one point per knot with positions, velocities, accelerations and time_from_start.
+        Events are not the trajectory's business; the writer adds them."""
+        return {
+            "joint_names": list(self.joint_names),
+            "points": [
+                {
+                    "positions": q,
+                    "velocities": qd,
+                    "accelerations": qdd,
+                    "time_from_start": t,
+                }
+                for t, q, qd, qdd in zip(
+                    self.t.tolist(),
+                    self.q.tolist(),
+                    self.qd.tolist(),
+                    self.qdd.tolist(),
+                    strict=True,
+                )
+            ],
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> Trajectory:
+        """Inverse of `to_json` (every point must carry all three vectors)."""
+        try:
+            names = tuple(data["joint_names"])
+            points: Sequence[Mapping[str, Any]] = data["points"]
+            t = [p["time_from_start"] for p in points]
+            q = [p["positions"] for p in points]
+            qd = [p["velocities"] for p in points]
+            qdd = [p["accelerations"] for p in points]
+        except (KeyError, TypeError) as exc:
+            raise ValueError(f"not a trajectory: missing or malformed {exc}") from None
+        return cls(
+            names, np.asarray(t, dtype=np.float64), np.asarray(q), np.asarray(qd), np.asarray(qdd)
+        )
+
+
+def concatenate(parts: Sequence[Trajectory]) -> Trajectory:
+    """One trajectory playing `parts` one after another on a single time axis.
+
+    Each part is shifted to begin where the previous one ends; its first point must equal the
+    previous part's last point (positions, velocities, accelerations within JOIN_TOLERANCE),
+    and the two coincide in one knot.
+    """
+    if not parts:
+        raise ValueError("concatenate needs at least one trajectory")
+    first = parts[0]
+    times, qs, qds, qdds = [first.t], [first.q], [first.qd], [first.qdd]
+    end = first.end_time
+    for k, part in enumerate(parts[1:], start=1):
+        if part.joint_names != first.joint_names:
+            raise ValueError(
+                f"part {k} has joints {list(part.joint_names)}; part 0 has "
+                f"{list(first.joint_names)}"
+            )
+        _check_junction(k, qs[-1][-1], qds[-1][-1], qdds[-1][-1], part)
+        times.append(part.t[1:] - part.t[0] + end)
+        qs.append(part.q[1:])
+        qds.append(part.qd[1:])
+        qdds.append(part.qdd[1:])
+        end += part.duration
+    return Trajectory(
+        first.joint_names,
+        np.concatenate(times),
+        np.concatenate(qs),
+        np.concatenate(qds),
+        np.concatenate(qdds),
+    )
+
+
+def _check_junction(
+    k: int, q: FloatArray, qd: FloatArray, qdd: FloatArray, part: Trajectory
+) -> None:
+    for what, prev, nxt in (
+        ("position", q, part.q[0]),
+        ("velocity", qd, part.qd[0]),
+        ("acceleration", qdd, part.qdd[0]),
+    ):
+        gap = np.abs(nxt - prev)
+        if np.any(gap > JOIN_TOLERANCE):
+            j = int(np.argmax(gap))
+            raise ValueError(
+                f"part {k} does not start where part {k - 1} ends: {what} of "
+                f"{part.joint_names[j]} jumps from {prev[j]:.9g} to {nxt[j]:.9g}"
+            )
