@@ -1,0 +1,357 @@
+"""The cell's robots as pinocchio models: each arm at its base pose with its tool's TCP, and
+all arms together for one forward kinematics over the whole cell.
+
+Building (:func:`build_arm`, :func:`build_cell_model`) is separate from using: an :class:`Arm`
+or :class:`CellModel` is immutable data plus a few evaluation methods, so tests and other
+layers can inspect what was built.
+
+Frames: the universe of every model here is the CELL frame. An arm's URDF root link is its
+controller base frame (for the built-in UR models, the frame the controller reports TCP poses
+in), placed at ``T_cell_base``; ``tool0`` (or the user's ``tip`` link) is the flange; the TCP
+frame is ``T_flange_tcp`` from the tool. Names inside the models are prefixed with the robot's
+name (``left_shoulder_pan_joint``, ``left_tool0``, ``left_tcp``); collision objects are named
+``<robot>/<link>`` (``left/forearm_link``, ``left/forearm_link#2``, ``left/tool``).
+
+Limits (SI): position, velocity from the URDF. Acceleration: URDF has none. For the built-in
+UR models it is :data:`UR_ACCELERATION`, 5 rad/s^2 on every joint, the value Universal Robots'
+own MoveIt configuration (ur_moveit_config joint_limits.yaml) uses, "chosen conservatively";
+the arms themselves are limited by torque, not by a published acceleration. For a user URDF
+it is :data:`ACCELERATION_PER_VELOCITY` times the velocity limit (full speed in 0.5 s).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any, Literal
+
+import coal
+import numpy as np
+import pinocchio as pin
+from numpy.typing import ArrayLike, NDArray
+
+from cellengine import geometry as g
+from cellengine.errors import InputError, Problem, known
+from cellengine.geometry import Mat
+from cellengine.info.cell import Robot, Tool, UrdfModel
+from cellengine.info.files import resolve_inside
+from cellengine.info.yamlio import load_yaml
+from cellengine.motion.ur_ik import DH, UR_DH
+from cellengine.motion.urdf import Urdf, build_geometry, build_model, check_chain, read_urdf
+from cellengine.world import World
+
+Vec = NDArray[np.float64]
+
+BUILTIN_DIR = Path(__file__).resolve().parent / "urdf"
+BUILTIN_TIP = "tool0"
+UR_ACCELERATION: dict[str, tuple[float, ...]] = {
+    "ur3e": (5.0,) * 6,
+    "ur5e": (5.0,) * 6,
+    "ur10e": (5.0,) * 6,
+    "ur5": (5.0,) * 6,
+}
+ACCELERATION_PER_VELOCITY = 2.0  # 1/s: a user URDF's joints reach full speed in 0.5 s
+DEFAULT_FINGER_WIDTH = 0.02  # m, the tool's collision box when the tool gives none
+TCP_FRAME = "tcp"
+TOOL_GEOMETRY = "tool"
+
+
+def builtin_urdf(model: str) -> Path:
+    """The shipped URDF of a built-in model (``ur5e``, ...)."""
+    if model not in UR_DH:
+        raise KeyError(f"unknown built-in robot model '{model}'" + known(UR_DH))
+    return BUILTIN_DIR / f"{model}.urdf"
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Per-joint limits, SI (rad or m; /s; /s^2); read-only (n,) arrays."""
+
+    lower: Vec
+    upper: Vec
+    velocity: Vec
+    acceleration: Vec
+
+    def __post_init__(self) -> None:
+        n = len(self.lower)
+        for name in ("lower", "upper", "velocity", "acceleration"):
+            a = np.array(getattr(self, name), dtype=float)
+            if a.shape != (n,):
+                raise ValueError(f"limits: {name} has shape {a.shape}, expected ({n},)")
+            a.setflags(write=False)
+            object.__setattr__(self, name, a)
+
+    @staticmethod
+    def concatenate(parts: Sequence[Limits]) -> Limits:
+        return Limits(
+            *(np.concatenate([getattr(p, k) for p in parts]) for k in Limits.__annotations__)
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class Arm:
+    """One robot of the cell. Evaluation methods share one pinocchio Data: not thread-safe."""
+
+    name: str
+    joint_names: tuple[str, ...]  # prefixed: 'left_shoulder_pan_joint'
+    model: Any  # pin.Model of the arm alone; universe = the cell frame
+    collision: Any  # pin.GeometryModel: the arm's links and its tool
+    tool0: int  # frame id of the flange in `model`
+    tcp: int  # frame id of the tool's TCP in `model`
+    limits: Limits
+    T_cell_base: Mat
+    T_flange_tcp: Mat
+    dh: DH | None  # the DH table of a built-in UR model (closed-form IK), else None
+    home: Vec | None = None  # cell.yaml's home configuration, if given
+    _data: Any = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        for name in ("T_cell_base", "T_flange_tcp"):
+            a = np.array(getattr(self, name), dtype=float)
+            a.setflags(write=False)
+            object.__setattr__(self, name, a)
+        object.__setattr__(self, "_data", self.model.createData())
+
+    @property
+    def nq(self) -> int:
+        return int(self.model.nq)
+
+    def fk(self, q: ArrayLike) -> Mat:
+        """T_cell_tcp at ``q``."""
+        return self._placement(q, self.tcp)
+
+    def fk_flange(self, q: ArrayLike) -> Mat:
+        """T_cell_flange at ``q``."""
+        return self._placement(q, self.tool0)
+
+    def jacobian(self, q: ArrayLike, frame: Literal["tcp", "flange"] = "tcp") -> Mat:
+        """(6, n): rows 0-2 the frame origin's linear velocity, 3-5 its angular velocity, both
+        in cell axes (pinocchio's LOCAL_WORLD_ALIGNED), per unit joint velocity."""
+        frame_id = {"tcp": self.tcp, "flange": self.tool0}[frame]
+        J = pin.computeFrameJacobian(
+            self.model, self._data, self._q(q), frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        )
+        return np.array(J)
+
+    def _placement(self, q: ArrayLike, frame_id: int) -> Mat:
+        pin.forwardKinematics(self.model, self._data, self._q(q))
+        return np.array(pin.updateFramePlacement(self.model, self._data, frame_id).homogeneous)
+
+    def _q(self, q: ArrayLike) -> Vec:
+        qa = np.asarray(q, dtype=float)
+        if qa.shape != (self.nq,):
+            raise ValueError(f"arm '{self.name}': q has shape {qa.shape}, expected ({self.nq},)")
+        return qa
+
+
+@dataclass(frozen=True, eq=False)
+class CellModel:
+    """Every arm of the cell in one model; q is the arms' q's in ``arms`` order."""
+
+    arms: Mapping[str, Arm]
+    model: Any  # pin.Model: all arms appended (pin.appendModel)
+    collision: Any  # pin.GeometryModel: all arms' geometry, named '<robot>/<link>'
+    joint_names: tuple[str, ...]
+    slices: Mapping[str, slice]  # each arm's entries of the cell's q
+    tool0: Mapping[str, int]  # each arm's flange frame id in `model`
+    tcp: Mapping[str, int]  # each arm's TCP frame id in `model`
+
+    @property
+    def nq(self) -> int:
+        return int(self.model.nq)
+
+    @property
+    def limits(self) -> Limits:
+        return Limits.concatenate([a.limits for a in self.arms.values()])
+
+    def split(self, q: ArrayLike) -> dict[str, Vec]:
+        qa = np.asarray(q, dtype=float)
+        if qa.shape != (self.nq,):
+            raise ValueError(f"q has shape {qa.shape}, expected ({self.nq},)")
+        return {name: qa[s].copy() for name, s in self.slices.items()}
+
+    def join(self, qs: Mapping[str, ArrayLike]) -> Vec:
+        if set(qs) != set(self.arms):
+            raise ValueError(f"join needs exactly the arms {sorted(self.arms)}, got {sorted(qs)}")
+        out = np.empty(self.nq)
+        for name, s in self.slices.items():
+            part = np.asarray(qs[name], dtype=float)
+            if part.shape != (s.stop - s.start,):
+                raise ValueError(f"arm '{name}': q has shape {part.shape}")
+            out[s] = part
+        return out
+
+
+# ---------------------------------------------------------------------------------- building
+
+
+def build_cell_model(world: World) -> CellModel:
+    """Every robot of the world's cell; every problem of every robot reported together."""
+    cell = world.cell
+    arms: dict[str, Arm] = {}
+    problems: list[Problem] = []
+    for name, robot in cell.robots.items():
+        tool = cell.tools.get(robot.tool) if robot.tool is not None else None
+        try:
+            arms[name] = build_arm(name, robot, tool, world.cell_file)
+        except InputError as e:
+            problems.extend(e.problems)
+    if problems:
+        raise InputError(problems)
+    return assemble(arms)
+
+
+def assemble(arms: Mapping[str, Arm]) -> CellModel:
+    """Append the arms (already in the cell frame) into one model and one geometry model."""
+    model, geom = pin.Model(), pin.GeometryModel()
+    for arm in arms.values():
+        model, geom = pin.appendModel(model, arm.model, geom, arm.collision, 0, pin.SE3.Identity())
+    slices: dict[str, slice] = {}
+    for name, arm in arms.items():
+        first = model.joints[model.getJointId(arm.joint_names[0])].idx_q
+        last = model.joints[model.getJointId(arm.joint_names[-1])].idx_q
+        slices[name] = slice(first, last + 1)
+    return CellModel(
+        MappingProxyType(dict(arms)),
+        model,
+        geom,
+        tuple(str(n) for n in list(model.names)[1:]),
+        MappingProxyType(slices),
+        MappingProxyType({n: model.getFrameId(_frame_name(a, a.tool0)) for n, a in arms.items()}),
+        MappingProxyType({n: model.getFrameId(_frame_name(a, a.tcp)) for n, a in arms.items()}),
+    )
+
+
+def _frame_name(arm: Arm, frame_id: int) -> str:
+    return str(arm.model.frames[frame_id].name)
+
+
+def build_arm(name: str, robot: Robot, tool: Tool | None, cell_file: Path) -> Arm:
+    """One robot of ``cell_file``'s cell: its URDF (built-in or the user's, resolved inside
+    the cell folder), placed at its base pose, with its tool's TCP frame and collision box."""
+    prefix = f"{name}_"
+    if isinstance(robot.model, UrdfModel):
+        try:
+            path = resolve_inside(cell_file.parent, robot.model.urdf, cell_file)
+        except InputError as e:  # load_cell checked it already; the file may have gone since
+            loc = ("robots", name, "model", "urdf")
+            raise _cell_error(cell_file, e.problems[0].message, loc) from None
+        urdf, tip, dh = read_urdf(path, cell_file.parent), robot.model.tip, None
+        if tip not in urdf.links:
+            raise _cell_error(
+                cell_file,
+                f"robots.{name}.model.tip: unknown link '{tip}' in {robot.model.urdf}"
+                + known(urdf.links),
+                ("robots", name, "model", "tip"),
+            )
+    else:
+        path = builtin_urdf(robot.model)
+        urdf, tip, dh = read_urdf(path, BUILTIN_DIR), BUILTIN_TIP, UR_DH[robot.model]
+    raw = build_model(urdf, tip, prefix)
+    tool0 = raw.getFrameId(prefix + tip, pin.FrameType.BODY)
+    T_flange_tcp = tool.tcp.matrix() if tool is not None else np.eye(4)
+    _add_tcp_frame(raw, urdf, prefix, tool0, T_flange_tcp)
+    geom = build_geometry(raw, urdf, prefix, name)
+    if tool is not None:
+        _add_tool_geometry(raw, geom, tool0, T_flange_tcp, tool, name)
+    T_cell_base = robot.base.matrix()
+    model, collision = pin.appendModel(
+        pin.Model(), raw, pin.GeometryModel(), geom, 0, pin.SE3(T_cell_base)
+    )
+    joint_names = tuple(str(n) for n in list(model.names)[1:])
+    limits = _limits(urdf, tip, robot)
+    return Arm(
+        name=name,
+        joint_names=joint_names,
+        model=model,
+        collision=collision,
+        tool0=model.getFrameId(prefix + tip, pin.FrameType.BODY),
+        tcp=model.getFrameId(prefix + TCP_FRAME, pin.FrameType.OP_FRAME),
+        limits=limits,
+        T_cell_base=T_cell_base,
+        T_flange_tcp=T_flange_tcp,
+        dh=dh,
+        home=_home(robot, name, len(joint_names), cell_file),
+    )
+
+
+def _add_tcp_frame(model: Any, urdf: Urdf, prefix: str, tool0: int, T_flange_tcp: Mat) -> None:
+    name = prefix + TCP_FRAME
+    if TCP_FRAME in urdf.links or TCP_FRAME in urdf.joints:
+        raise InputError.at(
+            f"the URDF names a link or joint '{TCP_FRAME}', which cellengine keeps for the "
+            "tool's TCP frame; rename it",
+            urdf.file,
+        )
+    flange = model.frames[tool0]
+    placement = flange.placement * pin.SE3(T_flange_tcp)
+    model.addFrame(pin.Frame(name, flange.parentJoint, tool0, placement, pin.FrameType.OP_FRAME))
+
+
+def _add_tool_geometry(
+    model: Any, geom: Any, tool0: int, T_flange_tcp: Mat, tool: Tool, owner: str
+) -> None:
+    """A box from the flange to the TCP, finger_width square, on the flange's joint: a
+    stand-in for the gripper until tools carry their own geometry."""
+    p_tcp = T_flange_tcp[:3, 3]
+    length = float(np.linalg.norm(p_tcp))
+    if length < 1e-6:  # a TCP on the flange: no volume to add
+        return
+    width = tool.finger_width or DEFAULT_FINGER_WIDTH
+    T_flange_box = g.transform(_z_along(p_tcp / length), p_tcp / 2)
+    flange = model.frames[tool0]
+    placement = flange.placement * pin.SE3(T_flange_box)
+    box = coal.Box(width, width, length)
+    geom.addGeometryObject(
+        pin.GeometryObject(f"{owner}/{TOOL_GEOMETRY}", flange.parentJoint, tool0, placement, box)
+    )
+
+
+def _z_along(z: Vec) -> Mat:
+    """A rotation whose z axis is the unit vector ``z`` (x kept near the flange's x)."""
+    x = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = x - z * float(x @ z)
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(z, x), z])
+
+
+def _limits(urdf: Urdf, tip: str, robot: Robot) -> Limits:
+    joints = check_chain(urdf, tip)
+    lower = [-math.tau if j.type == "continuous" else float(j.lower or 0.0) for j in joints]
+    upper = [math.tau if j.type == "continuous" else float(j.upper or 0.0) for j in joints]
+    velocity = [float(j.velocity or 0.0) for j in joints]
+    if isinstance(robot.model, str):
+        acceleration = list(UR_ACCELERATION[robot.model])
+    else:
+        acceleration = [ACCELERATION_PER_VELOCITY * v for v in velocity]
+    return Limits(np.array(lower), np.array(upper), np.array(velocity), np.array(acceleration))
+
+
+def _home(robot: Robot, name: str, n: int, cell_file: Path) -> Vec | None:
+    if robot.home is None:
+        return None
+    if len(robot.home) != n:
+        raise _cell_error(
+            cell_file,
+            f"robots.{name}.home: the robot has {n} joints, got {len(robot.home)} values",
+            ("robots", name, "home"),
+        )
+    home = np.array(robot.home, dtype=float)
+    home.setflags(write=False)
+    return home
+
+
+def _where(cell_file: Path, loc: tuple[str | int, ...]) -> tuple[int | None, int | None]:
+    """Line and column of ``loc`` in the cell file: read again only when reporting."""
+    try:
+        pos = load_yaml(cell_file).where(loc)
+    except InputError:
+        return None, None
+    return pos if pos else (None, None)
+
+
+def _cell_error(cell_file: Path, message: str, loc: tuple[str | int, ...]) -> InputError:
+    return InputError.at(message, cell_file, *_where(cell_file, loc))
