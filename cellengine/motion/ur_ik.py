@@ -73,9 +73,14 @@ UR_DH: dict[str, DH] = {
     "ur5": _dh((0.089159, 0, 0, 0.10915, 0.09465, 0.0823), (0, -0.425, -0.39225, 0, 0, 0)),
 }
 
+# ur_description's position limits: +-2 pi, the elbow +-pi (beyond it the forearm meets the
+# upper arm).
+UR_UPPER = (TWO_PI, TWO_PI, math.pi, TWO_PI, TWO_PI, TWO_PI)
+UR_LOWER = tuple(-x for x in UR_UPPER)
+
 
 def _check_structure(d: Sequence[float], a: Sequence[float], alpha: Sequence[float]) -> None:
-    """The closed form assumes the UR geometry: three parallel middle axes and a spherical-less
+    """The closed form assumes the UR geometry: three parallel middle axes and a non-spherical
     wrist with offsets d4, d5, d6. Anything else must use the numerical solver."""
     if len(d) != 6 or len(a) != 6 or len(alpha) != 6:
         raise ValueError("a UR DH table has six rows")
@@ -130,9 +135,16 @@ class URKinematics:
     def from_name(
         cls, name: str, lower: ArrayLike | None = None, upper: ArrayLike | None = None
     ) -> URKinematics:
-        """A built-in model by name: ``ur3e``, ``ur5e``, ``ur10e`` or ``ur5``."""
+        """A built-in model by name: ``ur3e``, ``ur5e``, ``ur10e`` or ``ur5``, by default with
+        the built-in URDFs' limits (ur_description's: +-2 pi, the elbow +-pi)."""
         dh = UR_DH[name]
-        return cls(dh.d, dh.a, dh.alpha, lower, upper)
+        return cls(
+            dh.d,
+            dh.a,
+            dh.alpha,
+            UR_LOWER if lower is None else lower,
+            UR_UPPER if upper is None else upper,
+        )
 
     # ------------------------------------------------------------------ forward kinematics
 
