@@ -36,7 +36,8 @@ def random_q(rng: np.random.Generator, n: int) -> np.ndarray:
 
 
 def angle_diff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.abs((a - b + math.pi) % (2 * math.pi) - math.pi)
+    d: np.ndarray = np.abs((a - b + math.pi) % (2 * math.pi) - math.pi)
+    return d
 
 
 @pytest.fixture(params=MODELS)
