@@ -41,6 +41,7 @@ import numpy as np
 import pinocchio as pin
 import trimesh
 from lxml import etree
+from numpy.typing import NDArray
 
 from cellengine import geometry as g
 from cellengine.errors import InputError, known
@@ -57,6 +58,7 @@ PACKAGE = "package://"
 _URL = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]+:")
 
 Vec3 = tuple[float, float, float]
+Vec = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
@@ -415,12 +417,17 @@ def _convex_hull(path: Path, ref: str, scale: Sequence[float], urdf: Path, line:
     data = read_capped(path, "mesh", urdf, line)
     try:  # from bytes, so trimesh can open no other file (textures, materials)
         mesh: Any = trimesh.load(io.BytesIO(data), file_type=ext, force="mesh")
-        mesh.apply_scale(np.asarray(scale, dtype=float))
-        hull = mesh.convex_hull
-    except Exception as e:  # trimesh and qhull raise many kinds; all mean "not a usable mesh"
+        vertices = np.asarray(mesh.vertices, dtype=float) * np.asarray(scale, dtype=float)
+    except Exception as e:  # trimesh's readers raise many kinds; all mean "not a mesh"
+        raise InputError.at(f"mesh '{ref}' cannot be read: {_one_line(e)}", urdf, line) from None
+    if len(vertices) == 0 or len(mesh.faces) == 0:
+        raise InputError.at(f"mesh '{ref}' has no triangles", urdf, line)
+    if _flat(vertices):  # qhull would fail with a page of its own diagnostics
+        raise InputError.at(f"mesh '{ref}' is flat: its convex hull has no volume", urdf, line)
+    try:
+        hull = trimesh.Trimesh(vertices=vertices).convex_hull
+    except Exception as e:  # qhull on degenerate input
         raise InputError.at(f"mesh '{ref}' cannot be used: {_one_line(e)}", urdf, line) from None
-    if len(hull.faces) < 4:
-        raise InputError.at(f"mesh '{ref}' has no volume", urdf, line)
     points = coal.StdVec_Vec3s()
     for v in np.asarray(hull.vertices, dtype=float):
         points.append(v)
@@ -428,6 +435,14 @@ def _convex_hull(path: Path, ref: str, scale: Sequence[float], urdf: Path, line:
     for a, b, c in np.asarray(hull.faces, dtype=int):
         triangles.append(coal.Triangle(int(a), int(b), int(c)))
     return coal.Convex(points, triangles)
+
+
+def _flat(points: Vec) -> bool:
+    """All points on one plane (or line, or point), to rounding."""
+    if len(points) < 4:
+        return True
+    sv = np.linalg.svd(points - points.mean(axis=0), compute_uv=False)
+    return bool(sv[-1] <= 1e-9 * max(float(sv[0]), 1e-300))
 
 
 def _one_line(e: Exception) -> str:
