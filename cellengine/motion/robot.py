@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Literal
@@ -86,9 +86,9 @@ class Limits:
 
     @staticmethod
     def concatenate(parts: Sequence[Limits]) -> Limits:
-        return Limits(
-            *(np.concatenate([getattr(p, k) for p in parts]) for k in Limits.__annotations__)
-        )
+        """The limits of several arms, one after the other (a cell's q)."""
+        names = [f.name for f in fields(Limits)]
+        return Limits(*(np.concatenate([getattr(p, k) for p in parts]) for k in names))
 
 
 @dataclass(frozen=True, eq=False)
