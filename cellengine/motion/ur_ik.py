@@ -311,24 +311,49 @@ class URKinematics:
         lo: list[float],
         hi: list[float],
     ) -> list[float] | None:
+        """The branch nearest the seed after wrapping, or None. Walks the branch tree (q1 is
+        shared by a shoulder's four branches, q5 and q6 by a wrist's two) so that each shared
+        angle is wrapped once and a subtree already farther than the best is skipped."""
         best: list[float] | None = None
         best_d = math.inf
-        for b in branches:
-            if b is None:
+        s0, s1, s2, s3, s4, s5 = sd
+        for sh in (0, 4):
+            first = branches[sh] or branches[sh + 2]
+            if first is None:
                 continue
-            cand: list[float] = []
-            dist = 0.0
-            for j in range(6):
-                w = _near(b[j], sd[j], lo[j], hi[j])
-                if w is None:
-                    break
-                e = w - sd[j]
-                dist += e * e
-                if dist >= best_d:
-                    break
-                cand.append(w)
-            else:
-                best, best_d = cand, dist
+            w1 = _near(first[0], s0, lo[0], hi[0])
+            if w1 is None:
+                continue
+            d1 = (w1 - s0) * (w1 - s0)
+            if d1 >= best_d:
+                continue
+            for k in (sh, sh + 2):
+                b = branches[k]
+                if b is None:
+                    continue
+                w5 = _near(b[4], s4, lo[4], hi[4])
+                w6 = _near(b[5], s5, lo[5], hi[5])
+                if w5 is None or w6 is None:
+                    continue
+                d56 = d1 + (w5 - s4) * (w5 - s4) + (w6 - s5) * (w6 - s5)
+                if d56 >= best_d:
+                    continue
+                for e in (b, branches[k + 1]):
+                    if e is None:
+                        continue
+                    w2 = _near(e[1], s1, lo[1], hi[1])
+                    if w2 is None:
+                        continue
+                    d = d56 + (w2 - s1) * (w2 - s1)
+                    if d >= best_d:
+                        continue
+                    w3 = _near(e[2], s2, lo[2], hi[2])
+                    w4 = _near(e[3], s3, lo[3], hi[3])
+                    if w3 is None or w4 is None:
+                        continue
+                    d += (w3 - s2) * (w3 - s2) + (w4 - s3) * (w4 - s3)
+                    if d < best_d:
+                        best, best_d = [w1, w2, w3, w4, w5, w6], d
         return best
 
     def _branches(self, m: list[list[float]], seed6: float) -> list[tuple[float, ...] | None]:
@@ -379,11 +404,13 @@ class URKinematics:
                     out += (None, None)
                     continue
                 s3a = sqrt(1.0 - c3 * c3) if abs(c3) < 1.0 else 0.0
-                phi = atan2(Y, X)
+                q3a = atan2(s3a, c3)
                 A = a2 + a3 * c3
-                for s3 in (s3a, -s3a):
-                    q3 = atan2(s3, c3)
-                    q2 = phi - atan2(a3 * s3, A)
+                XA, YA = X * A, Y * A
+                for s3, q3 in ((s3a, q3a), (-s3a, -q3a)):
+                    # q2 = atan2(Y, X) - atan2(a3 s3, A), as one atan2 of the rotated vector
+                    B = a3 * s3
+                    q2 = atan2(YA - X * B, XA + Y * B)
                     out.append((q1, q2, q3, q234 - q2 - q3, q5, q6))
         return out
 
@@ -416,11 +443,10 @@ def _wrap1(x: float) -> float:
 
 def _near(v: float, s: float, lo: float, hi: float) -> float | None:
     """v moved by a multiple of 2 pi to the representative nearest s inside [lo, hi]."""
-    w = v + TWO_PI * round((s - v) / TWO_PI)
-    if w < lo:
-        w += TWO_PI
-    elif w > hi:
-        w -= TWO_PI
+    w = s + ((v - s + math.pi) % TWO_PI - math.pi)  # Python's % is floored: one operation
+    if lo <= w <= hi:
+        return w
+    w = w + TWO_PI if w < lo else w - TWO_PI
     if w < lo:
         return lo if w > lo - LIMIT_SLACK else None
     if w > hi:
