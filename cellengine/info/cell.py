@@ -33,6 +33,7 @@ class Robot(Frozen):
     model: str | UrdfModel
     base: Pose = Pose()  # controller base frame in the cell frame
     tool: str | None = None
+    # angle units here; build_cell_model rescales prismatic axes to the length unit
     home: tuple[Angle, ...] | None = None
 
 

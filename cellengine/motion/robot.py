@@ -38,6 +38,7 @@ from cellengine.errors import InputError, Problem, known
 from cellengine.geometry import Mat
 from cellengine.info.cell import Robot, Tool, UrdfModel
 from cellengine.info.files import resolve_inside
+from cellengine.info.units import Units
 from cellengine.info.yamlio import load_yaml
 from cellengine.motion.ur_ik import DH, UR_DH
 from cellengine.motion.urdf import Urdf, build_geometry, build_model, check_chain, read_urdf
@@ -196,7 +197,7 @@ def build_cell_model(world: World) -> CellModel:
     for name, robot in cell.robots.items():
         tool = cell.tools.get(robot.tool) if robot.tool is not None else None
         try:
-            arms[name] = build_arm(name, robot, tool, world.cell_file)
+            arms[name] = build_arm(name, robot, tool, world.cell_file, cell.units)
         except InputError as e:
             problems.extend(e.problems)
     if problems:
@@ -229,10 +230,13 @@ def _frame_name(arm: Arm, frame_id: int) -> str:
     return str(arm.model.frames[frame_id].name)
 
 
-def build_arm(name: str, robot: Robot, tool: Tool | None, cell_file: Path) -> Arm:
+def build_arm(
+    name: str, robot: Robot, tool: Tool | None, cell_file: Path, units: Units | None = None
+) -> Arm:
     """One robot of ``cell_file``'s cell: its URDF (built-in or the user's, resolved inside
     the cell folder), placed at its base pose, with its tool's TCP frame and collision box."""
     prefix = f"{name}_"
+    units = units or Units()
     if isinstance(robot.model, UrdfModel):
         try:
             path = resolve_inside(cell_file.parent, robot.model.urdf, cell_file)
@@ -274,7 +278,7 @@ def build_arm(name: str, robot: Robot, tool: Tool | None, cell_file: Path) -> Ar
         T_cell_base=T_cell_base,
         T_flange_tcp=T_flange_tcp,
         dh=dh,
-        home=_home(robot, name, len(joint_names), cell_file),
+        home=_home(robot, name, len(joint_names), cell_file, model, units),
     )
 
 
@@ -330,7 +334,7 @@ def _limits(urdf: Urdf, tip: str, robot: Robot) -> Limits:
     return Limits(np.array(lower), np.array(upper), np.array(velocity), np.array(acceleration))
 
 
-def _home(robot: Robot, name: str, n: int, cell_file: Path) -> Vec | None:
+def _home(robot: Robot, name: str, n: int, cell_file: Path, model: Any, units: Units) -> Vec | None:
     if robot.home is None:
         return None
     if len(robot.home) != n:
@@ -340,6 +344,12 @@ def _home(robot: Robot, name: str, n: int, cell_file: Path) -> Vec | None:
             ("robots", name, "home"),
         )
     home = np.array(robot.home, dtype=float)
+    # cell.yaml converts home with the angle unit, before joint types are known; a prismatic
+    # axis's value is a length: undo the angle factor and apply the length factor.
+    ctx = units.context()
+    for i, joint in enumerate(list(model.joints)[1:]):
+        if "Prismatic" in joint.shortname() or joint.shortname().startswith("JointModelP"):
+            home[i] *= ctx["length"] / ctx["angle"]
     home.setflags(write=False)
     return home
 

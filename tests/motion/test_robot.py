@@ -557,3 +557,26 @@ def test_a_link_with_two_parents_is_refused(write: Write) -> None:
     p = user_cell(write, urdf).problems[0]
     assert p.message == "joint 'k': link 'tip' already has parent joint 'j'; a URDF is a tree"
     assert p.line == 10
+
+
+def test_home_of_prismatic_axes_in_length_units(tmp_path: Path) -> None:
+    """With units mm/deg, home gives millimetres for the linear axes and degrees for the
+    rotation: each converted by its joint's kind."""
+    src = URDF_DATA / "cartesian"
+    (tmp_path / "cartesian.urdf").write_text((src / "cartesian.urdf").read_text())
+    text = (src / "cell.yaml").read_text()
+    text = text.replace(
+        "name: cartesian_lab\n", "name: cartesian_lab\nunits: {length: mm, angle: deg}\n"
+    )
+    text = text.replace(
+        "xyz: [0.1, 0.2, 0.0], rpy: [0, 0, 1.5707963267948966]",
+        "xyz: [100, 200, 0], rpy: [0, 0, 90]",
+    )
+    text = text.replace("home: [0.5, 0.3, 0.1, 0.0]", "home: [500, 300, 100, 90]")
+    text = text.replace("xyz: [0, 0, 0.05]", "xyz: [0, 0, 50]").replace(
+        "finger_width: 0.01", "finger_width: 10"
+    )
+    (tmp_path / "cell.yaml").write_text(text)
+    arm = build_cell_model(load_world(tmp_path / "cell.yaml")).arms["gantry"]
+    assert arm.home is not None
+    np.testing.assert_allclose(arm.home, [0.5, 0.3, 0.1, math.pi / 2])
