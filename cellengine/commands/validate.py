@@ -12,6 +12,7 @@ from typing import Any
 from cellengine.errors import EXIT_INVALID, EXIT_OK, InputError, Problem, UsageError, display_path
 from cellengine.info.load import load_objects, load_plan, load_world
 from cellengine.info.yamlio import load_yaml
+from cellengine.motion.robot import build_cell_model
 from cellengine.world import World
 
 KINDS = ("cell", "objects", "plan")
@@ -60,6 +61,7 @@ def validate_paths(paths: list[Path]) -> list[Result]:
         if key not in worlds:
             try:
                 worlds[key] = load_world(cell)
+                build_cell_model(worlds[key])  # URDFs, meshes, tips: the robots must build
             except InputError as e:
                 worlds[key] = e
         world = worlds[key]

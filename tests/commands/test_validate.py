@@ -100,3 +100,23 @@ def test_usage_errors_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str])
     with pytest.raises(SystemExit) as e:
         main(["validate", "--format", "xml", str(tmp_path)])
     assert e.value.code == 2
+
+
+def test_robot_models_are_built(
+    cell_dir: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A URDF robot whose tip is not a link fails validation, not only a later run."""
+    monkeypatch.chdir(cell_dir)
+    (cell_dir / "arm.urdf").write_text(
+        '<robot name="a"><link name="base"/><link name="l1"/>'
+        '<joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>'
+        '<axis xyz="0 0 1"/><limit lower="-1" upper="1" velocity="1" effort="1"/></joint>'
+        "</robot>"
+    )
+    (cell_dir / "cell.yaml").write_text(
+        CELL.replace("right: {model: ur5e,", "right: {model: {urdf: arm.urdf, tip: l9},")
+    )
+    assert main(["validate", "cell.yaml"]) == 1
+    assert capsys.readouterr().out == (
+        "cell.yaml:4:40: robots.right.model.tip: unknown link 'l9' in arm.urdf; known: base, l1\n"
+    )
