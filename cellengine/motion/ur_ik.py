@@ -19,9 +19,10 @@ need a few hundred of them.
 
 Every angle comes from ``atan2`` of two well-conditioned quantities rather than ``acos``, so the
 residual stays at rounding level even near ``q5 = 0`` (``acos`` near 1 loses half the digits).
-Singular poses give a valid solution, never NaN: at the wrist singularity (``sin q5 = 0``) only
-``q4 + q6`` is determined, and ``q6`` is taken from the seed; at the shoulder singularity
-(``r = |d4|``) both shoulder roots coincide.
+Singular poses give a valid solution, never NaN: at the wrist singularity (``sin q5 = 0``) the
+axes of joints 2, 3, 4 and 6 are parallel and the solutions form a one-parameter family; ``q6``
+is taken from the seed and q2..q4 follow. At the shoulder singularity (``r = |d4|``) the two
+shoulder roots coincide; with the elbow stretched (``q3 = 0``) the two elbows do.
 """
 
 from __future__ import annotations
