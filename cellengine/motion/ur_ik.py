@@ -135,6 +135,13 @@ class URKinematics:
         self._elbow_den = 2.0 * a2 * a3
 
     @classmethod
+    def from_dh(
+        cls, dh: DH, lower: ArrayLike | None = None, upper: ArrayLike | None = None
+    ) -> URKinematics:
+        """From a :class:`DH` table (an ``Arm.dh``), e.g. with the arm's limits."""
+        return cls(dh.d, dh.a, dh.alpha, lower, upper)
+
+    @classmethod
     def from_name(
         cls, name: str, lower: ArrayLike | None = None, upper: ArrayLike | None = None
     ) -> URKinematics:

@@ -347,6 +347,13 @@ def test_batch_equals_single_with_limits_and_misses() -> None:
             assert np.all(sol >= lower) and np.all(sol <= upper)
 
 
+def test_from_dh_equals_from_name() -> None:
+    a = URKinematics.from_dh(UR_DH["ur3e"], UR_LOWER, UR_UPPER)
+    b = URKinematics.from_name("ur3e")
+    q = np.array([0.3, -1.2, 1.1, -0.7, 0.9, 0.5])
+    assert np.array_equal(a.fk(q), b.fk(q)) and np.array_equal(a.upper, b.upper)
+
+
 def test_not_a_ur_geometry() -> None:
     dh = UR_DH["ur5e"]
     with pytest.raises(ValueError, match="not a UR geometry"):
