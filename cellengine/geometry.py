@@ -9,7 +9,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 Mat = NDArray[np.float64]
 
@@ -29,8 +29,8 @@ def rot_z(a: float) -> Mat:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
-def rpy_to_matrix(rpy: Sequence[float]) -> Mat:
-    r, p, y = rpy
+def rpy_to_matrix(rpy: ArrayLike) -> Mat:
+    r, p, y = np.asarray(rpy, dtype=float)
     return rot_z(y) @ rot_y(p) @ rot_x(r)
 
 
@@ -56,7 +56,7 @@ def axis_angle_to_matrix(axis: Sequence[float], angle: float) -> Mat:
     return R
 
 
-def transform(R: Mat | None = None, t: Sequence[float] | Mat | None = None) -> Mat:
+def transform(R: Mat | None = None, t: ArrayLike | None = None) -> Mat:
     T = np.eye(4)
     if R is not None:
         T[:3, :3] = R
@@ -65,7 +65,7 @@ def transform(R: Mat | None = None, t: Sequence[float] | Mat | None = None) -> M
     return T
 
 
-def pose(xyz: Sequence[float] = (0.0, 0.0, 0.0), rpy: Sequence[float] = (0.0, 0.0, 0.0)) -> Mat:
+def pose(xyz: ArrayLike = (0.0, 0.0, 0.0), rpy: ArrayLike = (0.0, 0.0, 0.0)) -> Mat:
     return transform(rpy_to_matrix(rpy), xyz)
 
 

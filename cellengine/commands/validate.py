@@ -60,8 +60,9 @@ def validate_paths(paths: list[Path]) -> list[Result]:
         key = cell.resolve()
         if key not in worlds:
             try:
-                worlds[key] = load_world(cell)
-                build_cell_model(worlds[key])  # URDFs, meshes, tips: the robots must build
+                world = load_world(cell)
+                build_cell_model(world)  # URDFs, meshes, tips: the robots must build
+                worlds[key] = world
             except InputError as e:
                 worlds[key] = e
         world = worlds[key]
