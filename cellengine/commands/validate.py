@@ -60,15 +60,15 @@ def validate_paths(paths: list[Path]) -> list[Result]:
         key = cell.resolve()
         if key not in worlds:
             try:
-                world = load_world(cell)
-                build_cell_model(world)  # URDFs, meshes, tips: the robots must build
-                worlds[key] = world
+                built = load_world(cell)
+                build_cell_model(built)  # URDFs, meshes, tips: the robots must build
+                worlds[key] = built
             except InputError as e:
                 worlds[key] = e
-        world = worlds[key]
-        if isinstance(world, InputError):
-            raise InputError(world.problems)
-        return world
+        loaded = worlds[key]
+        if isinstance(loaded, InputError):
+            raise InputError(loaded.problems)
+        return loaded
 
     results = []
     seen: set[Path] = set()
