@@ -1,0 +1,172 @@
+"""The trajectory gate: the last check before anything reaches a driver.
+
+A trajectory passes when, sampled every millisecond, its times strictly increase, every
+value is finite, every joint stays within its position, velocity and acceleration limits,
+and no sampled state collides. Each violation names the joint or the pair of objects, the
+time and the value; the minimum distance between the arms is reported either way.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from cellengine.motion.trajectory import Trajectory
+
+Vec = NDArray[np.float64]
+
+SAMPLE_DT = 0.001  # seconds between checked samples
+TOLERANCE = 1e-6  # relative slack on limits, for rounding in the producers
+DISTANCE_EVERY = 10  # the arms' minimum distance is computed on every 10th sample
+
+
+class LimitsLike(Protocol):
+    lower: Vec
+    upper: Vec
+    velocity: Vec
+    acceleration: Vec
+
+
+class Checker(Protocol):
+    def check_batch(self, Q: Vec) -> NDArray[np.bool_]: ...
+    def check(self, q: Vec) -> object | None: ...  # a contact naming the pair, or None
+
+
+Distance = tuple[float, tuple[str, str]]
+
+
+class ArmDistance(Protocol):
+    def __call__(self, q: Vec) -> Distance: ...
+
+
+@dataclass(frozen=True)
+class Violation:
+    kind: str  # finite | position | velocity | acceleration | collision
+    time: float
+    what: str  # the joint, or the colliding pair
+    value: float | None = None
+    limit: float | None = None
+
+    def __str__(self) -> str:
+        at = f"t={self.time:.3f} s"
+        if self.kind == "collision":
+            return f"{at}: collision between {self.what}"
+        if self.kind == "finite":
+            return f"{at}: {self.what}"
+        unit = {"position": "", "velocity": "/s", "acceleration": "/s^2"}[self.kind]
+        return (
+            f"{at}: {self.what} {self.kind} {self.value:.6g}{unit} outside the limit "
+            f"{self.limit:.6g}{unit}"
+        )
+
+
+@dataclass(frozen=True)
+class GateReport:
+    violations: tuple[Violation, ...]
+    samples: int
+    min_arm_distance: float | None = None
+    closest_pair: tuple[str, str] | None = None
+
+    @property
+    def ok(self) -> bool:
+        return not self.violations
+
+
+def check_trajectory(
+    traj: Trajectory,
+    joint_names: Sequence[str],
+    limits: LimitsLike,
+    checker: Checker | None = None,
+    arm_distance: ArmDistance | None = None,
+    dt: float = SAMPLE_DT,
+) -> GateReport:
+    """Check ``traj`` whose joints must be ``joint_names`` (the model's order)."""
+    if tuple(traj.joint_names) != tuple(joint_names):
+        raise ValueError(
+            f"trajectory joints {list(traj.joint_names)} differ from the model's "
+            f"{list(joint_names)}"
+        )
+    # A Trajectory cannot be built with times that do not increase or values that are not
+    # finite; what is checked here is what its samples show.
+    t = _sample_times(traj, dt)
+    q, qd, qdd = traj.sample(t)
+    violations = _finite(t, q, qd, qdd) or _limits(t, q, qd, qdd, joint_names, limits)
+    if checker is not None:
+        violations += _collisions(t, q, checker)
+    d, pair = _arm_distance(q, arm_distance)
+    return GateReport(tuple(violations), len(t), d, pair)
+
+
+def _finite(t: Vec, q: Vec, qd: Vec, qdd: Vec) -> list[Violation]:
+    bad = ~(np.isfinite(q) & np.isfinite(qd) & np.isfinite(qdd)).all(axis=1)
+    if not bad.any():
+        return []
+    i = int(np.argmax(bad))
+    return [Violation("finite", float(t[i]), "a sampled value is not a finite number")]
+
+
+def _sample_times(traj: Trajectory, dt: float) -> Vec:
+    t = np.arange(traj.start_time, traj.end_time, dt)
+    return np.append(t, traj.end_time)  # the last knot is always checked
+
+
+def _limits(
+    t: Vec, q: Vec, qd: Vec, qdd: Vec, names: Sequence[str], limits: LimitsLike
+) -> list[Violation]:
+    """The first violation of each kind for each joint (not one per sample)."""
+    out = []
+    lo, hi = np.asarray(limits.lower), np.asarray(limits.upper)
+    slack = TOLERANCE * np.maximum(1.0, np.abs(hi - lo))
+    checks = (
+        ("position", q, np.maximum(lo - q - slack, q - hi - slack), None),
+        (
+            "velocity",
+            qd,
+            np.abs(qd) - np.asarray(limits.velocity) * (1 + TOLERANCE),
+            limits.velocity,
+        ),
+        (
+            "acceleration",
+            qdd,
+            np.abs(qdd) - np.asarray(limits.acceleration) * (1 + TOLERANCE),
+            limits.acceleration,
+        ),
+    )
+    for kind, values, excess, bound in checks:
+        for j in map(int, np.flatnonzero((excess > 0).any(axis=0))):
+            i = int(np.argmax(excess[:, j] > 0))
+            v = float(values[i, j])
+            limit = (
+                float(np.asarray(bound)[j])
+                if bound is not None
+                else (float(lo[j]) if v < lo[j] else float(hi[j]))
+            )
+            out.append(Violation(kind, float(t[i]), names[j], v, limit))
+    return out
+
+
+def _collisions(t: Vec, q: Vec, checker: Checker) -> list[Violation]:
+    colliding = np.flatnonzero(checker.check_batch(q))
+    if len(colliding) == 0:
+        return []
+    i = int(colliding[0])
+    contact = checker.check(q[i])
+    return [Violation("collision", float(t[i]), str(contact) if contact else "unknown objects")]
+
+
+def _arm_distance(
+    q: Vec, arm_distance: ArmDistance | None
+) -> tuple[float | None, tuple[str, str] | None]:
+    if arm_distance is None or len(q) == 0:
+        return None, None
+    best: Distance | None = None
+    for row in (*q[::DISTANCE_EVERY], q[-1]):
+        d = arm_distance(row)
+        if best is None or d[0] < best[0]:
+            best = d
+    assert best is not None
+    return best
