@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -24,6 +24,18 @@ FloatArray = NDArray[np.float64]
 
 # Junctions of concatenated trajectories must agree to this (rad or m, and per second).
 JOIN_TOLERANCE = 1e-6
+# Samples per segment behind Trajectory.peaks' bounds on velocity and acceleration.
+PEAK_SUBDIVISIONS = 4
+# Times sampled per block (keeps every temporary array small; see _quintic_coefficients).
+_BLOCK = 1024
+
+
+class Peaks(NamedTuple):
+    """Per segment and joint (N-1, n): bounds on |velocity|, |acceleration|, |jerk|."""
+
+    velocity: FloatArray
+    acceleration: FloatArray
+    jerk: FloatArray
 
 
 def _frozen(value: ArrayLike, name: str, ndim: int) -> FloatArray:
@@ -42,11 +54,13 @@ def _frozen(value: ArrayLike, name: str, ndim: int) -> FloatArray:
 
 def _quintic_coefficients(
     t: FloatArray, q: FloatArray, qd: FloatArray, qdd: FloatArray
-) -> FloatArray:
-    """Per segment, the coefficients c0..c5 of p(tau) = sum c_k tau^k, tau in [0, 1].
+) -> tuple[FloatArray, ...]:
+    """Per segment, the coefficients c0..c5 of p(tau) = sum c_k tau^k, tau in [0, 1]: six
+    (N-1, n) arrays (separate, not one (N-1, 6, n) block: arrays past ~100 kB cost a page
+    fault per page on every allocation on the benchmark machine).
 
-    Shape (N-1, 6, n). Matching q, qd, qdd at both ends fixes c0..c2 from the start and
-    c3..c5 from the three end-point residuals (the closed form of the 3x3 solve).
+    Matching q, qd, qdd at both ends fixes c0..c2 from the start and c3..c5 from the three
+    end-point residuals (the closed form of the 3x3 solve).
     """
     h = np.diff(t)[:, None]
     q0, q1, v0, v1, a0, a1 = q[:-1], q[1:], qd[:-1], qd[1:], qdd[:-1], qdd[1:]
@@ -57,7 +71,10 @@ def _quintic_coefficients(
     c3 = 10.0 * dq - 4.0 * dv + 0.5 * da
     c4 = -15.0 * dq + 7.0 * dv - da
     c5 = 6.0 * dq - 3.0 * dv + 0.5 * da
-    return np.stack([q0, v0 * h, c2, c3, c4, c5], axis=1)
+    coef = (np.ascontiguousarray(q0), v0 * h, c2, c3, c4, c5)
+    for c in coef:
+        c.flags.writeable = False
+    return coef
 
 
 @dataclass(frozen=True, eq=False)
@@ -74,7 +91,7 @@ class Trajectory:
     q: FloatArray
     qd: FloatArray
     qdd: FloatArray
-    _coef: FloatArray = field(init=False, repr=False)
+    _coef: tuple[FloatArray, ...] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         names = tuple(self.joint_names)
@@ -103,7 +120,6 @@ class Trajectory:
         for key, value in (("joint_names", names), ("t", t), *arrays.items()):
             object.__setattr__(self, key, value)
         coef = _quintic_coefficients(t, arrays["q"], arrays["qd"], arrays["qdd"])
-        coef.flags.writeable = False
         object.__setattr__(self, "_coef", coef)
 
     # -- basic properties -------------------------------------------------------------
@@ -150,39 +166,75 @@ class Trajectory:
         the start or after the end are clamped: the end point's stored state is returned.
         """
         scalar = np.ndim(t) == 0
+        ts = np.atleast_1d(np.asarray(t, dtype=np.float64)).ravel()
         if self.t.size == 1:
-            m = int(np.size(t))
-            out = tuple(np.repeat(a, m, axis=0) for a in (self.q, self.qd, self.qdd))
+            out = tuple(np.repeat(a, ts.size, axis=0) for a in (self.q, self.qd, self.qdd))
         else:
-            seg, tau, h = self._locate(np.atleast_1d(np.asarray(t, dtype=np.float64)))
-            c = self._coef[seg]  # (M, 6, n)
-            tt = tau[:, None]
-            hh = h[:, None]
-            pos = c[:, 0] + tt * (
-                c[:, 1] + tt * (c[:, 2] + tt * (c[:, 3] + tt * (c[:, 4] + tt * c[:, 5])))
-            )
-            vel = c[:, 1] + tt * (
-                2 * c[:, 2] + tt * (3 * c[:, 3] + tt * (4 * c[:, 4] + tt * 5 * c[:, 5]))
-            )
-            acc = 2 * c[:, 2] + tt * (6 * c[:, 3] + tt * (12 * c[:, 4] + tt * 20 * c[:, 5]))
-            out = (pos, vel / hh, acc / (hh * hh))
+            parts = [self._sample_block(ts[i : i + _BLOCK]) for i in range(0, ts.size, _BLOCK)]
+            out = tuple(np.concatenate(p) for p in zip(*parts, strict=True))
         if scalar:
             return out[0][0], out[1][0], out[2][0]
         return out[0], out[1], out[2]
 
+    def _sample_block(self, ts: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        seg, tau, h = self._locate(ts)
+        c0, c1, c2, c3, c4, c5 = (np.take(c, seg, axis=0) for c in self._coef)
+        tt = np.repeat(tau, self.dof).reshape(c0.shape)  # full shape: faster than (M, 1)
+        hh = np.repeat(h, self.dof).reshape(c0.shape)
+        pos = c0 + tt * (c1 + tt * (c2 + tt * (c3 + tt * (c4 + tt * c5))))
+        vel = c1 + tt * (2 * c2 + tt * (3 * c3 + tt * (4 * c4 + tt * 5 * c5)))
+        acc = 2 * c2 + tt * (6 * c3 + tt * (12 * c4 + tt * 20 * c5))
+        return pos, vel / hh, acc / (hh * hh)
+
     def jerk(self, t: ArrayLike) -> FloatArray:
         """Jerk (third derivative) of the interpolation at time(s) `t`; zero outside."""
         scalar = np.ndim(t) == 0
-        ts = np.atleast_1d(np.asarray(t, dtype=np.float64))
+        ts = np.atleast_1d(np.asarray(t, dtype=np.float64)).ravel()
         if self.t.size == 1:
             out = np.zeros((ts.size, self.dof))
         else:
             seg, tau, h = self._locate(ts)
-            c = self._coef[seg]
+            c3, c4, c5 = (np.take(c, seg, axis=0) for c in self._coef[3:])
             tt = tau[:, None]
-            out = (6 * c[:, 3] + tt * (24 * c[:, 4] + tt * 60 * c[:, 5])) / (h[:, None] ** 3)
+            out = (6 * c3 + tt * (24 * c4 + tt * 60 * c5)) / (h[:, None] ** 3)
             out[(ts < self.t[0]) | (ts > self.t[-1])] = 0.0
         return out[0] if scalar else out
+
+    def peaks(self) -> Peaks:
+        """Upper bounds on |velocity|, |acceleration| and |jerk| over each segment, per joint,
+        shape (N-1, n) each: what a check at any sampling rate can find, at once.
+
+        Jerk is a quadratic per segment, its peak exact (ends and vertex). Acceleration and
+        velocity are evaluated at the ends and at PEAK_SUBDIVISIONS - 1 inner points, plus
+        the remainder bound for a function between two samples delta apart,
+        max|f''| delta^2 / 8, with max|f''| the segment's exact peak snap or jerk. The bound
+        exceeds the true peak by at most that remainder (about 1e-5 of the limits for
+        segments of a few ms to tens of ms).
+        """
+        if self.t.size == 1:
+            zero = np.zeros((0, self.dof))
+            return Peaks(zero, zero, zero)
+        _, c1, c2, c3, c4, c5 = self._coef
+        h = np.diff(self.t)[:, None]
+        jerk_end = np.maximum(np.abs(6 * c3), np.abs(6 * c3 + 24 * c4 + 60 * c5))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            vertex = np.clip(np.where(c5 != 0.0, -c4 / (5.0 * c5), 0.0), 0.0, 1.0)
+        jerk_mid = np.abs(6 * c3 + vertex * (24 * c4 + vertex * 60 * c5))
+        jerk = np.maximum(jerk_end, jerk_mid) / h**3
+        snap = np.maximum(np.abs(24 * c4), np.abs(24 * c4 + 120 * c5)) / h**4
+        vel = np.zeros_like(c1)
+        acc = np.zeros_like(c1)
+        for tau in np.linspace(0.0, 1.0, PEAK_SUBDIVISIONS + 1).tolist():
+            np.maximum(
+                vel,
+                np.abs(c1 + tau * (2 * c2 + tau * (3 * c3 + tau * (4 * c4 + tau * 5 * c5)))),
+                out=vel,
+            )
+            np.maximum(
+                acc, np.abs(2 * c2 + tau * (6 * c3 + tau * (12 * c4 + tau * 20 * c5))), out=acc
+            )
+        gap = (h / PEAK_SUBDIVISIONS) ** 2 / 8.0
+        return Peaks(vel / h + jerk * gap, acc / h**2 + snap * gap, jerk)
 
     def resample(self, dt: float) -> Trajectory:
         """The trajectory sampled every `dt` seconds from its start; the end point is kept

@@ -154,3 +154,36 @@ def test_concatenate_refuses_a_jump_or_other_joints() -> None:
         concatenate([_rest_move(0.0, 1.0, 1.0), other])
     with pytest.raises(ValueError, match="at least one"):
         concatenate([])
+
+
+def _dense_worst(traj: Trajectory) -> tuple[np.ndarray, ...]:
+    dense = np.linspace(traj.t[0], traj.t[-1], 100_001)
+    _, qd, qdd = traj.sample(dense)
+    seg = np.clip(np.searchsorted(traj.t, dense, side="right") - 1, 0, len(traj) - 2)
+    out = []
+    for values in (qd, qdd, traj.jerk(dense)):
+        worst = np.zeros((len(traj) - 1, traj.dof))
+        np.maximum.at(worst, seg, np.abs(values))
+        out.append(worst)
+    return tuple(out)
+
+
+def test_peaks_bound_dense_samples_of_any_knots() -> None:
+    rng = np.random.default_rng(3)
+    times = np.cumsum(rng.uniform(0.01, 0.05, 40))
+    state = [rng.normal(size=(40, 3)) * k for k in (1, 1, 10)]
+    traj = Trajectory(("a", "b", "c"), times, *state)
+    for bound, worst in zip(traj.peaks(), _dense_worst(traj), strict=True):
+        assert bound.shape == (39, 3)
+        assert np.all(worst <= bound * (1 + 1e-9) + 1e-9)
+
+
+def test_peaks_are_tight_on_smooth_motion() -> None:
+    t = np.cumsum(np.r_[0.0, np.full(60, 0.02)])[:, None]
+    w = np.array([3.0, 5.0])
+    traj = Trajectory(
+        ("a", "b"), t[:, 0], np.sin(w * t), w * np.cos(w * t), -(w**2) * np.sin(w * t)
+    )
+    for bound, worst in zip(traj.peaks(), _dense_worst(traj), strict=True):
+        assert np.all(worst <= bound + 1e-12)
+        assert np.all(bound <= worst * (1 + 1e-3) + 1e-9)
