@@ -118,22 +118,35 @@ class CollisionChecker:
             count=len(Qa),
         )
 
-    def distance(self, q: ArrayLike) -> tuple[float, Pair]:
-        """The minimum distance over the checked pairs at q and the pair at it. Negative when
-        convex shapes overlap (their penetration depth); a mesh element's distance is to its
-        surface. Mesh elements are first measured as their convex hulls (a lower bound, cheap),
-        and only pairs whose bound is below the best exact distance are measured exactly."""
-        if self._n_pairs == 0:
-            return math.inf, ("", "")
+    def distance(self, q: ArrayLike, between: tuple[str, str] | None = None) -> tuple[float, Pair]:
+        """The minimum distance over the checked pairs at q and the pair at it; ``between``
+        two arms: over the pairs with one object of each (links, and objects they hold).
+        Negative when convex shapes overlap (their penetration depth); a mesh element's
+        distance is to its surface. Mesh elements are first measured as their convex hulls (a
+        lower bound, cheap), and only pairs whose bound is below the best exact distance are
+        measured exactly. (inf, ("", "")) when no pair qualifies."""
         qa = self._q(q)
         scene, gdata = self._scene, self._bounds_data
+        mask = None if between is None else self._between(between)
+        if self._n_pairs == 0 or (mask is not None and not mask.any()):
+            return math.inf, ("", "")
         k = int(pin.computeDistances(self._model, self._data, scene.bounds, gdata, qa))
-        d = float(gdata.distanceResults[k].min_distance)
-        if scene.exact_bounds[k]:
-            return d, scene.pair_names(k)
-        return self._refined_distance()
+        if mask is None and scene.exact_bounds[k]:
+            return float(gdata.distanceResults[k].min_distance), scene.pair_names(k)
+        return self._refined_distance(mask)
 
-    def _refined_distance(self) -> tuple[float, Pair]:
+    def _between(self, arms: tuple[str, str]) -> NDArray[np.bool_]:
+        """Pairs with one object owned by each of two arms."""
+        a, b = arms
+        for arm in arms:
+            if arm not in self._scene.cell.arms:
+                raise ValueError(f"unknown arm '{arm}' (arms: {', '.join(self._scene.cell.arms)})")
+        owners = [o.owner for o in self._scene.objects]
+        return np.array(
+            [{owners[i], owners[j]} == {a, b} for i, j in self._scene.pairs], dtype=bool
+        )
+
+    def _refined_distance(self, mask: NDArray[np.bool_] | None) -> tuple[float, Pair]:
         """After computeDistances on the bounds: measure inexact pairs on the exact model in
         increasing order of their lower bound, until no bound is below the best found."""
         scene = self._scene
@@ -142,9 +155,11 @@ class CollisionChecker:
             dtype=float,
             count=self._n_pairs,
         )
+        if mask is not None:
+            bounds[~mask] = math.inf
         exact = self._exact
         pin.updateGeometryPlacements(self._model, self._data, scene.geometry, exact.data)
-        best, best_pair = math.inf, 0
+        best, best_pair = math.inf, int(np.argmin(bounds))
         for p in np.argsort(bounds, kind="stable"):
             if bounds[p] >= best:
                 break
@@ -194,8 +209,8 @@ class CollisionChecker:
         scene, exact = self._scene, self._exact
         pin.framesForwardKinematics(self._model, self._data, q)
         pin.updateGeometryPlacements(self._model, self._data, scene.geometry, exact.data)
-        a, b = scene.pairs[p]
-        return Contact(scene.objects[a].name, scene.objects[b].name, exact.distance(p), q.copy(), t)
+        a, b = scene.pair_names(p)
+        return Contact(a, b, exact.distance(p), q.copy(), t)
 
     def _q(self, q: ArrayLike) -> Vec:
         qa = np.asarray(q, dtype=float)
