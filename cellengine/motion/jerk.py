@@ -34,12 +34,11 @@ put full-jerk pulses in every segment. ruckig is used where joint space is free
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
-from cellengine.motion.topp import GeometricPath, SpeedPlanner, SpeedProfile
+from cellengine.motion.topp import GeometricPath, SpeedPlanner, SpeedProfile, row_max, row_min
 from cellengine.motion.trajectory import Trajectory
 
 FloatArray = NDArray[np.float64]
@@ -58,17 +57,6 @@ MAX_ROUNDS = 12
 # An excess this small (as a time stretch) is fixed by slowing the whole motion uniformly
 # instead of another round: cheaper, and it costs at most this share of the duration.
 SCALE_TOLERANCE = 3e-3
-
-
-class SmoothPath(GeometricPath, Protocol):
-    """A path with its third derivative and the parameter values where it jumps."""
-
-    @property
-    def breakpoints(self) -> FloatArray: ...
-
-    def derivatives3(
-        self, s: FloatArray
-    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]: ...
 
 
 @dataclass(frozen=True)
@@ -135,12 +123,21 @@ def _filtered(
 
 
 def _knot_times(ref: _Reference, window: float, breakpoints: FloatArray) -> FloatArray:
-    """Times where the filtered motion's jerk may jump, with gaps split to MAX_KNOT_GAP."""
+    """Times where the filtered motion's jerk may jump, with gaps split to MAX_KNOT_GAP.
+
+    The filtered s is a cubic in t between the reference's grid times and their shifts by
+    the window; the path's third derivative jumps where s crosses a breakpoint.
+    """
     end = ref.duration + window
-    kinks = np.concatenate([ref.t, ref.t + window])
+    kinks = np.unique(np.clip(np.concatenate([ref.t, ref.t + window]), 0.0, end))
     if breakpoints.size:
-        kinks = np.concatenate([kinks, _crossing_times(ref, window, breakpoints, end)])
-    kinks = _spaced(np.unique(np.clip(kinks, 0.0, end)), end)
+        s_kinks = _filtered(ref, window, kinks)[0]
+        crossings = np.interp(breakpoints, s_kinks, kinks)
+        # one Newton step: s is smooth between kinks, the linear guess is off by ~1e-3 s
+        pos, vel, _ = _filtered(ref, window, crossings)
+        crossings = np.clip(crossings - (pos - breakpoints) / np.maximum(vel, 1e-9), 0.0, end)
+        kinks = np.unique(np.concatenate([kinks, crossings]))
+    kinks = _spaced(kinks, end)
     gaps = np.diff(kinks)
     parts = np.maximum(1, np.ceil(gaps / MAX_KNOT_GAP - 1e-9).astype(np.intp))
     # every gap split into `parts` equal pieces: a start plus a fraction of the gap
@@ -153,29 +150,14 @@ def _knot_times(ref: _Reference, window: float, breakpoints: FloatArray) -> Floa
 def _spaced(times: FloatArray, end: float) -> FloatArray:
     """`times` (sorted, from 0) thinned so that knots are at least MIN_KNOT_GAP apart, and
     ending at `end`. The filtered s is a difference of two running integrals, exact to
-    about 1e-13: over a 5 us segment that noise alone made a quintic jerk of 2e4."""
-    kept = [0.0]
-    for t in times.tolist():
-        if t - kept[-1] >= MIN_KNOT_GAP:
-            kept.append(t)
-    if end - kept[-1] < MIN_KNOT_GAP and len(kept) > 1:
-        kept.pop()
-    kept.append(end)
-    return np.array(kept)
+    about 1e-13: over a 5 us segment that noise alone made a quintic jerk of 2e4.
 
-
-def _crossing_times(
-    ref: _Reference, window: float, breakpoints: FloatArray, end: float
-) -> FloatArray:
-    """When the filtered motion passes the path's breakpoints (its third derivative
-    jumps there): a few Newton steps from a linear guess; s_f is increasing."""
-    coarse = np.linspace(0.0, end, max(64, ref.t.size))
-    s_coarse = _filtered(ref, window, coarse)[0]
-    times = np.interp(breakpoints, s_coarse, coarse)
-    for _ in range(3):
-        pos, vel, _ = _filtered(ref, window, times)
-        times = np.clip(times - (pos - breakpoints) / np.maximum(vel, 1e-9), 0.0, end)
-    return np.asarray(times)
+    A time is dropped when it follows the previous time (kept or not) too closely; every
+    kept time is then at least the gap after the previous kept one."""
+    keep = np.concatenate([[True], np.diff(times) >= MIN_KNOT_GAP])
+    keep &= times <= end - MIN_KNOT_GAP
+    kept = times[keep]
+    return np.append(kept, end) if kept.size else np.array([0.0, end])
 
 
 @dataclass(frozen=True)
@@ -185,7 +167,7 @@ class _Built:
     sdot: FloatArray
 
 
-def _build(path: SmoothPath, ref: _Reference, window: float, names: tuple[str, ...]) -> _Built:
+def _build(path: GeometricPath, ref: _Reference, window: float, names: tuple[str, ...]) -> _Built:
     times = _knot_times(ref, window, path.breakpoints)
     s, sd, sdd = _filtered(ref, window, times)
     s = np.clip(s, 0.0, path.length)
@@ -204,10 +186,10 @@ def _segment_ratios(built: _Built, limits: PathLimits, grid: FloatArray) -> Floa
     peaks = built.trajectory.peaks()
     count = peaks.velocity.shape[0]
     ratios = np.zeros((count, 4))
-    ratios[:, 0] = (peaks.velocity / limits.velocity).max(axis=1)
-    ratios[:, 1] = (peaks.acceleration / limits.acceleration).max(axis=1)
+    ratios[:, 0] = row_max(peaks.velocity / limits.velocity)
+    ratios[:, 1] = row_max(peaks.acceleration / limits.acceleration)
     if limits.jerk is not None:
-        ratios[:, 2] = (peaks.jerk / limits.jerk).max(axis=1)
+        ratios[:, 2] = row_max(peaks.jerk / limits.jerk)
     if limits.tcp_speed is not None and limits.tcp_ds is not None:
         speed = np.interp(built.s, grid, limits.tcp_ds) * built.sdot
         at_knots = speed / (limits.tcp_speed * TCP_MARGIN)
@@ -235,18 +217,18 @@ def _range_min(grid: FloatArray, lo: FloatArray, hi: FloatArray, value: FloatArr
     return out
 
 
-def _jerk_cap(path: SmoothPath, grid: FloatArray, jerk: FloatArray) -> FloatArray:
+def _jerk_cap(path: GeometricPath, grid: FloatArray, jerk: FloatArray) -> FloatArray:
     """At constant speed the joint jerk is q''' sdot^3, so sdot^2 <= (j / |q'''|)^(2/3) is
     needed wherever the profile cruises: a first cap that saves rounds."""
     d3 = path.derivatives3(grid)[3]
     # q''' is constant per spline piece and jumps at its knots: take both sides
     d3 = np.maximum(np.abs(d3), np.abs(path.derivatives3(np.maximum(grid - 1e-9, 0.0))[3]))
     with np.errstate(divide="ignore"):
-        return np.asarray(((jerk / d3).min(axis=1)) ** (2.0 / 3.0))
+        return np.asarray(row_min(jerk / d3) ** (2.0 / 3.0))
 
 
 def smooth(
-    path: SmoothPath,
+    path: GeometricPath,
     planner: SpeedPlanner,
     limits: PathLimits,
     window: float,
@@ -270,7 +252,7 @@ def smooth(
         if stretch <= 1.0 + SCALE_TOLERANCE:
             return _time_scaled(built.trajectory, stretch)
         # segment k depends on the reference over [t_k - W, t_k+1]
-        bad = np.flatnonzero((ratios > 1.0).any(axis=1))
+        bad = np.flatnonzero(row_max(ratios) > 1.0)
         t = built.trajectory.t
         lo = ref.at(t[bad] - window)[1]
         hi = ref.at(t[bad + 1])[1]
@@ -291,5 +273,4 @@ def _time_scaled(traj: Trajectory, k: float) -> Trajectory:
     normalised time do not change)."""
     if k <= 1.0:
         return traj
-    k *= 1.0 + 1e-12  # rounding must not leave a ratio a hair above 1
-    return Trajectory(traj.joint_names, traj.t * k, traj.q, traj.qd / k, traj.qdd / k**2)
+    return traj.time_scaled(k * (1.0 + 1e-12))  # rounding must not leave a ratio above 1

@@ -236,6 +236,27 @@ class Trajectory:
         gap = (h / PEAK_SUBDIVISIONS) ** 2 / 8.0
         return Peaks(vel / h + jerk * gap, acc / h**2 + snap * gap, jerk)
 
+    def time_scaled(self, factor: float) -> Trajectory:
+        """The same motion `factor` times slower (factor > 1) or faster: times stretched,
+        velocities divided by factor, accelerations by factor^2. The quintic pieces keep
+        their shapes in normalised time, so nothing is re-fitted."""
+        if not (np.isfinite(factor) and factor > 0.0):
+            raise ValueError(f"factor must be a positive number, got {factor!r}")
+        out = object.__new__(Trajectory)
+        fields = {
+            "joint_names": self.joint_names,
+            "t": self.t * factor,
+            "q": self.q,
+            "qd": self.qd / factor,
+            "qdd": self.qdd / (factor * factor),
+            "_coef": self._coef,
+        }
+        for key, value in fields.items():
+            if isinstance(value, np.ndarray):
+                value.flags.writeable = False
+            object.__setattr__(out, key, value)
+        return out
+
     def resample(self, dt: float) -> Trajectory:
         """The trajectory sampled every `dt` seconds from its start; the end point is kept
         (the last step is shorter when the duration is not a multiple of dt)."""
