@@ -11,11 +11,12 @@ how far any point of one object of pair p can move relative to the other over th
 segment (each joint's radius: distance from its axis to the farthest point it moves). A check
 at fraction t with pair p's security margin set to ``h * scene.motion[p] @ |dq|`` (coal reports
 a pair closer than its margin) proves every state in [t, t + h] free when it passes: no point
-moved further than the pair was apart. The step h doubles after a pass and halves after a
-failure; a pair still within its margin when that margin is below ``clearance`` stops the
-segment: a collision, or a near miss closer than ``clearance`` (the resolution: nothing is
-accepted closer than that; DEFAULT_CLEARANCE = 1 mm). A short segment in free space passes in
-one check, a long one in a handful.
+moved further than the pair was apart. The step h doubles after a pass. After a failure, the
+pair coal flagged is measured (d: its distance, or its convex bound's, a lower bound) and h
+becomes 0.9 d / (motion bound of the pair): the largest step that pair allows. A pair closer
+than ``clearance`` stops the segment: a collision, or a near miss (the resolution: nothing is
+accepted closer than that; DEFAULT_CLEARANCE = 1 mm). So the step never falls below
+0.9 clearance / (largest motion bound), and a short segment in free space passes in one check.
 
 A checker preallocates pinocchio and coal data: not thread-safe; one per thread.
 """
@@ -34,6 +35,8 @@ from cellengine.motion.scene import CollisionScene, HeldObject, Pair, attach, de
 
 Vec = NDArray[np.float64]
 
+STEP_SAFETY = 0.9  # of the largest step a flagged pair's distance allows
+STEP_GROWTH = 2.0  # after a passed step
 # Measured on the cable-routing cell (31 objects, 272 pairs), per free state: the pair loop
 # 215 us, a dynamic AABB tree 14 us, SSaP 12.5 us, all-pairs AABB tests ("naive") 7.6 us:
 # with so few objects, testing every pair of boxes beats maintaining a tree.
@@ -87,7 +90,8 @@ class CollisionChecker:
         # exact: margins 0; inflated: per-pair margins for segments; bounds: distances
         self._exact = _Checked(model, scene.geometry)
         self._inflated = _Checked(model, scene.geometry)
-        self._bounds_data = pin.GeometryData(scene.bounds)
+        self._segment_bounds = pin.GeometryData(scene.bounds)
+        self._selections: dict[tuple[str, ...] | None, tuple[Any, NDArray[np.bool_]]] = {}
         self._n_pairs = len(scene.pairs)
 
     # ------------------------------------------------------------------------------ states
@@ -126,37 +130,46 @@ class CollisionChecker:
         lower bound, cheap), and only pairs whose bound is below the best exact distance are
         measured exactly. (inf, ("", "")) when no pair qualifies."""
         qa = self._q(q)
-        scene, gdata = self._scene, self._bounds_data
-        mask = None if between is None else self._between(between)
-        if self._n_pairs == 0 or (mask is not None and not mask.any()):
+        scene = self._scene
+        gdata, mask = self._selection(between)
+        if not mask.any():
             return math.inf, ("", "")
         k = int(pin.computeDistances(self._model, self._data, scene.bounds, gdata, qa))
-        if mask is None and scene.exact_bounds[k]:
+        if scene.exact_bounds[k]:
             return float(gdata.distanceResults[k].min_distance), scene.pair_names(k)
-        return self._refined_distance(mask)
+        return self._refined_distance(gdata, mask)
+
+    def _selection(self, between: tuple[str, str] | None) -> tuple[Any, NDArray[np.bool_]]:
+        """A GeometryData on the bounds model with only the selected pairs active (pinocchio
+        skips inactive pairs), and the selection as a mask; made once per selection."""
+        key = None if between is None else tuple(sorted(between))
+        if key not in self._selections:
+            mask = np.ones(self._n_pairs, dtype=bool) if between is None else self._between(between)
+            gdata = pin.GeometryData(self._scene.bounds)
+            for p in np.flatnonzero(~mask):
+                gdata.deactivateCollisionPair(int(p))
+            self._selections[key] = (gdata, mask)
+        return self._selections[key]
 
     def _between(self, arms: tuple[str, str]) -> NDArray[np.bool_]:
         """Pairs with one object owned by each of two arms."""
-        a, b = arms
         for arm in arms:
             if arm not in self._scene.cell.arms:
-                raise ValueError(f"unknown arm '{arm}' (arms: {', '.join(self._scene.cell.arms)})")
+                known = ", ".join(self._scene.cell.arms)
+                raise ValueError(f"unknown arm '{arm}' (arms: {known})")
         owners = [o.owner for o in self._scene.objects]
         return np.array(
-            [{owners[i], owners[j]} == {a, b} for i, j in self._scene.pairs], dtype=bool
+            [{owners[i], owners[j]} == set(arms) for i, j in self._scene.pairs], dtype=bool
         )
 
-    def _refined_distance(self, mask: NDArray[np.bool_] | None) -> tuple[float, Pair]:
+    def _refined_distance(self, gdata: Any, mask: NDArray[np.bool_]) -> tuple[float, Pair]:
         """After computeDistances on the bounds: measure inexact pairs on the exact model in
         increasing order of their lower bound, until no bound is below the best found."""
         scene = self._scene
         bounds = np.fromiter(
-            (r.min_distance for r in self._bounds_data.distanceResults),
-            dtype=float,
-            count=self._n_pairs,
+            (r.min_distance for r in gdata.distanceResults), dtype=float, count=self._n_pairs
         )
-        if mask is not None:
-            bounds[~mask] = math.inf
+        bounds[~mask] = math.inf  # inactive pairs keep stale results
         exact = self._exact
         pin.updateGeometryPlacements(self._model, self._data, scene.geometry, exact.data)
         best, best_pair = math.inf, int(np.argmin(bounds))
@@ -190,17 +203,33 @@ class CollisionChecker:
             p = inflated.first_hit(self._model, self._data, q)
             if p is None:
                 t += h
-                h *= 2.0
+                h *= STEP_GROWTH
                 continue
             if t == 0.0 and h == 1.0:  # the start itself may be in collision: say so at once
                 start = self._exact.first_hit(self._model, self._data, qa)
                 if start is not None:
                     return self._contact(start, qa, 0.0)
-            # Terminates: once h <= clearance / max(motion), every flagged pair stops here.
-            if motion[p] * h <= clearance:
+            # The flagged pair is closer than its margin: the largest step it allows is its
+            # distance over its motion bound (a hull's distance is a lower bound: also safe).
+            d = self._pair_distance(p, clearance)
+            if d <= clearance:
                 return self._contact(p, q, t)
-            h /= 2.0
+            # below d / motion[p] < h: the pair passes next time (with room for GJK's
+            # tolerance); the step never falls below 0.9 clearance / max(motion): terminates
+            h = STEP_SAFETY * d / motion[p]
         return None
+
+    def _pair_distance(self, p: int, clearance: float) -> float:
+        """Pair p's distance at the state of the last check: its convex bound's, or, when
+        that is within ``clearance`` and the pair has a mesh, the exact one."""
+        scene = self._scene
+        pin.updateGeometryPlacements(self._model, self._data, scene.bounds, self._segment_bounds)
+        d = float(pin.computeDistance(scene.bounds, self._segment_bounds, p).min_distance)
+        if d > clearance or scene.exact_bounds[p]:
+            return d
+        exact = self._exact
+        pin.updateGeometryPlacements(self._model, self._data, scene.geometry, exact.data)
+        return exact.distance(p)
 
     # ------------------------------------------------------------------------------ helpers
 
