@@ -29,8 +29,16 @@ environment, arm bases against the environment; ``stands_on`` for an arm's base 
 obstacle its base frame is on), ``same_body`` (objects on one rigid body), ``adjacent`` (one
 arm's bodies joined by one joint), ``held`` (a held object and the gripper holding it),
 ``user``, ``srdf``, ``out_of_reach`` (the spheres each object can ever occupy, about a point
-fixed in the cell, do not meet: a geometric proof), ``never`` (sampled: see
-:func:`sampled_self_pairs` and :func:`sampled_first_joint_pairs`).
+fixed in the cell, do not meet: a geometric proof), ``never``: an arm's own pairs never within
+ACM_MARGIN in ACM_SAMPLES random configurations, their closest approach then lowered by local
+descent (:func:`sampled_self_pairs`; memoised per arm geometry, about 0.15 s per distinct arm,
+so no file cache), and the objects moved by an arm's first joint alone against the
+environment, swept finely enough to be a proof (:func:`sampled_first_joint_pairs`). Arm
+against arm pairs are not sampled: their distance depends on all twelve joints, where 10 000
+samples are far too sparse to call a pair safe; only reach spheres rule them out.
+
+How SRDF would be wired: a ``robots.<name>.srdf`` key in cell.yaml (a path inside the cell
+folder, resolved like a URDF) read by :func:`load_srdf` and passed as ``srdf={name: pairs}``.
 """
 
 from __future__ import annotations
@@ -530,8 +538,9 @@ def _enclosure_notes(cell: CellModel, statics: Sequence[StaticShape]) -> list[st
             extent = np.asarray(s.shape.aabb_local.max_) - np.asarray(s.shape.aabb_local.min_)
             if float(extent.min()) >= thinnest:
                 out.append(
-                    f"element '{s.name}' is a mesh {float(extent.min()) * 1000:.0f} mm thick: a "
-                    "link wholly inside it would not be seen (a BVH is a surface)"
+                    f"element '{s.name}': its mesh's box is {float(extent.min()) * 1000:.0f} mm "
+                    f"at its thinnest, room for a {thinnest * 1000:.0f} mm link if its walls "
+                    "are that thick: a shape wholly inside a mesh is not seen (a BVH is a surface)"
                 )
     return out
 
