@@ -31,11 +31,15 @@ What MoveIt's computeCartesianPath does, with these differences:
 - **Fraction** is of the path length, as in MoveIt: the length from the first waypoint to the
   last one reached over the length to the last waypoint; a step's length counts rotation too
   (``hypot(|dp|, ROTATION_LENGTH * angle)``, see interpolate), so a pure reorientation has one.
-- **Collisions are checked in batches** (``check_batch`` over every waypoint state), and each
-  step between waypoints is handed to the checker's ``check_segment`` only when the joints move
-  more between the two waypoints than the checker's own segment resolution
-  (:data:`SEGMENT_RESOLUTION` by default): below it, check_segment would only check the two
-  ends, already checked.
+- **Collisions: every step is proved free, not sampled.** The checker's ``check_segment``
+  proves a joint-space segment free (cellengine.motion.collision: conservative advancement
+  with margins from each joint's reach, no point of any object can move further than the pair
+  was apart); in free space one check covers a step of a dense path, ends included. So each
+  step (start -> waypoint 0, waypoint i -> i + 1) goes to check_segment, in path order, and
+  the first contact stops the path: a collision thinner than a step cannot hide between two
+  waypoints, and a state check of the waypoints would add nothing. A per-state batch
+  (``check_batch`` of every waypoint, about a third of the cost) is there for callers that
+  re-check later anyway (``segments=False``): it can miss what passes between waypoints.
 - **Dual-arm paths are checked together**: both arms' paths are resampled onto one common
   parameter (each arm's fraction of its own path length; the grid is the union of both arms'
   waypoints), so every state checked has BOTH arms where they actually are at that moment,
@@ -81,12 +85,9 @@ LIMIT_SLACK = 1e-10
 # its joints may move only by round-off, ZERO_STEP_MOTION.
 ZERO_STEP = 1e-12
 ZERO_STEP_MOTION = 1e-6
-# Joint motion (rad or m, any one joint) between two states below which a collision checker's
-# segment check would only check the two ends; used when the checker does not say its own.
-SEGMENT_RESOLUTION = 0.01
-# A jump this many waypoints or fewer before an unreachable one is put down to the edge of
-# the workspace in its message.
-EDGE_WAYPOINTS = 3
+# A jump this close (m of path) before an unreachable waypoint is put down to the edge of the
+# workspace in its message.
+EDGE_DISTANCE = 0.01
 # Resampling: grid parameters closer than this are one.
 SAME_PARAMETER = 1e-12
 
@@ -189,6 +190,7 @@ def cartesian_path(
     *,
     check: Checker | None = None,
     jump: JumpThreshold | None = None,
+    segments: bool = True,
 ) -> CartesianResult:
     """The arm's joint path through TCP ``waypoints`` (N, 4, 4) in the cell frame, starting
     from the configuration ``seed``. ``check`` sees the arm's q (wrap a whole-cell checker
@@ -199,7 +201,7 @@ def cartesian_path(
     lengths = step_lengths(Ts)
     rows, stop = len(run.q), run.stop
     if check is not None:
-        hit = first_collision(np.vstack([q0, run.q]), check)
+        hit = first_collision(np.vstack([q0, run.q]), check, segments=segments)
         if hit is not None:  # always before the IK's stop: only reached waypoints are checked
             rows, stop = hit.waypoint, _collision_stop(hit, {arm.name: hit.waypoint})
     s = _parameter(lengths)
@@ -225,20 +227,21 @@ def solve_arm(ik: ArmIK, Ts: Poses, seed: Vec, jump: JumpThreshold) -> ArmRun:
         q, stop = _numeric_rows(ik, Ts, seed)
     jumped = _first_jump(ik, q, seed, Ts, jump)
     if jumped is not None and (stop is None or jumped.waypoint <= stop.waypoint):
-        stop = _edge_note(jumped, stop)
+        stop = _edge_note(jumped, stop, Ts)
     m = len(Ts) if stop is None else stop.waypoint
     return ArmRun(q[:m], stop)
 
 
-def _edge_note(jumped: Stop, ik_stop: Stop | None) -> Stop:
+def _edge_note(jumped: Stop, ik_stop: Stop | None, Ts: Poses) -> Stop:
     """Joint speeds explode on the way to the workspace's edge (the elbow stretching, the
     wrist point nearing the shoulder axis), so the jump tests often stop a path just before
     the pose that is out of reach: say so."""
     if ik_stop is None or ik_stop.kind != "unreachable":
         return jumped
-    if not 0 < ik_stop.waypoint - jumped.waypoint <= EDGE_WAYPOINTS:
+    i, k = jumped.waypoint, ik_stop.waypoint
+    if k <= i or float(step_lengths(Ts[i : k + 1]).sum()) > EDGE_DISTANCE:
         return jumped
-    note = f"; waypoint {ik_stop.waypoint} is out of reach (the arm nears its workspace's edge)"
+    note = f"; waypoint {k} is out of reach (the arm nears its workspace's edge)"
     return replace(jumped, message=jumped.message + note)
 
 
@@ -506,34 +509,46 @@ class Hit:
     where: Literal["start", "waypoint", "step"]
 
 
-def first_collision(states: Vec, check: Checker) -> Hit | None:
-    """The first collision along ``states`` (row 0 the start, row i + 1 waypoint i), at a
-    state or on the step into it, or None.
+def first_collision(states: Vec, check: Checker, *, segments: bool = True) -> Hit | None:
+    """The first collision along ``states`` (row 0 the start, row i + 1 waypoint i), or None.
 
-    All states are checked in one ``check_batch``; a step's segment only when its joints
-    move more than the checker's segment resolution (``check.resolution`` if it has one,
-    else :data:`SEGMENT_RESOLUTION`), and only steps before the first colliding state."""
-    hit = np.flatnonzero(check.check_batch(states))
-    first_state = int(hit[0]) if len(hit) else len(states)
-    if first_state == 0:  # the start itself: waypoint 0 cannot be reached
-        return Hit(0, check.check(states[0]), "start")
-    resolution = float(getattr(check, "resolution", SEGMENT_RESOLUTION))
-    # steps 0 .. first_state - 2 join free states; the step into the colliding state ends
-    # in a collision anyway
-    free = states[:first_state]
-    motion = np.abs(np.diff(free, axis=0)).max(axis=1, initial=0.0)
-    for k in np.flatnonzero(motion > resolution):
-        contact = check.check_segment(free[k], free[k + 1])
+    ``segments``: each step goes to ``check_segment`` in path order (a proof for a checker
+    whose segment check is one, as cellengine.motion.collision's); else only the states, in
+    one ``check_batch``."""
+    if isinstance(check, ArmInCell):  # whole-cell states once, not per call
+        states, check = check.lift(states), check.checker
+    if not segments:
+        hit = np.flatnonzero(check.check_batch(states))
+        if len(hit) == 0:
+            return None
+        k = int(hit[0])
+        return Hit(max(k - 1, 0), check.check(states[k]), "start" if k == 0 else "waypoint")
+    if len(states) == 1:
+        contact = check.check(states[0])
+        return None if contact is None else Hit(0, contact, "start")
+    for k in range(len(states) - 1):
+        contact = check.check_segment(states[k], states[k + 1])
         if contact is not None:
-            return Hit(int(k), contact, "step")
-    if first_state == len(states):
-        return None
-    return Hit(first_state - 1, check.check(states[first_state]), "waypoint")
+            return Hit(k, contact, _where_on_step(contact, k))
+    return None
+
+
+def _where_on_step(contact: Any, k: int) -> Literal["start", "waypoint", "step"]:
+    """Where on step k a segment contact is, from its ``t`` (fraction along the step)."""
+    t = getattr(contact, "t", None)
+    if t is None:
+        return "step"
+    if t <= 0.0 and k == 0:
+        return "start"
+    return "waypoint" if t >= 1.0 else "step"
 
 
 def _collision_stop(hit: Hit, waypoints: Mapping[str, int]) -> Stop:
     pair = _pair(hit.contact)
-    what = f"'{pair[0]}' and '{pair[1]}'" if pair else str(hit.contact)
+    what = f"'{pair[0]}' and '{pair[1]}'" if pair else f"({hit.contact})"
+    distance = getattr(hit.contact, "distance", None)
+    if isinstance(distance, float) and distance > 0.0:  # a segment check's near miss
+        what += f" (within {distance * 1e3:.2f} mm, under the checker's clearance)"
     i = hit.waypoint
     where = {
         "start": "at the start configuration",
@@ -587,23 +602,20 @@ class ArmInCell:
     arm: str
     q_cell: Vec
 
-    @property
-    def resolution(self) -> float:
-        return float(getattr(self.checker, "resolution", SEGMENT_RESOLUTION))
-
-    def _full(self, q: Vec) -> Vec:
+    def lift(self, q: Vec) -> Vec:
+        """The cell's q (..., nq) of the arm's q (..., n)."""
         Q = np.array(np.broadcast_to(self.q_cell, (*np.shape(q)[:-1], self.cell.nq)))
         Q[..., self.cell.slices[self.arm]] = q
         return Q
 
     def check(self, q: Vec) -> Any | None:
-        return self.checker.check(self._full(q))
+        return self.checker.check(self.lift(q))
 
     def check_batch(self, Q: Vec) -> NDArray[np.bool_]:
-        return self.checker.check_batch(self._full(Q))
+        return self.checker.check_batch(self.lift(Q))
 
     def check_segment(self, q0: Vec, q1: Vec) -> Any | None:
-        return self.checker.check_segment(self._full(q0), self._full(q1))
+        return self.checker.check_segment(self.lift(q0), self.lift(q1))
 
 
 def dual_cartesian_path(
@@ -613,6 +625,7 @@ def dual_cartesian_path(
     *,
     check: Checker | None = None,
     jump: JumpThreshold | None = None,
+    segments: bool = True,
 ) -> CartesianResult:
     """Several arms along their own TCP waypoints at once, the whole cell's q per row.
 
@@ -628,7 +641,9 @@ def dual_cartesian_path(
     grid = _union(list(params.values()))
     on_grid = {name: resample(paths[name], params[name], grid) for name in paths}
     own = {name: _own_index(params[name], grid) for name in paths}
-    return _solve_on_grid(cell, on_grid, own, grid, seed, check, jump or JumpThreshold())
+    return _solve_on_grid(
+        cell, on_grid, own, grid, seed, _Checks(check, jump or JumpThreshold(), segments)
+    )
 
 
 def closed_chain_path(
@@ -641,6 +656,7 @@ def closed_chain_path(
     *,
     check: Checker | None = None,
     jump: JumpThreshold | None = None,
+    segments: bool = True,
 ) -> CartesianResult:
     """Both hands on one object: the leader's TCP along ``waypoints``, the follower's at
     ``T_cell_leader @ T_leader_follower`` at every waypoint (default: the relative pose of
@@ -659,7 +675,18 @@ def closed_chain_path(
     index = np.arange(len(Ts))
     on_grid = {leader: Ts, follower: Ts @ T_lf}
     own = {leader: index, follower: index}
-    return _solve_on_grid(cell, on_grid, own, grid, seed, check, jump or JumpThreshold())
+    return _solve_on_grid(
+        cell, on_grid, own, grid, seed, _Checks(check, jump or JumpThreshold(), segments)
+    )
+
+
+@dataclass(frozen=True)
+class _Checks:
+    """What a path is checked for besides reach and limits."""
+
+    check: Checker | None
+    jump: JumpThreshold
+    segments: bool
 
 
 def _solve_on_grid(
@@ -668,8 +695,7 @@ def _solve_on_grid(
     own: Mapping[str, NDArray[np.intp]],
     grid: Vec,
     seed: Vec,
-    check: Checker | None,
-    jump: JumpThreshold,
+    checks: _Checks,
 ) -> CartesianResult:
     """Every arm's IK along the shared grid; the rows before the first stop of any arm,
     then the cell's collisions on those rows."""
@@ -680,14 +706,16 @@ def _solve_on_grid(
     for name in cell.arms:  # cell order: ties go to the first arm
         if name not in on_grid:
             continue
-        runs[name] = run = solve_arm(arm_ik(cell.arms[name]), on_grid[name], seeds[name], jump)
+        runs[name] = run = solve_arm(
+            arm_ik(cell.arms[name]), on_grid[name], seeds[name], checks.jump
+        )
         if run.stop is not None and run.stop.waypoint < rows:
             rows, stop = run.stop.waypoint, run.stop
     Q = np.repeat(seed[None, :], rows, axis=0)
     for name, run in runs.items():
         Q[:, cell.slices[name]] = run.q[:rows]
-    if check is not None:
-        hit = first_collision(np.vstack([seed, Q]), check)
+    if checks.check is not None:
+        hit = first_collision(np.vstack([seed, Q]), checks.check, segments=checks.segments)
         if hit is not None:
             rows = hit.waypoint
             stop = _collision_stop(hit, _own_at(own, rows))
