@@ -70,7 +70,6 @@ from numpy.typing import ArrayLike, NDArray
 from cellengine import geometry as g
 from cellengine.motion.ik import ArmIK, arm_ik, wrap
 from cellengine.motion.interpolate import rotations, step_lengths
-from cellengine.motion.numeric_ik import NumericIK
 from cellengine.motion.robot import Arm, CellModel
 
 Vec = NDArray[np.float64]
@@ -163,13 +162,13 @@ class CartesianResult:
     s: Vec
     fraction: float
     stop: Stop | None
-    waypoints: int  # how many there were (rows of the grid)
+    n_waypoints: int  # how many there were (rows of the grid)
 
     def __post_init__(self) -> None:
-        complete = len(self.q) == self.waypoints
+        complete = len(self.q) == self.n_waypoints
         if complete != (self.stop is None):  # never short without a reason, nor vice versa
             raise ValueError(
-                f"a path with {len(self.q)} of {self.waypoints} waypoints must "
+                f"a path with {len(self.q)} of {self.n_waypoints} waypoints must "
                 + ("not have a stop" if complete else "say why it stops")
             )
         for name in ("q", "s"):
@@ -351,19 +350,9 @@ def _first_beyond_limit(ik: ArmIK, q: Vec) -> Stop | None:
 # ------------------------------------------------------------------------------ numerical
 
 
-def _path_solver(ik: ArmIK) -> NumericIK:
-    """The arm's numerical solver without random restarts (see the module docstring)."""
-    solver = getattr(ik, "_path_numeric", None)
-    if solver is None:
-        solver = NumericIK(ik.arm.model, ik.arm.tcp, max_restarts=0)
-        ik._path_numeric = solver  # type: ignore[attr-defined]
-    assert isinstance(solver, NumericIK)
-    return solver
-
-
 def _numeric_rows(ik: ArmIK, Ts: Poses, seed: Vec) -> tuple[Vec, Stop | None]:
     """Waypoint by waypoint from the previous solution; stop at the first that fails."""
-    solver = _path_solver(ik)
+    solver = ik.path_solver()
     out = np.empty((len(Ts), ik.n))
     prev = seed
     for i, T in enumerate(Ts):
@@ -380,7 +369,7 @@ def _numeric_rows(ik: ArmIK, Ts: Poses, seed: Vec) -> tuple[Vec, Stop | None]:
 
 
 def _at_limits(ik: ArmIK, q: Vec) -> str:
-    solver = _path_solver(ik)
+    solver = ik.path_solver()
     lo, hi = solver.lower, solver.upper
     names = [
         ik.arm.joint_names[k]

@@ -53,6 +53,7 @@ class ArmIK:
         self.T_tcp_flange = g.inverse(arm.T_flange_tcp)
         self.closed_form: URKinematics | None = None
         self.numeric: NumericIK | None = None
+        self._path_solver: NumericIK | None = None
         if arm.dh is not None:
             self.closed_form = URKinematics.from_dh(arm.dh, self.lower, self.upper)
         else:
@@ -63,6 +64,16 @@ class ArmIK:
     @property
     def n(self) -> int:
         return self.arm.nq
+
+    def path_solver(self) -> NumericIK:
+        """Numerical only: the solver for following a path, warm-started at the previous
+        waypoint and WITHOUT random restarts (a restart lands anywhere: a jump by
+        construction). Built on first use."""
+        if self.closed_form is not None:
+            raise ValueError(f"arm '{self.arm.name}' follows paths in closed form")
+        if self._path_solver is None:
+            self._path_solver = NumericIK(self.arm.model, self.arm.tcp, max_restarts=0)
+        return self._path_solver
 
     # ------------------------------------------------------------------ frames
 

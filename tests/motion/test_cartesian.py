@@ -144,7 +144,7 @@ def test_a_reachable_1_m_line_is_followed_on_one_branch(cell: CellModel) -> None
     q0 = start(arm, W[0])
     r = cartesian_path(arm, W, q0)
     assert r.ok and r.stop is None and r.fraction == 1.0
-    assert r.q.shape == (1001, 6) and r.waypoints == 1001
+    assert r.q.shape == (1001, 6) and r.n_waypoints == 1001
     assert residuals(arm, r.q, W) <= 1e-9
     np.testing.assert_allclose(r.s, np.linspace(0.0, 1.0, 1001), atol=1e-12)
     assert np.abs(np.diff(np.vstack([q0, r.q]), axis=0)).max() < 0.05  # continuous
