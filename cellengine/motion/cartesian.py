@@ -12,9 +12,12 @@ What MoveIt's computeCartesianPath does, with these differences:
   wrist + elbow``, chosen as the branch whose solution at the first waypoint is nearest the
   start) and unwraps each angle against the previous waypoint so that it moves continuously
   (no 2 pi steps). A pose that branch cannot reach is ``unreachable`` even if another branch
-  could: changing branch is a reconfiguration, never a Cartesian motion. Other arms follow the
-  path with the numerical solver warm-started at the previous waypoint, without random
-  restarts (a restart lands anywhere: a jump by construction).
+  could: changing branch is a reconfiguration, never a Cartesian motion. A joint that would
+  pass its limit while following the path continuously is a ``limit`` stop (the other
+  representative of the angle is a full turn away). Other arms follow the path with the
+  numerical solver warm-started at the previous waypoint, without random restarts (a restart
+  lands anywhere: a jump by construction); it keeps every joint within its limits, so a pose
+  needing more is ``unreachable``, and the message names the joints against their limits.
 - **Two jump tests, both on by default** (:class:`JumpThreshold`):
   *absolute*: no joint may move more than ``revolute`` rad (``prismatic`` m) between two
   consecutive waypoints. This is what catches branch flips and wrist flips (pi), whatever the
@@ -26,7 +29,10 @@ What MoveIt's computeCartesianPath does, with these differences:
   its Cartesian length (joint motion per metre of path: the local inverse-Jacobian gain, which
   does not depend on how finely the path is sampled) and compared with ``relative`` times the
   MEDIAN gain of the path, which a few jumps do not move. It stops the path where joint speeds
-  would explode relative to the rest of the path, e.g. close to a singularity.
+  would explode relative to the rest of the path, e.g. close to a singularity, and on the way
+  to the workspace's edge, where a path leaving the workspace stops a few millimetres early
+  as a jump (its message then says the next poses are out of reach). The motion of a step is
+  its largest joint's (rad or m alike).
   A step whose TCP does not move but whose joints do (more than 1e-6) is a jump too.
 - **Fraction** is of the path length, as in MoveIt: the length from the first waypoint to the
   last one reached over the length to the last waypoint; a step's length counts rotation too
@@ -339,7 +345,7 @@ def _first_beyond_limit(ik: ArmIK, q: Vec) -> Stop | None:
         "limit",
         i,
         f"waypoint {i}: joint '{name}' would reach {value:.4f}, beyond its limit {bound:.4f} "
-        "(following the path continuously; the other representative is a full turn away)",
+        "(following the path continuously)",
         arm=ik.arm.name,
         joint=name,
         value=value,
