@@ -152,6 +152,28 @@ def test_a_reachable_1_m_line_is_followed_on_one_branch(cell: CellModel) -> None
     assert {ik.branch(q) for q in r.q[::50]} == {ik.branch(q0)}
 
 
+def test_an_arc_is_followed_exactly(cell: CellModel) -> None:
+    arm = cell.arms["right"]
+    T0 = down(0.5, -0.2, 0.2)
+    W = itp.arc_about(T0, [0.4, -0.2, 0.2], [0, 0, 1], math.radians(120), max_translation=0.002)
+    r = cartesian_path(arm, W, start(arm, T0))
+    assert r.ok, r.stop
+    assert residuals(arm, r.q, W) <= 1e-9
+
+
+def test_steps_of_different_lengths_are_not_jumps(cell: CellModel) -> None:
+    """900 steps of 1 mm, then 10 of 1 cm: MoveIt's test (a step against factor x the MEAN
+    step, here 1.1 mm) would stop at the first 1 cm step for any factor under 9; joint motion
+    per metre of path does not change, so the relative test lets it pass even at 2 x."""
+    arm = cell.arms["left"]
+    a = itp.line(down(0.45, 0.8, 0.25), down(0.45, -0.1, 0.25), max_translation=0.001)
+    b = itp.line(a[-1], down(0.45, -0.2, 0.25), max_translation=0.01)
+    W = itp.concatenate([a, b])
+    assert len(W) == 911
+    r = cartesian_path(arm, W, start(arm, W[0]), jump=JumpThreshold(relative=2.0))
+    assert r.ok, r.stop
+
+
 def test_leaving_the_workspace_stops_at_the_first_unreachable_waypoint(cell: CellModel) -> None:
     """Tool down, the wrist point is straight above the TCP; it cannot come nearer than d4
     to the base's z axis. A line along x through the base's y from x = 0.6 leaves the
