@@ -56,7 +56,7 @@ TCP_MARGIN = 0.995
 MAX_ROUNDS = 12
 # An excess this small (as a time stretch) is fixed by slowing the whole motion uniformly
 # instead of another round: cheaper, and it costs at most this share of the duration.
-SCALE_TOLERANCE = 3e-3
+SCALE_TOLERANCE = 5e-3
 
 
 @dataclass(frozen=True)
