@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -20,6 +21,7 @@ from ompl import geometric as og
 from ompl import util as ou
 
 from cellengine.errors import known
+from cellengine.motion.robot import CellModel
 
 Vec = NDArray[np.float64]
 StateValid = Callable[[Vec], bool]
@@ -56,7 +58,10 @@ class TransitRequest:
     time_limit: float = 1.0  # seconds
     seed: int = 0
     simplify: bool = True
-    step: float = 0.05  # joint-space step (L2 over all joints) between states OMPL checks
+    step: float = 0.1  # joint-space step (L2 over all joints) between states OMPL checks
+    # search inside the box around start and goals widened by this (rad or m) first, the
+    # whole joint range on the last attempt: a smaller space samples where the moves are
+    box_margin: float | None = 1.0
     attempts: int = 3  # a path refused by the final segment check is planned again
 
     def __post_init__(self) -> None:
@@ -130,32 +135,57 @@ def plan_transit(
     plan_time = simplify_time = 0.0
     reason = ""
     for attempt in range(req.attempts):
-        budget = deadline - time.perf_counter()
+        # a share of what is left, so a search box without a way through leaves time for more
+        budget = (deadline - time.perf_counter()) / (req.attempts - attempt)
         if budget <= 0:
             break
         # OMPL's seed must be positive; re-seeded for every query, so any process agrees
         ou.RNG.setSeed(req.seed * 7919 + attempt + 1)
-        path, status, dt_plan, dt_simplify = _solve(req, valid, goals, budget)
+        last = attempt == req.attempts - 1
+        lower, upper = _search_bounds(req, goals, whole_range=last)
+        paths, dt_plan, dt_simplify = _solve(req, valid, goals, budget, lower, upper)
         plan_time, simplify_time = plan_time + dt_plan, simplify_time + dt_simplify
-        if path is None:
-            return _failed(
-                f"{req.planner}: {status} within {req.time_limit:g} s", counter, plan_time
-            )
-        bad = _first_bad_segment(path, segment_valid)
-        if bad is None:
-            reached = int(np.argmin(np.linalg.norm(np.array(goals) - path[-1], axis=1)))
-            index = next(k for k, g in enumerate(req.goals) if np.array_equal(g, goals[reached]))
-            return TransitResult(path, "", index, plan_time, simplify_time, counter[0])
-        reason = f"segment {bad} of the planned path failed the final collision check"
+        if not paths:
+            reason = f"{req.planner}: no path found within {req.time_limit:g} s"
+            continue
+        # the simplified path first; shortcuts can graze an obstacle between OMPL's checked
+        # states, and then the planner's own path, whose segments are short, often passes
+        for path in paths:
+            bad = _first_bad_segment(path, segment_valid)
+            if bad is None:
+                return TransitResult(
+                    path, "", _goal_index(req, goals, path), plan_time, simplify_time, counter[0]
+                )
+            reason = f"segment {bad} of the planned path failed the final collision check"
     return _failed(reason or f"{req.planner}: out of time", counter, plan_time)
 
 
+def _goal_index(req: TransitRequest, goals: list[Vec], path: Vec) -> int:
+    reached = goals[int(np.argmin(np.linalg.norm(np.array(goals) - path[-1], axis=1)))]
+    return next(k for k, g in enumerate(req.goals) if np.array_equal(g, reached))
+
+
+def _search_bounds(req: TransitRequest, goals: list[Vec], whole_range: bool) -> tuple[Vec, Vec]:
+    if whole_range or req.box_margin is None:
+        return req.lower, req.upper
+    points = np.vstack([req.start, *goals])
+    lower = np.maximum(req.lower, points.min(axis=0) - req.box_margin)
+    upper = np.minimum(req.upper, points.max(axis=0) + req.box_margin)
+    return lower, upper
+
+
 def _solve(
-    req: TransitRequest, valid: Callable[[ob.State], bool], goals: list[Vec], budget: float
-) -> tuple[Vec | None, str, float, float]:
-    """One OMPL query: (path or None, why, planning seconds, simplification seconds)."""
+    req: TransitRequest,
+    valid: Callable[[ob.State], bool],
+    goals: list[Vec],
+    budget: float,
+    lower: Vec,
+    upper: Vec,
+) -> tuple[list[Vec], float, float]:
+    """One OMPL query: the simplified path and the planner's own (none when no path was
+    found), planning seconds, simplification seconds."""
     n = len(req.start)
-    si = _space_information(req, valid)
+    si = _space_information(req.step, lower, upper, valid)
     pdef = ob.ProblemDefinition(si)
     pdef.addStartState(_state(si, req.start))
     goal_states = ob.GoalStates(si)
@@ -169,14 +199,20 @@ def _solve(
     planner.solve(budget)
     plan_time = time.perf_counter() - t0
     if not pdef.hasExactSolution():
-        return None, "no path found", plan_time, 0.0
+        return [], plan_time, 0.0
     path = pdef.getSolutionPath()
+    raw = _waypoints(path, n)
+    if not req.simplify:
+        return [raw], plan_time, 0.0
     t1 = time.perf_counter()
-    if req.simplify:
-        og.PathSimplifier(si).simplifyMax(path)
+    og.PathSimplifier(si).simplifyMax(path)
     simplify_time = time.perf_counter() - t1
+    return [_waypoints(path, n), raw], plan_time, simplify_time
+
+
+def _waypoints(path: og.PathGeometric, n: int) -> Vec:
     states = [path.getState(i) for i in range(path.getStateCount())]
-    return np.array([[s[j] for j in range(n)] for s in states]), "", plan_time, simplify_time
+    return np.array([[s[j] for j in range(n)] for s in states])
 
 
 def _first_bad_segment(path: Vec, segment_valid: SegmentValid | None) -> int | None:
@@ -186,19 +222,19 @@ def _first_bad_segment(path: Vec, segment_valid: SegmentValid | None) -> int | N
 
 
 def _space_information(
-    req: TransitRequest, valid: Callable[[ob.State], bool]
+    step: float, lower: Vec, upper: Vec, valid: Callable[[ob.State], bool]
 ) -> ob.SpaceInformation:
-    n = len(req.start)
+    n = len(lower)
     space = ob.RealVectorStateSpace(n)
     bounds = ob.RealVectorBounds(n)
     for i in range(n):
-        bounds.setLow(i, float(req.lower[i]))
-        bounds.setHigh(i, float(req.upper[i]))
+        bounds.setLow(i, float(lower[i]))
+        bounds.setHigh(i, float(upper[i]))
     space.setBounds(bounds)
     si = ob.SpaceInformation(space)
     si.setStateValidityChecker(valid)
-    extent = math.sqrt(float(np.sum((req.upper - req.lower) ** 2)))
-    si.setStateValidityCheckingResolution(min(1.0, req.step / extent))
+    extent = math.sqrt(float(np.sum((upper - lower) ** 2)))
+    si.setStateValidityCheckingResolution(min(1.0, step / extent))
     si.setup()
     return si
 
@@ -216,3 +252,48 @@ def _inside(q: Vec, req: TransitRequest) -> bool:
 
 def _failed(reason: str, counter: list[int], plan_time: float = 0.0) -> TransitResult:
     return TransitResult(None, reason, -1, plan_time, 0.0, counter[0])
+
+
+class CellChecker(Protocol):
+    def in_collision(self, q: Vec) -> bool: ...
+    def check_segment(self, q0: Vec, q1: Vec) -> object | None: ...
+
+
+def plan_for_arms(
+    cell: CellModel,
+    checker: CellChecker,
+    arms: Sequence[str],
+    start: ArrayLike,
+    goals: ArrayLike,
+    **options: object,
+) -> TransitResult:
+    """Plan the joints of ``arms`` (one arm, or both together as one 12-DOF problem) from the
+    cell configuration ``start`` to any of ``goals`` (cell configurations; only the planned
+    arms' joints are read); the other arms stay where ``start`` has them. The returned path
+    holds whole cell configurations, each segment proved free by ``checker.check_segment``."""
+    unknown = [a for a in arms if a not in cell.arms]
+    if unknown or not arms:
+        raise ValueError(f"unknown arm(s) {unknown}" + known(cell.arms))
+    full = np.asarray(start, dtype=float)
+    cols = np.concatenate([np.arange(cell.nq)[cell.slices[a]] for a in arms])
+
+    def whole(q: Vec) -> Vec:
+        out = full.copy()
+        out[cols] = q
+        return out
+
+    sub_goals = np.atleast_2d(np.asarray(goals, dtype=float))[:, cols]
+    req = request(
+        full[cols], sub_goals, cell.limits.lower[cols], cell.limits.upper[cols], **options
+    )
+    result = plan_transit(
+        req,
+        lambda q: not checker.in_collision(whole(q)),
+        lambda a, b: checker.check_segment(whole(a), whole(b)) is None,
+    )
+    if result.path is None:
+        return result
+    path = np.array([whole(q) for q in result.path])
+    return TransitResult(
+        path, "", result.goal_index, result.plan_time, result.simplify_time, result.checks
+    )

@@ -91,3 +91,52 @@ def test_planner_by_name_and_unknown_planner() -> None:
     assert plan_transit(request(start, goal, LOWER, UPPER, planner="RRT", seed=1), wall).ok
     with pytest.raises(ValueError, match=r"unknown planner 'RRT\*'; known: AORRTC, BFMT, BITstar"):
         request(start, goal, LOWER, UPPER, planner="RRT*")
+
+
+@pytest.fixture(scope="module")
+def cable_cell():  # type: ignore[no-untyped-def]
+    from cellengine.info.load import load_world
+    from cellengine.motion.collision import CollisionChecker
+    from cellengine.motion.robot import build_cell_model
+    from cellengine.motion.scene import build_scene
+    from tests.conftest import CELLS
+
+    world = load_world(CELLS / "cable_routing" / "cell.yaml")
+    cell = build_cell_model(world)
+    return cell, CollisionChecker(build_scene(cell, world))
+
+
+def test_both_arms_swap_sides_in_the_cable_cell(cable_cell) -> None:  # type: ignore[no-untyped-def]
+    """Both arms (12 DOF) from home to a pose where each reaches over the routing platform;
+    every segment of the result is proved free by the conservative segment check."""
+    from cellengine.motion.transit import plan_for_arms
+
+    cell, checker = cable_cell
+    home = cell.join({n: a.home for n, a in cell.arms.items()})
+    goal = home.copy()
+    goal[[0, 6]] = [-0.9, 0.9]  # shoulder pans turned towards each other's side
+    assert not checker.in_collision(home) and not checker.in_collision(goal)
+    result = plan_for_arms(cell, checker, ("left", "right"), home, goal, seed=1)
+    assert result.ok, result.reason
+    assert result.path is not None
+    np.testing.assert_allclose(result.path[[0, -1]], [home, goal])
+    assert all(
+        checker.check_segment(a, b) is None
+        for a, b in zip(result.path[:-1], result.path[1:], strict=True)
+    )
+    again = plan_for_arms(cell, checker, ("left", "right"), home, goal, seed=1)
+    assert again.path is not None and np.array_equal(again.path, result.path)
+
+
+def test_one_arm_moves_the_other_stays(cable_cell) -> None:  # type: ignore[no-untyped-def]
+    from cellengine.motion.transit import plan_for_arms
+
+    cell, checker = cable_cell
+    home = cell.join({n: a.home for n, a in cell.arms.items()})
+    goal = home.copy()
+    goal[0] = -0.6
+    result = plan_for_arms(cell, checker, ("left",), home, goal)
+    assert result.ok and result.path is not None
+    np.testing.assert_array_equal(result.path[:, 6:], np.tile(home[6:], (len(result.path), 1)))
+    with pytest.raises(ValueError, match=r"unknown arm\(s\) \['middle'\]; known: left, right"):
+        plan_for_arms(cell, checker, ("middle",), home, goal)
