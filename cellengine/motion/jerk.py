@@ -172,8 +172,10 @@ def _build(path: GeometricPath, ref: _Reference, window: float, names: tuple[str
     s, sd, sdd = _filtered(ref, window, times)
     s = np.clip(s, 0.0, path.length)
     q, d1, d2 = path.derivatives(s)
-    qd = d1 * sd[:, None]
-    qdd = d1 * sdd[:, None] + d2 * (sd * sd)[:, None]
+    dof = q.shape[1]
+    speed = np.repeat(sd, dof).reshape(q.shape)  # full shape: faster than (M, 1) columns
+    qd = d1 * speed
+    qdd = d1 * np.repeat(sdd, dof).reshape(q.shape) + d2 * (speed * speed)
     # rest at both ends exactly, not to rounding
     qd[[0, -1]] = 0.0
     qdd[[0, -1]] = 0.0

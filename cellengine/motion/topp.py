@@ -42,7 +42,7 @@ _DENSE_SOLVE = 300
 _HUGE = 1e300
 # Points checked inside every grid step, and the share of the overshoot ratio taken off
 # sdot^2 there (a hair more than the ratio, so that rounds converge).
-STEP_SAMPLES = 15
+STEP_SAMPLES = 3
 STEP_MARGIN = 0.998
 
 
@@ -260,11 +260,13 @@ def _acceleration_mvc(c: FloatArray, d: FloatArray) -> FloatArray:
     bound d_k - c_k x, i.e. (c_k - c_j) x <= d_j + d_k for every ordered pair; for each
     unordered pair one of the two orders binds: x <= (d_j + d_k) / |c_j - c_k|.
     """
+    # rows as contiguous (R, K) arrays: minima over axis 0 are fast, over short rows not
+    ct, dt = np.ascontiguousarray(c.T), np.ascontiguousarray(d.T)
     out = np.full(c.shape[0], np.inf)
     with np.errstate(divide="ignore"):
-        for j in range(c.shape[1] - 1):  # row by row: small arrays (see SpeedPlanner)
-            bound = (d[:, j : j + 1] + d[:, j + 1 :]) / np.abs(c[:, j : j + 1] - c[:, j + 1 :])
-            np.minimum(out, row_min(bound), out=out)
+        for j in range(ct.shape[0] - 1):  # one row against the rest: small arrays
+            bound = (dt[j] + dt[j + 1 :]) / np.abs(ct[j] - ct[j + 1 :])
+            np.minimum(out, bound.min(axis=0), out=out)
     return out
 
 

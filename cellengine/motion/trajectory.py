@@ -62,12 +62,14 @@ def _quintic_coefficients(
     Matching q, qd, qdd at both ends fixes c0..c2 from the start and c3..c5 from the three
     end-point residuals (the closed form of the 3x3 solve).
     """
-    h = np.diff(t)[:, None]
+    # full-shape h: broadcasting an (N-1, 1) column is several times slower
+    h = np.repeat(np.diff(t), q.shape[1]).reshape(q.shape[0] - 1, q.shape[1])
+    hh = h * h
     q0, q1, v0, v1, a0, a1 = q[:-1], q[1:], qd[:-1], qd[1:], qdd[:-1], qdd[1:]
-    c2 = 0.5 * a0 * h * h
+    c2 = 0.5 * a0 * hh
     dq = q1 - q0 - v0 * h - c2
     dv = (v1 - v0 - a0 * h) * h
-    da = (a1 - a0) * h * h
+    da = (a1 - a0) * hh
     c3 = 10.0 * dq - 4.0 * dv + 0.5 * da
     c4 = -15.0 * dq + 7.0 * dv - da
     c5 = 6.0 * dq - 3.0 * dv + 0.5 * da
@@ -215,26 +217,24 @@ class Trajectory:
             zero = np.zeros((0, self.dof))
             return Peaks(zero, zero, zero)
         _, c1, c2, c3, c4, c5 = self._coef
-        h = np.diff(self.t)[:, None]
+        # full-shape h: broadcasting an (N-1, 1) column is several times slower
+        h = np.repeat(np.diff(self.t), self.dof).reshape(c1.shape)
         jerk_end = np.maximum(np.abs(6 * c3), np.abs(6 * c3 + 24 * c4 + 60 * c5))
         with np.errstate(divide="ignore", invalid="ignore"):
             vertex = np.clip(np.where(c5 != 0.0, -c4 / (5.0 * c5), 0.0), 0.0, 1.0)
         jerk_mid = np.abs(6 * c3 + vertex * (24 * c4 + vertex * 60 * c5))
         jerk = np.maximum(jerk_end, jerk_mid) / h**3
         snap = np.maximum(np.abs(24 * c4), np.abs(24 * c4 + 120 * c5)) / h**4
-        vel = np.zeros_like(c1)
-        acc = np.zeros_like(c1)
-        for tau in np.linspace(0.0, 1.0, PEAK_SUBDIVISIONS + 1).tolist():
-            np.maximum(
-                vel,
-                np.abs(c1 + tau * (2 * c2 + tau * (3 * c3 + tau * (4 * c4 + tau * 5 * c5)))),
-                out=vel,
-            )
-            np.maximum(
-                acc, np.abs(2 * c2 + tau * (6 * c3 + tau * (12 * c4 + tau * 20 * c5))), out=acc
-            )
+        # the velocity and acceleration polynomials' coefficients, once
+        v1, v2, v3, v4, v5 = c1, 2 * c2, 3 * c3, 4 * c4, 5 * c5
+        a0, a1, a2, a3 = 2 * c2, 6 * c3, 12 * c4, 20 * c5
+        vel = np.abs(v1)
+        acc = np.abs(a0)
+        for tau in (np.arange(1, PEAK_SUBDIVISIONS + 1) / PEAK_SUBDIVISIONS).tolist():
+            np.maximum(vel, np.abs(v1 + tau * (v2 + tau * (v3 + tau * (v4 + tau * v5)))), out=vel)
+            np.maximum(acc, np.abs(a0 + tau * (a1 + tau * (a2 + tau * a3))), out=acc)
         gap = (h / PEAK_SUBDIVISIONS) ** 2 / 8.0
-        return Peaks(vel / h + jerk * gap, acc / h**2 + snap * gap, jerk)
+        return Peaks(vel / h + jerk * gap, acc / (h * h) + snap * gap, jerk)
 
     def time_scaled(self, factor: float) -> Trajectory:
         """The same motion `factor` times slower (factor > 1) or faster: times stretched,
