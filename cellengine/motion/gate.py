@@ -15,6 +15,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from cellengine.motion.robot import CellModel, Limits
 from cellengine.motion.trajectory import Trajectory
 
 Vec = NDArray[np.float64]
@@ -22,13 +23,6 @@ Vec = NDArray[np.float64]
 SAMPLE_DT = 0.001  # seconds between checked samples
 TOLERANCE = 1e-6  # relative slack on limits, for rounding in the producers
 DISTANCE_EVERY = 10  # the arms' minimum distance is computed on every 10th sample
-
-
-class LimitsLike(Protocol):
-    lower: Vec
-    upper: Vec
-    velocity: Vec
-    acceleration: Vec
 
 
 class Checker(Protocol):
@@ -79,7 +73,7 @@ class GateReport:
 def check_trajectory(
     traj: Trajectory,
     joint_names: Sequence[str],
-    limits: LimitsLike,
+    limits: Limits,
     checker: Checker | None = None,
     arm_distance: ArmDistance | None = None,
     dt: float = SAMPLE_DT,
@@ -115,7 +109,7 @@ def _sample_times(traj: Trajectory, dt: float) -> Vec:
 
 
 def _limits(
-    t: Vec, q: Vec, qd: Vec, qdd: Vec, names: Sequence[str], limits: LimitsLike
+    t: Vec, q: Vec, qd: Vec, qdd: Vec, names: Sequence[str], limits: Limits
 ) -> list[Violation]:
     """The first violation of each kind for each joint (not one per sample)."""
     out = []
@@ -170,3 +164,21 @@ def _arm_distance(
             best = d
     assert best is not None
     return best
+
+
+class CellChecker(Checker, Protocol):
+    def distance(self, q: Vec, between: tuple[str, str] | None = None) -> Distance: ...
+
+
+def check_cell_trajectory(traj: Trajectory, cell: CellModel, checker: CellChecker) -> GateReport:
+    """The gate for a whole cell: its joint order and limits, its collision checker, and the
+    minimum distance between its two arms (when it has two)."""
+    arms = tuple(cell.arms)
+    distance: ArmDistance | None = None
+    if len(arms) == 2:
+        between = (arms[0], arms[1])
+
+        def distance(q: Vec) -> Distance:
+            return checker.distance(q, between)
+
+    return check_trajectory(traj, cell.joint_names, cell.limits, checker, distance)

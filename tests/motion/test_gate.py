@@ -79,3 +79,53 @@ def test_minimum_arm_distance_reported() -> None:
 def test_joint_order_must_match() -> None:
     with pytest.raises(ValueError, match="differ from the model's"):
         check_trajectory(quintic(0.8, 1.0), ("b", "a"), LIMITS)
+
+
+@pytest.fixture(scope="module")
+def cable_cell():  # type: ignore[no-untyped-def]
+    from cellengine.info.load import load_world
+    from cellengine.motion.collision import CollisionChecker
+    from cellengine.motion.robot import build_cell_model
+    from cellengine.motion.scene import build_scene
+    from tests.conftest import CELLS
+
+    world = load_world(CELLS / "cable_routing" / "cell.yaml")
+    cell = build_cell_model(world)
+    return cell, CollisionChecker(build_scene(cell, world))
+
+
+def test_planned_and_timed_move_passes_the_gate(cable_cell) -> None:  # type: ignore[no-untyped-def]
+    from cellengine.motion.gate import check_cell_trajectory
+    from cellengine.motion.timing import time_parameterize
+    from cellengine.motion.transit import plan_for_arms
+
+    cell, checker = cable_cell
+    home = cell.join({n: a.home for n, a in cell.arms.items()})
+    goal = home.copy()
+    goal[[0, 6]] = [-0.9, 0.9]
+    path = plan_for_arms(cell, checker, ("left", "right"), home, goal, seed=1).path
+    assert path is not None
+    waypoints = np.vstack([path[0], (path[0] + path[-1]) / 2, path[-1]]) if len(path) == 2 else path
+    traj = time_parameterize(
+        waypoints, cell.limits, jerk=10 * cell.limits.acceleration, joint_names=cell.joint_names
+    )
+    report = check_cell_trajectory(traj, cell, checker)
+    assert report.ok, [str(v) for v in report.violations]
+    assert report.min_arm_distance is not None and report.min_arm_distance > 0
+    assert report.closest_pair is not None and report.closest_pair[0].startswith("left/")
+
+
+def test_a_move_into_the_table_is_stopped_at_the_gate(cable_cell) -> None:  # type: ignore[no-untyped-def]
+    from cellengine.motion.gate import check_cell_trajectory
+    from cellengine.motion.timing import ptp
+
+    cell, checker = cable_cell
+    home = cell.join({n: a.home for n, a in cell.arms.items()})
+    down = home.copy()
+    down[1:3] = [0.6, 0.0]  # left upper arm tilted 0.6 rad below level: into the table
+    assert checker.in_collision(down)
+    traj = ptp(home, down, cell.limits, joint_names=cell.joint_names)
+    report = check_cell_trajectory(traj, cell, checker)
+    (v,) = report.violations
+    assert v.kind == "collision" and "table" in v.what and v.what.startswith("left/")
+    assert 0 < v.time < traj.duration
