@@ -158,7 +158,7 @@ def _problem(
     planner = SpeedPlanner(
         path, lim.velocity, lim.acceleration, grid_points or grid_points_for(len(path.knots))
     )
-    _check_path_in_range(planner, lim)
+    _check_path_in_range(path, lim)
     tcp_ds = None
     if tcp is not None:
         if not (np.isfinite(tcp.speed) and tcp.speed > 0.0):
@@ -174,16 +174,18 @@ def _problem(
     )
 
 
-def _check_path_in_range(planner: SpeedPlanner, lim: _Resolved) -> None:
+def _check_path_in_range(path: SplinePath, lim: _Resolved) -> None:
     """A cubic spline can bulge past the waypoints: refuse a path that leaves a joint's
-    range rather than time it."""
-    outside = (planner.q < lim.lower) | (planner.q > lim.upper)
+    range rather than time it (each piece's extremes, exactly)."""
+    low, high = path.extremes()
+    outside = (low < lim.lower) | (high > lim.upper)
     if np.any(outside):
-        i, j = np.argwhere(outside)[0]
+        k, j = np.argwhere(outside)[0]
+        value = low[k, j] if low[k, j] < lim.lower[j] else high[k, j]
         raise ValueError(
             f"the spline through the waypoints leaves joint {j}'s range "
-            f"[{lim.lower[j]:.6g}, {lim.upper[j]:.6g}] at s = {planner.s[i]:.4g} "
-            f"(q = {planner.q[i, j]:.6g}); add waypoints there"
+            f"[{lim.lower[j]:.6g}, {lim.upper[j]:.6g}] between waypoints {k} and {k + 1} "
+            f"(reaching {value:.6g}); add waypoints there"
         )
 
 

@@ -117,6 +117,21 @@ class SplinePath:
         """Parameter values (from 0) of the inner waypoints, where d3q/ds3 jumps."""
         return np.asarray(self.knots[1:-1] - self.knots[0])
 
+    def extremes(self) -> tuple[FloatArray, FloatArray]:
+        """Least and greatest value of each joint over each cubic piece, (N-1, n) each:
+        the ends and the roots of dq/ds inside the piece, exactly."""
+        c0, c1, c2, c3 = self._coef
+        width = np.repeat(np.diff(self.knots), self.dof).reshape(c0.shape)
+        values = [c0, c0 + width * (c1 + width * (c2 + width * c3))]
+        # dq/ds = c1 + 2 c2 x + 3 c3 x^2 = 0
+        a, b = 3.0 * c3, 2.0 * c2
+        with np.errstate(divide="ignore", invalid="ignore"):
+            root = np.sqrt(np.maximum(b * b - 4.0 * a * c1, 0.0))
+            for x in ((-b + root) / (2.0 * a), (-b - root) / (2.0 * a), -c1 / b):
+                x = np.where(np.isfinite(x), np.clip(x, 0.0, width), 0.0)
+                values.append(c0 + x * (c1 + x * (c2 + x * c3)))
+        return np.minimum.reduce(values), np.maximum.reduce(values)
+
     def derivatives(self, s: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         q, d1, d2, _ = self.derivatives3(s)
         return q, d1, d2

@@ -234,7 +234,7 @@ def test_a_spline_leaving_the_joint_range_is_refused() -> None:
     limits = JointLimits(np.full(2, -1.0), np.full(2, 1.0), np.full(2, 1.0), np.full(2, 1.0))
     # a sharp turn next to the bound: the spline bulges past it
     wp = np.array([[0.0, 0.0], [0.5, 0.0], [0.98, 0.9], [0.5, 0.95], [0.0, 0.9]])
-    with pytest.raises(ValueError, match="leaves joint 0's range"):
+    with pytest.raises(ValueError, match=r"leaves joint 0's range .* between waypoints 1 and 2"):
         time_optimal(wp, limits)
 
 
@@ -335,3 +335,51 @@ def test_retargeter_refuses_a_target_outside_the_range() -> None:
         gen.set_target([7.0, 0, 0, 0, 0, 0])
     with pytest.raises(ValueError, match="dt must be positive"):
         retargeter(np.zeros(6), ur_limits(), dt=0.0)
+
+
+def test_spline_extremes_are_exact() -> None:
+    wp = random_walk(11, count=8)
+    path = SplinePath(wp)
+    low, high = path.extremes()
+    knots = path.knots - path.knots[0]
+    for k in range(7):
+        piece = path.derivatives(np.linspace(knots[k], knots[k + 1], 100_001))[0]
+        assert np.all(piece.min(axis=0) >= low[k] - 1e-12)
+        assert np.all(piece.max(axis=0) <= high[k] + 1e-12)
+        np.testing.assert_allclose(piece.min(axis=0), low[k], atol=1e-9)
+        np.testing.assert_allclose(piece.max(axis=0), high[k], atol=1e-9)
+
+
+def test_a_solve_after_new_caps_equals_one_from_scratch() -> None:
+    """SpeedPlanner re-solves only what changed caps reach: it must not change a thing."""
+    from cellengine.motion.topp import SpeedPlanner
+
+    rng = np.random.default_rng(12)
+    path = SplinePath(random_walk(12))
+    limits = ur_limits()
+    planner = SpeedPlanner(path, limits.velocity, limits.acceleration, 300)
+    profile = planner.solve()
+    cap = np.full(planner.s.size, np.inf)
+    for rounds in range(6):
+        spots = rng.choice(planner.s.size, size=rng.integers(1, 30), replace=False)
+        cap[spots] = np.minimum(cap[spots], profile.x[spots] * rng.uniform(0.3, 1.0, spots.size))
+        if rounds == 3:
+            cap = cap * 1.1  # and caps that rise
+        profile = planner.solve(cap)
+        fresh = SpeedPlanner(path, limits.velocity, limits.acceleration, 300).solve(cap)
+        np.testing.assert_array_equal(profile.x, fresh.x)
+        np.testing.assert_array_equal(profile.u, fresh.u)
+
+
+def test_time_scaled_trajectory_is_the_same_motion_slower() -> None:
+    traj = time_optimal(random_walk(13, count=8), ur_limits())
+    slow = traj.time_scaled(2.0)
+    assert slow.duration == pytest.approx(2 * traj.duration)
+    times = np.linspace(0.0, traj.duration, 777)
+    q, qd, qdd = traj.sample(times)
+    q2, qd2, qdd2 = slow.sample(2 * times)
+    np.testing.assert_allclose(q2, q, atol=1e-12)
+    np.testing.assert_allclose(qd2, qd / 2, atol=1e-12)
+    np.testing.assert_allclose(qdd2, qdd / 4, atol=1e-12)
+    with pytest.raises(ValueError, match="factor must be"):
+        traj.time_scaled(0.0)
