@@ -13,6 +13,10 @@ Entry points:
 
 Every trajectory returned is on the path (its samples lie on the spline), starts and ends
 at rest, and stays within the limits at any sampling rate (Trajectory.peaks bounds).
+
+"No jerk limit" means accelerations ramp over one 2 ms servo period (otg.UNLIMITED_JERK_RAMP):
+a Trajectory is C2, a bang-bang profile is not. With jerk limits j, the on-path filter's
+window is 2 a / j (an acceleration flip from +a to -a then ramps at j).
 """
 
 from __future__ import annotations
