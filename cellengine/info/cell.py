@@ -35,6 +35,7 @@ class Robot(Frozen):
     tool: str | None = None
     # angle units here; build_cell_model rescales prismatic axes to the length unit
     home: tuple[Angle, ...] | None = None
+    srdf: str | None = None  # an SRDF whose <disable_collisions> pairs are never checked
 
 
 class Tool(Frozen):

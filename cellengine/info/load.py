@@ -61,6 +61,12 @@ def _check_cell(cell: Cell, doc: YamlDoc) -> list[Problem]:
                 name,
                 "tool",
             )
+        if robot.srdf is not None:
+            try:
+                where = _at(doc, ("robots", name, "srdf"))
+                resolve_inside(doc.file.parent, robot.srdf, doc.file, *where)
+            except InputError as e:
+                out.extend(e.problems)
         if isinstance(robot.model, UrdfModel):
             urdf = ("robots", name, "model", "urdf")
             try:

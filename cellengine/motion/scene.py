@@ -60,6 +60,7 @@ from numpy.typing import NDArray
 from cellengine.errors import InputError
 from cellengine.geometry import Mat
 from cellengine.info.cell import Obstacle
+from cellengine.info.files import resolve_inside
 from cellengine.info.xmlsafe import parse_xml
 from cellengine.motion.robot import TOOL_GEOMETRY, Arm, CellModel
 from cellengine.world import World
@@ -221,6 +222,8 @@ def build_scene(
     """The scene of ``world``'s cell. ``srdf`` maps a robot's name to the link pairs of its
     SRDF (:func:`load_srdf`, link names as in its URDF); ``allowed`` are object-name pairs
     never to check."""
+    if srdf is None:
+        srdf = srdf_of(world)
     statics, notes = environment(world)
     links = _objects_of(cell)
     fixed: dict[Pair, str] = {}
@@ -555,6 +558,16 @@ def _min_width(shape: Any) -> float:
 
 
 # ---------------------------------------------------------------------------------- SRDF
+
+
+def srdf_of(world: World) -> dict[str, frozenset[Pair]]:
+    """The SRDF pairs of each robot whose cell.yaml entry names an ``srdf`` file."""
+    root = world.cell_file.parent
+    return {
+        name: load_srdf(resolve_inside(root, robot.srdf, world.cell_file))
+        for name, robot in world.cell.robots.items()
+        if robot.srdf is not None
+    }
 
 
 def load_srdf(path: Path) -> frozenset[Pair]:

@@ -545,3 +545,26 @@ def test_motion_bounds_hold(cell: CellModel, scene: CollisionScene) -> None:
             M = gdata.oMg[tool]
             moved.append(corners @ M.rotation.T + M.translation)
         assert np.linalg.norm(moved[1] - moved[0], axis=1).max() <= scene.motion[p] @ np.abs(dq)
+
+
+def test_srdf_named_in_cell_yaml(tmp_path: Path) -> None:
+    """robots.<name>.srdf in cell.yaml: read from inside the cell folder by build_scene."""
+    import shutil
+
+    from cellengine.info.load import load_world as load
+    from cellengine.motion.robot import build_cell_model as build
+
+    src = CELLS / "cable_routing"
+    shutil.copytree(src, tmp_path / "cell")
+    (tmp_path / "cell" / "left.srdf").write_text(
+        '<robot name="ur5e"><disable_collisions link1="upper_arm_link" link2="tool"/></robot>'
+    )
+    cell_yaml = tmp_path / "cell" / "cell.yaml"
+    text = cell_yaml.read_text().replace(
+        "    tool: cable_gripper\n", "    tool: cable_gripper\n    srdf: left.srdf\n", 1
+    )
+    cell_yaml.write_text(text)
+    w = load(cell_yaml)
+    scene = build_scene(build(w), w)
+    assert scene.acm.reason("left/tool", "left/upper_arm_link") == "srdf"
+    assert ("right/tool", "right/upper_arm_link") in scene.checked
