@@ -63,6 +63,7 @@ from cellengine.info.cell import Obstacle
 from cellengine.info.files import resolve_inside
 from cellengine.info.xmlsafe import parse_xml
 from cellengine.motion.robot import TOOL_GEOMETRY, Arm, CellModel
+from cellengine.motion.urdf import coal_convex
 from cellengine.world import World
 
 Vec = NDArray[np.float64]
@@ -520,13 +521,7 @@ def _convex(mesh: trimesh.Trimesh) -> Any | None:
         return None
     if len(hull.faces) < 4:
         return None
-    points = coal.StdVec_Vec3s()
-    for v in np.asarray(hull.vertices, dtype=float):
-        points.append(v)
-    triangles = coal.StdVec_Triangle()
-    for a, b, c in np.asarray(hull.faces, dtype=int):
-        triangles.append(coal.Triangle(int(a), int(b), int(c)))
-    return coal.Convex(points, triangles)
+    return coal_convex(hull)
 
 
 def _enclosure_notes(cell: CellModel, statics: Sequence[StaticShape]) -> list[str]:

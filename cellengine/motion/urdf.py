@@ -428,6 +428,11 @@ def _convex_hull(path: Path, ref: str, scale: Sequence[float], urdf: Path, line:
         hull = trimesh.Trimesh(vertices=vertices).convex_hull
     except Exception as e:  # qhull on degenerate input
         raise InputError.at(f"mesh '{ref}' cannot be used: {_one_line(e)}", urdf, line) from None
+    return coal_convex(hull)
+
+
+def coal_convex(hull: trimesh.Trimesh) -> Any:
+    """A coal.Convex of a convex trimesh (its vertices and triangles as they are)."""
     points = coal.StdVec_Vec3s()
     for v in np.asarray(hull.vertices, dtype=float):
         points.append(v)
