@@ -1,0 +1,1 @@
+"""Drivers: one interface and one lifecycle; the simulated cell by default."""

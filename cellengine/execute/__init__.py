@@ -1,0 +1,1 @@
+"""The executor: segments to timed, validated dual-arm programs (split, sync, async)."""

@@ -1,0 +1,108 @@
+"""What a plan compiles to: pure data, no I/O, no driver.
+
+Skills turn plan steps into :class:`Segment` s (fingertip poses in the cell frame, gripper
+events, couplings between the arms); the executor turns segments into a :class:`Program`
+(timed joint trajectories of both arms on one time axis, with gripper events); drivers
+play a program; the report describes it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from cellengine.motion.trajectory import Trajectory
+
+Poses = NDArray[np.float64]  # (k, 4, 4) T_cell_tcp
+
+
+@dataclass(frozen=True)
+class GripperEvent:
+    """A gripper changes mode (a name in the tool's ``jaw`` table: open, slide, grasp...)
+    and, with it, what it holds: ``holds`` names the object held from then on (None: nothing)."""
+
+    arm: str
+    mode: str
+    holds: str | None = None
+
+
+@dataclass(frozen=True)
+class ArmPath:
+    """One arm's motion in a segment.
+
+    ``cartesian``: the TCP follows ``poses`` (k >= 2, already interpolated: linear or circular,
+    within the skill's step sizes), starting where the arm is. ``transit``: a free-space move
+    to ``poses[-1]`` (k = 1), any collision-free joint path.
+    """
+
+    arm: str
+    kind: Literal["cartesian", "transit"]
+    poses: Poses
+
+    def __post_init__(self) -> None:
+        p = np.array(self.poses, dtype=float)
+        if p.ndim != 3 or p.shape[1:] != (4, 4) or len(p) == 0:
+            raise ValueError(f"poses must have shape (k, 4, 4), got {p.shape}")
+        if self.kind == "cartesian" and len(p) < 2:
+            raise ValueError("a cartesian path needs at least 2 poses")
+        if self.kind == "transit" and len(p) != 1:
+            raise ValueError("a transit move has exactly 1 goal pose")
+        p.setflags(write=False)
+        object.__setattr__(self, "poses", p)
+
+
+@dataclass(frozen=True)
+class Segment:
+    """A piece of one step during which the arms move together (or one arm alone).
+
+    ``before`` events happen at the start of the segment, ``after`` events at its end.
+    ``closed_chain`` = (leader, follower): the follower keeps its pose relative to the
+    leader (both hands on one object). ``keep_distance`` = two arms whose fingertips must
+    stay at a constant distance (a taut cable) throughout; the executor checks it.
+    """
+
+    step: int  # index of the plan step
+    label: str  # what it does, in plan terms: "RouteCable guide2: lift"
+    paths: tuple[ArmPath, ...] = ()
+    before: tuple[GripperEvent, ...] = ()
+    after: tuple[GripperEvent, ...] = ()
+    closed_chain: tuple[str, str] | None = None
+    keep_distance: tuple[str, str] | None = None
+    # what the step promises at the end of this segment, for reports and tests, e.g.
+    # {"guide": "routing.guide2", "slot": [x, y, z]}
+    facts: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
+
+    def arms(self) -> tuple[str, ...]:
+        return tuple(p.arm for p in self.paths)
+
+
+@dataclass(frozen=True)
+class TimedEvent:
+    time: float  # seconds from the program's start
+    event: GripperEvent
+
+
+@dataclass(frozen=True)
+class CompiledSegment:
+    """A segment as timed joint motion of the whole cell (every arm's joints, cell order)."""
+
+    segment: Segment
+    strategy: str  # split | sync | async
+    trajectory: Trajectory  # times from the program's start
+    report: Mapping[str, Any]  # fraction, planning time, durations, min distance, checks
+
+
+@dataclass(frozen=True)
+class Program:
+    joint_names: tuple[str, ...]
+    segments: tuple[CompiledSegment, ...]
+    events: tuple[TimedEvent, ...]
+
+    @property
+    def duration(self) -> float:
+        return self.segments[-1].trajectory.end_time if self.segments else 0.0
