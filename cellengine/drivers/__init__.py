@@ -1,1 +1,32 @@
-"""Drivers: one interface and one lifecycle; the simulated cell by default."""
+"""Drivers: one interface and one lifecycle; the simulated cell by default.
+
+- :mod:`.lifecycle`: the states and transitions every driver follows.
+- :mod:`.base`: :class:`Driver`, the interface, with the shared checks.
+- :mod:`.sim`: :class:`SimDriver`, the simulated cell (with fault injection for tests).
+- :mod:`.record`: :class:`Recorder`, what was sent and what happened, as plain data.
+- :mod:`.registry`: ``DRIVERS`` and :func:`make_driver`.
+"""
+
+from cellengine.drivers.base import Driver, GripperState
+from cellengine.drivers.fault import DriverFault, Fault, Refused
+from cellengine.drivers.layout import CellLayout
+from cellengine.drivers.lifecycle import LifecycleError, State
+from cellengine.drivers.record import Played, Recorder
+from cellengine.drivers.registry import DRIVERS, make_driver
+from cellengine.drivers.sim import SimDriver
+
+__all__ = [
+    "DRIVERS",
+    "CellLayout",
+    "Driver",
+    "DriverFault",
+    "Fault",
+    "GripperState",
+    "LifecycleError",
+    "Played",
+    "Recorder",
+    "Refused",
+    "SimDriver",
+    "State",
+    "make_driver",
+]

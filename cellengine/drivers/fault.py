@@ -1,0 +1,52 @@
+"""What went wrong in a driver, as data (:class:`Fault`), and the two ways a driver says no.
+
+- :class:`DriverFault`: something failed while the driver was working (an arm stopped
+  following, a gripper did not reach its mode, a connection dropped). Both arms are
+  stopped and the driver is in its error state; it carries the :class:`Fault`.
+- :class:`Refused`: a request was turned down before anything was sent (the arms are not
+  where the segment starts, an event names an unknown gripper mode). Nothing moved and the
+  driver's state is unchanged.
+
+Both are :class:`~cellengine.errors.DriverError` s (exit code 3) whose one problem is
+located at the driver: printed as "sim driver: <message>".
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import Any, Literal
+
+from cellengine.errors import DriverError, Problem
+
+FaultKind = Literal["tracking", "gripper", "connection", "interrupted", "internal"]
+
+
+@dataclass(frozen=True)
+class Fault:
+    """One fault: what (``kind``), where (arm, joint), when (program time, s), the value that
+    gave it away (a joint's deviation, the mode a gripper stayed in) and the full message."""
+
+    kind: FaultKind
+    message: str
+    arm: str | None = None
+    joint: str | None = None
+    time: float | None = None
+    value: float | str | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+class DriverFault(DriverError):
+    """A fault during operation: the driver is in its error state."""
+
+    def __init__(self, kind: str, fault: Fault) -> None:
+        self.fault = fault
+        super().__init__(Problem(fault.message, f"{kind} driver"))
+
+
+class Refused(DriverError):
+    """A request refused before anything was sent; the driver's state is unchanged."""
+
+    def __init__(self, kind: str, message: str) -> None:
+        super().__init__(Problem(message, f"{kind} driver"))
