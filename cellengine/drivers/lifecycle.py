@@ -40,11 +40,11 @@ TRANSITIONS: dict[str, tuple[frozenset[State], State]] = {
     "configure": (frozenset({State.UNCONFIGURED}), State.INACTIVE),
     "activate": (frozenset({State.INACTIVE}), State.ACTIVE),
     "deactivate": (frozenset({State.ACTIVE}), State.INACTIVE),
+    "recover": (frozenset({State.ERROR}), State.INACTIVE),
     "finalize": (
         frozenset({State.UNCONFIGURED, State.INACTIVE, State.ACTIVE, State.ERROR}),
         State.FINALIZED,
     ),
-    "recover": (frozenset({State.ERROR}), State.INACTIVE),
 }
 # requests that are no-ops in their target state
 IDEMPOTENT: dict[str, State] = {
@@ -59,6 +59,12 @@ OPERATIONS: dict[str, frozenset[State]] = {
     "joint_state": frozenset({State.INACTIVE, State.ACTIVE, State.ERROR}),
     "gripper": frozenset({State.INACTIVE, State.ACTIVE, State.ERROR}),
     "read_mass": frozenset({State.INACTIVE, State.ACTIVE}),
+}
+# how refusals name the operations that are not transitions
+DISPLAY = {
+    "joint_state": "read joint states",
+    "gripper": "read grippers",
+    "read_mass": "read masses",
 }
 # states in which the driver holds a configuration (a connection, the arms' state)
 CONFIGURED = frozenset({State.INACTIVE, State.ACTIVE})
@@ -78,15 +84,17 @@ def allowed_from(state: State) -> tuple[str, ...]:
 
 def _names(states: Iterable[State]) -> str:
     order = list(State)
-    return " or ".join(f"'{s}'" for s in sorted(states, key=order.index))
+    names = [f"'{s}'" for s in sorted(states, key=order.index)]
+    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " or " + names[-1]
 
 
 def refusal(op: str, state: State, needs: Iterable[State]) -> str:
-    """The message of an illegal request, e.g. "cannot execute: the driver is 'inactive'
-    (execute needs 'active'); allowed from 'inactive': activate, finalize"."""
+    """The message of an illegal request, e.g. "cannot execute: the driver is 'inactive',
+    not 'active'; allowed from 'inactive': activate, finalize"."""
     allowed = ", ".join(allowed_from(state)) or "nothing"
+    what = DISPLAY.get(op, op)
     return (
-        f"cannot {op}: the driver is '{state}' ({op} needs {_names(needs)}); "
+        f"cannot {what}: the driver is '{state}', not {_names(needs)}; "
         f"allowed from '{state}': {allowed}"
     )
 

@@ -196,6 +196,7 @@ class SimDriver(Driver):
         traj = segment.trajectory
         ticks = servo_ticks(traj.start_time, traj.end_time, self.servo_period)
         commanded = np.atleast_2d(traj.sample(ticks)[0])
+        commanded[-1] = traj.q[-1]  # the end point itself, not the polynomial's rounding of it
         log = _Log(ticks, commanded)
         clock: Clock = RealClock() if self.realtime else SimulatedClock()
         fault = self._play(clock, log, list(events))

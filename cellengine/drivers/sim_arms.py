@@ -37,7 +37,7 @@ class SimArms:
     def step(self, command: FloatArray, frozen: BoolArray) -> FloatArray:
         """One servo period toward ``command``; returns the measured q (a copy)."""
         self.command = np.array(command, dtype=np.float64)
-        moved = self.q + self.gain * (self.command - self.q)
+        moved = self.command if self.gain == 1.0 else self.q + self.gain * (self.command - self.q)
         self.q = np.where(frozen, self.q, moved)
         return self.q.copy()
 

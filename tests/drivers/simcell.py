@@ -56,6 +56,7 @@ def quintic(q0: ArrayLike, q1: ArrayLike, duration: float, t0: float = 0.0) -> T
     pos = a + d * (10 * s**3 - 15 * s**4 + 6 * s**5)
     vel = d * (30 * s**2 - 60 * s**3 + 30 * s**4) / duration
     acc = d * (60 * s - 180 * s**2 + 120 * s**3) / duration**2
+    pos[0], pos[-1] = a, b  # exactly
     return Trajectory(NAMES, t + t0, pos, vel, acc)
 
 
