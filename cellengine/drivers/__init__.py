@@ -5,12 +5,14 @@
 - :mod:`.sim`: :class:`SimDriver`, the simulated cell (with fault injection for tests).
 - :mod:`.record`: :class:`Recorder`, what was sent and what happened, as plain data.
 - :mod:`.registry`: ``DRIVERS`` and :func:`make_driver`.
+- :mod:`.play`: a whole Program on a driver, each event with its segment.
 """
 
 from cellengine.drivers.base import Driver, GripperState
 from cellengine.drivers.fault import DriverFault, Fault, Refused
 from cellengine.drivers.layout import CellLayout
 from cellengine.drivers.lifecycle import LifecycleError, State
+from cellengine.drivers.play import play, segment_events
 from cellengine.drivers.record import Played, Recorder
 from cellengine.drivers.registry import DRIVERS, make_driver
 from cellengine.drivers.sim import SimDriver
@@ -29,4 +31,6 @@ __all__ = [
     "SimDriver",
     "State",
     "make_driver",
+    "play",
+    "segment_events",
 ]

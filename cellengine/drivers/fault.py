@@ -13,18 +13,33 @@ located at the driver: printed as "sim driver: <message>".
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import Any, Literal
 
 from cellengine.errors import DriverError, Problem
 
-FaultKind = Literal["tracking", "gripper", "connection", "interrupted", "internal"]
+# tracking: a joint deviates from its command; gripper: a mode not reached; connection: lost;
+# protective_stop, emergency_stop: reported by a controller; overrun: a segment took longer
+# than allowed; interrupted: the user stopped it; internal: a bug (the exception's text)
+FaultKind = Literal[
+    "tracking",
+    "gripper",
+    "connection",
+    "protective_stop",
+    "emergency_stop",
+    "overrun",
+    "interrupted",
+    "internal",
+]
 
 
 @dataclass(frozen=True)
 class Fault:
     """One fault: what (``kind``), where (arm, joint), when (program time, s), the value that
-    gave it away (a joint's deviation, the mode a gripper stayed in) and the full message."""
+    gave it away (a joint's deviation, the mode a gripper stayed in), the full message, and
+    whatever else a driver knows (``details``: e.g. a controller's safety status bits)."""
 
     kind: FaultKind
     message: str
@@ -32,9 +47,18 @@ class Fault:
     joint: str | None = None
     time: float | None = None
     value: float | str | None = None
+    details: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}), hash=False)
 
     def to_json(self) -> dict[str, Any]:
-        return asdict(self)
+        return {
+            "kind": self.kind,
+            "message": self.message,
+            "arm": self.arm,
+            "joint": self.joint,
+            "time": self.time,
+            "value": self.value,
+            "details": dict(self.details),
+        }
 
 
 class DriverFault(DriverError):

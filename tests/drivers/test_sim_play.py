@@ -16,10 +16,13 @@ from cellengine.drivers import (
     SimDriver,
     State,
     make_driver,
+    play,
+    segment_events,
 )
 from cellengine.drivers.record import Played, Sent, Transition
 from cellengine.drivers.sim import servo_ticks
 from cellengine.errors import EXIT_DRIVER
+from cellengine.program import Program
 from tests.drivers.simcell import (
     JOINTS,
     NAMES,
@@ -76,6 +79,33 @@ def test_program_ends_at_its_last_point_with_events_in_order() -> None:
         (1.6, "left", "open", None, True),
     ]
     assert d.state is State.ACTIVE and all(p.completed for p in played)
+
+
+def as_program() -> Program:
+    segments = [seg for seg, _ in program()]
+    events = [e for _, evs in program() for e in evs]
+    return Program(NAMES, tuple(segments), tuple(events))  # type: ignore[arg-type]
+
+
+def test_a_whole_program_plays_with_each_event_in_its_segment() -> None:
+    prog = as_program()
+    assert [[e.time for e in evs] for evs in segment_events(prog)] == [
+        [0.0, 0.0, 1.0],  # 1.0: the first segment ends there, the grasp goes with it
+        [],
+        [1.3, 1.6],
+    ]
+    d = active()
+    played = play(d, prog)
+    assert len(played) == 3 and np.array_equal(d.joint_state(), B)
+    assert d.gripper("right") == GripperState("grasp", "cable1")
+    assert d.gripper("left") == GripperState("open", None)
+
+
+def test_an_event_outside_every_segment_is_a_program_error() -> None:
+    prog = as_program()
+    late = Program(prog.joint_names, prog.segments, (*prog.events, event(2.0, "left", "open")))
+    with pytest.raises(ValueError, match=r"event 'open' of arm 'left' at t = 2\.000 s is in no"):
+        segment_events(late)
 
 
 def test_ticks_are_the_servo_period_and_commands_the_trajectory() -> None:
