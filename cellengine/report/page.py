@@ -1,0 +1,152 @@
+"""report.html: one self-contained page (inline CSS and JS, the data as embedded JSON, system
+fonts; nothing is fetched). :func:`render_page` fills the template."""
+
+from __future__ import annotations
+
+import html
+import json
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from cellengine.report.page_css import CSS
+from cellengine.report.page_js import JS
+
+# Catches every error of the page's own script (which runs after it) into the DOM, so a
+# headless browser can read them with --dump-dom.
+GUARD = r"""
+(function () {
+  function fail(msg) {
+    var e = document.getElementById('errors');
+    e.hidden = false;
+    e.textContent += msg + '\n';
+    document.body.dataset.status = 'error';
+  }
+  window.addEventListener('error', function (ev) {
+    fail('error: ' + ev.message + ' (line ' + ev.lineno + ':' + ev.colno + ')');
+  });
+  window.addEventListener('unhandledrejection', function (ev) {
+    fail('unhandled rejection: ' + ev.reason);
+  });
+  window.ceFail = fail;
+})();
+"""
+
+BODY = r"""
+<header>
+  <h1 id="title"></h1><span class="sub" id="subtitle"></span>
+  <div class="chips" id="chips"></div>
+</header>
+<div class="wrap">
+  <div class="row1">
+    <section class="panel">
+      <div id="view-wrap">
+        <canvas id="view" aria-label="3D replay of the cell"></canvas>
+        <div class="hud" id="hud-step"></div>
+        <div class="hud" id="hud-legend"></div>
+        <div class="hud" id="hud-help">drag: orbit &middot; shift/right-drag: pan &middot;
+          wheel: zoom &middot; double-click: reset</div>
+      </div>
+      <div class="controls">
+        <button id="play" title="play / pause (space)">&#9654; Play</button>
+        <input type="range" id="slider" min="0" max="1" step="0.001" value="0"
+          aria-label="time">
+        <span id="clock"></span>
+        <select id="speed" title="playback speed">
+          <option value="0.25">0.25&times;</option><option value="0.5">0.5&times;</option>
+          <option value="1" selected>1&times;</option><option value="2">2&times;</option>
+          <option value="4">4&times;</option>
+        </select>
+        <button id="btn-trails" class="on" title="fingertip paths">paths</button>
+        <button id="btn-keys" title="keypoints">keypoints</button>
+        <button id="btn-wire" title="static meshes as wireframe">wire</button>
+        <button id="btn-reset" title="reset the view">view</button>
+      </div>
+    </section>
+    <aside class="panel" id="now"></aside>
+  </div>
+  <section class="panel">
+    <h2>Step timeline</h2>
+    <div id="timeline"></div>
+  </section>
+  <section class="panel">
+    <h2>Joints</h2>
+    <div class="plots" id="plots"></div>
+  </section>
+  <section class="panel">
+    <h2>Steps and segments</h2>
+    <div style="overflow-x:auto"><table id="steps"></table></div>
+  </section>
+  <section class="panel" id="details-panel" hidden>
+    <h2>Run</h2>
+    <dl class="kv" id="details"></dl>
+  </section>
+</div>
+"""
+
+TEMPLATE = (
+    "<!DOCTYPE html>\n<html lang='en'>\n<head>\n<meta charset='utf-8'>\n"
+    "<meta name='viewport' content='width=device-width, initial-scale=1'>\n"
+    "<title>__CE_TITLE__</title>\n<style>"
+    + CSS
+    + "</style>\n</head>\n<body data-status='loading'>\n<pre id='errors' hidden></pre>\n"
+    + "<script>"
+    + GUARD
+    + "</script>\n"
+    + BODY
+    + "<script type='application/json' id='ce-data'>__CE_DATA__</script>\n<script>"
+    + JS
+    + "</script>\n</body>\n</html>\n"
+)
+
+
+# Per-sample series are embedded as integer deltas between consecutive samples (a third of the
+# size of decimal text): value = (sum of the deltas so far, per stride position) / scale.
+POSITION_SCALE = 10_000  # 0.1 mm (replay_data rounds positions to it already)
+JOINT_SCALE = 100_000  # 1e-5 rad, rad/s
+TIME_SCALE = 10_000  # 0.1 ms
+
+
+def pack(values: Sequence[float], stride: int, scale: int) -> dict[str, Any]:
+    """A flat series of ``stride`` numbers per sample as integer deltas along the samples."""
+    a = np.rint(np.asarray(values, dtype=float).reshape(-1, stride) * scale).astype(np.int64)
+    delta = np.vstack([a[:1], np.diff(a, axis=0)]) if len(a) else a
+    return {"scale": scale, "stride": stride, "delta": delta.ravel().tolist()}
+
+
+def unpack(packed: Mapping[str, Any]) -> NDArray[np.float64]:
+    """Inverse of :func:`pack` (what the page does at load), flat."""
+    stride, scale = int(packed["stride"]), float(packed["scale"])
+    delta = np.asarray(packed["delta"], dtype=np.int64).reshape(-1, stride)
+    return (np.cumsum(delta, axis=0) / scale).ravel()
+
+
+def pack_replay(replay: Mapping[str, Any]) -> dict[str, Any]:
+    """``replay`` with its per-sample series packed (static meshes stay as they are)."""
+    out = dict(replay)
+    out["times"] = pack(replay["times"], 1, TIME_SCALE)
+    out["q"] = [pack(s, 1, JOINT_SCALE) for s in replay["q"]]
+    out["qd"] = [pack(s, 1, JOINT_SCALE) for s in replay["qd"]]
+    out["tcp"] = {arm: pack(v, 3, POSITION_SCALE) for arm, v in replay["tcp"].items()}
+    out["links"] = [
+        {**link, "points": pack(link["points"], link["stride"], POSITION_SCALE)}
+        for link in replay["links"]
+    ]
+    if replay.get("arm_distance") is not None:
+        out["arm_distance"] = pack(replay["arm_distance"], 1, POSITION_SCALE)
+    return out
+
+
+def embed_json(data: Any) -> str:
+    """JSON safe inside a <script> element: '<' written as \\u003c, so no '</script>' or
+    '<!--' can appear; strict (no NaN)."""
+    text = json.dumps(data, separators=(",", ":"), allow_nan=False, ensure_ascii=False)
+    return text.replace("<", "\\u003c").replace("\u2028", "\\u2028").replace("\u2029", "\\u2029")
+
+
+def render_page(report: Mapping[str, Any], replay: Mapping[str, Any], title: str) -> str:
+    data = embed_json({"report": report, "replay": pack_replay(replay), "title": title})
+    head, _, tail = TEMPLATE.partition("__CE_DATA__")
+    return head.replace("__CE_TITLE__", html.escape(title)) + data + tail

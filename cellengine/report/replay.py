@@ -1,0 +1,321 @@
+"""What report.html draws: the cell's static meshes, every arm link's shape and both TCPs
+sampled along the program, joint positions and velocities, the step timeline, gripper events
+and when the cable runs between the hands.
+
+Everything is in the cell frame, metres and radians. Per sample arrays are flat lists, one per
+link (``stride`` numbers per sample), so the page indexes them without nesting:
+
+- ``capsule`` and ``cylinder``: the two end points of the axis (6 numbers) and ``radius``;
+- ``sphere``: the centre (3) and ``radius``;
+- ``box``: the centre and the three half-axis vectors (12); any other shape is drawn as its
+  local bounding box.
+
+A link fixed in the cell (an arm's base) has one sample (``fixed``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import coal
+import numpy as np
+import pinocchio as pin
+import trimesh
+from numpy.typing import NDArray
+
+from cellengine.info.cell import Obstacle
+from cellengine.motion.robot import CellModel
+from cellengine.program import Program
+from cellengine.report.data import event_entry, step_label
+from cellengine.report.distance import ArmDistance
+from cellengine.report.sampling import joint_order, program_span, sample_program, sample_times
+from cellengine.world import World
+
+Vec = NDArray[np.float64]
+Faces = NDArray[np.int64]
+
+REPLAY_FORMAT = "cellengine.replay/1"
+REPLAY_RATE = 25.0  # Hz: link shapes, TCPs, joint states
+MAX_SAMPLES = 6000  # the rate is lowered for programs longer than 4 min at 25 Hz
+MESH_TRIANGLES = 2000  # a static mesh with more triangles is decimated to at most this
+DECIMALS = 4  # positions rounded to 0.1 mm
+JOINT_DECIMALS = 5  # rad, rad/s (or m, m/s)
+CYLINDER_SECTIONS = 24
+
+
+def replay_data(
+    program: Program,
+    cell: CellModel,
+    world: World,
+    *,
+    rate: float = REPLAY_RATE,
+    max_samples: int = MAX_SAMPLES,
+    step_labels: Mapping[int, str] | None = None,
+) -> dict[str, Any]:
+    """The replay embedded in report.html (see the module's notes for the layout)."""
+    times = sample_times(program, rate, max_samples)
+    q, qd = sample_program(program, times, joint_order(program, cell.joint_names))
+    geometry, tcp = placements(cell, q)
+    distance = ArmDistance(cell).series(q)
+    start, end = program_span(program)
+    limits = cell.limits
+    return {
+        "format": REPLAY_FORMAT,
+        "start": start,
+        "duration": end - start,
+        "times": _round(times, DECIMALS),
+        "arms": list(cell.arms),
+        "joint_names": list(cell.joint_names),
+        "arm_joints": {a: list(range(s.start, s.stop)) for a, s in cell.slices.items()},
+        "limits": {
+            "lower": limits.lower.tolist(),
+            "upper": limits.upper.tolist(),
+            "velocity": limits.velocity.tolist(),
+        },
+        "q": _round(q.T, JOINT_DECIMALS),
+        "qd": _round(qd.T, JOINT_DECIMALS),
+        "links": link_shapes(cell, geometry),
+        "tcp": {arm: _round(p.ravel(), DECIMALS) for arm, p in tcp.items()},
+        "arm_distance": None if distance is None else _round(distance[0], DECIMALS),
+        "static": static_meshes(world),
+        "keypoints": [
+            {"name": name, "p": _round(T[:3, 3], DECIMALS)} for name, T in world.keypoints().items()
+        ],
+        **timeline(program, step_labels or {}),
+        "events": [event_entry(e) for e in program.events],
+        "cable": cable_spans(program, world),
+    }
+
+
+def _round(a: Any, decimals: int) -> Any:
+    return np.round(np.asarray(a, dtype=float), decimals).tolist()
+
+
+# ---------------------------------------------------------------------------------- arms
+
+
+def placements(cell: CellModel, Q: Vec) -> tuple[Vec, dict[str, Vec]]:
+    """Every collision object's placement (S, G, 4, 4) and each arm's TCP position (S, 3) at
+    the rows of Q, by pinocchio's forward kinematics."""
+    model, geometry = cell.model, cell.collision
+    data, gdata = model.createData(), pin.GeometryData(geometry)
+    n = int(geometry.ngeoms)
+    M = np.empty((len(Q), n, 4, 4))
+    tcp = {arm: np.empty((len(Q), 3)) for arm in cell.arms}
+    for s, q in enumerate(Q):
+        pin.framesForwardKinematics(model, data, q)
+        pin.updateGeometryPlacements(model, data, geometry, gdata)
+        for i in range(n):
+            M[s, i] = gdata.oMg[i].homogeneous
+        for arm, frame in cell.tcp.items():
+            tcp[arm][s] = data.oMf[frame].translation
+    return M, tcp
+
+
+def link_shapes(cell: CellModel, M: Vec) -> list[dict[str, Any]]:
+    """Each collision object of the cell's arms with its points per sample (M from
+    :func:`placements`)."""
+    out = []
+    for i, obj in enumerate(cell.collision.geometryObjects):
+        fixed = int(obj.parentJoint) == 0
+        kind, radius, points = shape_points(obj.geometry, M[:1, i] if fixed else M[:, i])
+        name = str(obj.name)
+        out.append(
+            {
+                "name": name,
+                "arm": name.split("/", 1)[0],
+                "kind": kind,
+                "radius": radius,
+                "fixed": fixed,
+                "stride": points.shape[1],
+                "points": _round(points.ravel(), DECIMALS),
+            }
+        )
+    return out
+
+
+def shape_points(shape: Any, M: Vec) -> tuple[str, float, Vec]:
+    """Kind, radius and the (S, stride) points of a coal shape at placements M (S, 4, 4)."""
+    R, p = M[:, :3, :3], M[:, :3, 3]
+    if isinstance(shape, coal.Capsule | coal.Cylinder):
+        axis = R[:, :, 2] * float(shape.halfLength)
+        kind = "capsule" if isinstance(shape, coal.Capsule) else "cylinder"
+        return kind, float(shape.radius), np.hstack([p - axis, p + axis])
+    if isinstance(shape, coal.Sphere):
+        return "sphere", float(shape.radius), p
+    if isinstance(shape, coal.Box):
+        centre, half = p, np.asarray(shape.halfSide, dtype=float)
+    else:
+        shape.computeLocalAABB()
+        lo, hi = np.asarray(shape.aabb_local.min_), np.asarray(shape.aabb_local.max_)
+        centre, half = p + R @ ((lo + hi) / 2), (hi - lo) / 2
+    axes = [R[:, :, k] * half[k] for k in range(3)]
+    return "box", 0.0, np.hstack([centre, *axes])
+
+
+# ---------------------------------------------------------------------------------- statics
+
+
+def static_meshes(world: World, max_triangles: int = MESH_TRIANGLES) -> list[dict[str, Any]]:
+    """Platform elements (their mesh, else their collision boxes) and obstacles as triangle
+    meshes in the cell frame. ``ground``: an obstacle nothing else reaches below the top of
+    (the table), which the page draws first."""
+    items: list[tuple[str, str, str, Vec, Faces]] = []
+    for pname, platform in world.platforms.items():
+        for ename, element in platform.elements.items():
+            T = platform.T_cell_platform @ element.T_platform_element
+            mesh = _element_mesh(element.mesh, [(b.size, b.T_element_box) for b in element.boxes])
+            if mesh is not None:
+                items.append((f"{pname}.{ename}", pname, "element", *_placed(mesh, T)))
+    for oname, obstacle in world.cell.obstacles.items():
+        mesh = obstacle_mesh(obstacle)
+        items.append((oname, "obstacles", "obstacle", *_placed(mesh, obstacle.pose.matrix())))
+    lowest = [float(v[:, 2].min()) for *_, v, _ in items]
+    out = []
+    for k, (name, group, kind, v, f) in enumerate(items):
+        others = [z for j, z in enumerate(lowest) if j != k]
+        ground = kind == "obstacle" and float(v[:, 2].max()) <= min(others, default=0.0) + 1e-3
+        v, f = decimate(v, f, max_triangles)
+        out.append(
+            {
+                "name": name,
+                "group": group,
+                "kind": kind,
+                "ground": ground,
+                "vertices": _round(v.ravel(), DECIMALS),
+                "triangles": f.ravel().tolist(),
+            }
+        )
+    return out
+
+
+def _element_mesh(
+    mesh: trimesh.Trimesh | None, boxes: Sequence[tuple[Sequence[float], Vec]]
+) -> trimesh.Trimesh | None:
+    if mesh is not None and len(mesh.faces) > 0:
+        return mesh
+    if not boxes:
+        return None
+    parts = [trimesh.creation.box(extents=size, transform=T) for size, T in boxes]
+    merged = trimesh.util.concatenate(parts)
+    assert isinstance(merged, trimesh.Trimesh)  # boxes concatenate to one mesh
+    return merged
+
+
+def obstacle_mesh(o: Obstacle) -> trimesh.Trimesh:
+    """An obstacle's shape in its own frame (a cylinder along z, as coal's)."""
+    mesh: trimesh.Trimesh
+    if o.box is not None:
+        mesh = trimesh.creation.box(extents=o.box)
+    elif o.cylinder is not None:
+        c = o.cylinder
+        mesh = trimesh.creation.cylinder(c.radius, c.length, sections=CYLINDER_SECTIONS)
+    else:
+        assert o.sphere is not None  # the model validator guarantees exactly one shape
+        mesh = trimesh.creation.icosphere(subdivisions=2, radius=o.sphere.radius)
+    return mesh
+
+
+def _placed(mesh: trimesh.Trimesh, T: Vec) -> tuple[Vec, Faces]:
+    v = np.asarray(mesh.vertices, dtype=float)
+    return v @ T[:3, :3].T + T[:3, 3], np.asarray(mesh.faces, dtype=np.int64)
+
+
+def decimate(vertices: Vec, faces: Faces, max_faces: int) -> tuple[Vec, Faces]:
+    """At most ``max_faces`` triangles by vertex clustering: vertices in one cell of a grid
+    merge to their mean, collapsed and repeated triangles go; the grid coarsens until few
+    enough remain. Small meshes come back unchanged."""
+    if len(faces) <= max_faces:
+        return vertices, faces
+    lo = vertices.min(axis=0)
+    size = float(np.linalg.norm(vertices.max(axis=0) - lo)) / 128 or 1.0
+    while True:
+        keys = np.floor((vertices - lo) / size).astype(np.int64)
+        _, cluster, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+        cluster = cluster.ravel()
+        merged = np.zeros((len(counts), 3))
+        np.add.at(merged, cluster, vertices)
+        merged /= counts[:, None]
+        f = cluster[faces]
+        f = f[(f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 0] != f[:, 2])]
+        f = np.unique(f, axis=0) if len(f) else f
+        if len(f) <= max_faces:
+            used, f = np.unique(f, return_inverse=True)
+            return merged[used], f.reshape(-1, 3).astype(np.int64)
+        size *= 1.5
+
+
+# ---------------------------------------------------------------------------------- timeline
+
+
+def timeline(program: Program, step_labels: Mapping[int, str]) -> dict[str, Any]:
+    """Segments and steps with their start and end times."""
+    segments: list[dict[str, Any]] = [
+        {
+            "index": i,
+            "step": int(cs.segment.step),
+            "label": cs.segment.label,
+            "strategy": cs.strategy,
+            "start": cs.trajectory.start_time,
+            "end": cs.trajectory.end_time,
+        }
+        for i, cs in enumerate(program.segments)
+    ]
+    steps: dict[int, dict[str, Any]] = {}
+    for s in segments:
+        step = steps.setdefault(
+            s["step"],
+            {
+                "step": s["step"],
+                "label": step_labels.get(s["step"]) or step_label(s["label"]),
+                "start": s["start"],
+                "end": s["end"],
+            },
+        )
+        step["start"], step["end"] = min(step["start"], s["start"]), max(step["end"], s["end"])
+    return {"segments": segments, "steps": [steps[k] for k in sorted(steps)]}
+
+
+def cable_spans(program: Program, world: World) -> list[dict[str, Any]]:
+    """Intervals during which two or more arms hold the same cable (or its connector): the
+    page draws the cable as a line between their fingertips."""
+    cables = set(world.objects.cables)
+    holding: dict[str, str | None] = {}
+    spans: list[dict[str, Any]] = []
+    open_: dict[str, dict[str, Any]] = {}
+    _, end = program_span(program)
+    for e in sorted(program.events, key=lambda e: e.time):
+        holds = e.event.holds
+        holding[e.event.arm] = _cable_of(holds, cables) if holds else None
+        _update_spans(holding, open_, spans, float(e.time))
+    for span in open_.values():
+        span["end"] = end
+        spans.append(span)
+    return sorted(spans, key=lambda s: (s["start"], s["cable"]))
+
+
+def _cable_of(name: str, cables: set[str]) -> str | None:
+    head = name.split(".", 1)[0]
+    return name if name in cables else head if head in cables else None
+
+
+def _update_spans(
+    holding: Mapping[str, str | None],
+    open_: dict[str, dict[str, Any]],
+    spans: list[dict[str, Any]],
+    t: float,
+) -> None:
+    arms_of: dict[str, list[str]] = {}
+    for arm, cable in holding.items():
+        if cable is not None:
+            arms_of.setdefault(cable, []).append(arm)
+    for cable in list(open_):
+        if open_[cable]["arms"] != sorted(arms_of.get(cable, [])):
+            span = open_.pop(cable)
+            span["end"] = t
+            if span["end"] > span["start"]:
+                spans.append(span)
+    for cable, arms in arms_of.items():
+        if len(arms) >= 2 and cable not in open_:
+            open_[cable] = {"cable": cable, "arms": sorted(arms), "start": t, "end": t}
