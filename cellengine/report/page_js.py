@@ -813,7 +813,8 @@ JS = r"""
     const step = lastStarted(RP.steps, state.t);
     const seg = lastStarted(RP.segments, state.t);
     for (const [item, row, kind] of rows) {
-      const on = kind === 'step' ? step && item.step === step.step : seg && item.index === seg.index;
+      const on = kind === 'step' ? step && item.step === step.step
+        : seg && item.index === seg.index;
       row.classList.toggle('active', Boolean(on));
     }
   }
