@@ -1,1 +1,21 @@
-"""The executor: segments to timed, validated dual-arm programs (split, sync, async)."""
+"""The executor: segments to timed, validated dual-arm programs (split, sync, async).
+
+``compile_segments(world, cell, checker, segments, q_start, strategy)`` -> Program, or the
+:class:`Compiler` to add segments one at a time. See compile.py for the order of work,
+strategies.py, merge.py and schedule.py for the choices.
+"""
+
+from cellengine.execute.compile import Compiler, compile_segments
+from cellengine.execute.merge import MERGES, Merge
+from cellengine.execute.strategies import STRATEGIES, Strategy
+from cellengine.execute.timeline import program_trajectory
+
+__all__ = [
+    "MERGES",
+    "STRATEGIES",
+    "Compiler",
+    "Merge",
+    "Strategy",
+    "compile_segments",
+    "program_trajectory",
+]

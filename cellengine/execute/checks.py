@@ -1,0 +1,72 @@
+"""The checks every compiled piece must pass before it joins the program.
+
+- the gate (:func:`~cellengine.motion.gate.check_cell_trajectory`): limits at 1 ms samples,
+  collisions, the distance between the arms;
+- a kept distance: the two fingertips (the arms' TCPs) at a constant distance, within
+  ``KEEP_DISTANCE_TOLERANCE``, all along the timed motion (a taut cable between the hands).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import NDArray
+
+from cellengine.execute.refused import Refused
+from cellengine.motion.collision import CollisionChecker
+from cellengine.motion.gate import GateReport, check_cell_trajectory
+from cellengine.motion.robot import CellModel
+from cellengine.motion.trajectory import Trajectory
+
+Vec = NDArray[np.float64]
+
+KEEP_DISTANCE_TOLERANCE = 0.001  # m: the fingertips' distance may vary by this much
+KEEP_DISTANCE_DT = 0.005  # s between the samples where it is measured
+
+
+def gate(traj: Trajectory, cell: CellModel, checker: CollisionChecker) -> GateReport:
+    """The gate's report; Refused naming every violation when it fails."""
+    report = check_cell_trajectory(traj, cell, checker)
+    if not report.ok:
+        raise Refused("the trajectory fails the gate: " + "; ".join(map(str, report.violations)))
+    return report
+
+
+@dataclass(frozen=True)
+class KeptDistance:
+    distance: float  # m at the start
+    deviation: float  # m: the largest change along the motion
+
+
+def kept_distance(traj: Trajectory, cell: CellModel, arms: tuple[str, str]) -> KeptDistance:
+    """The fingertips' distance along ``traj``; Refused when it changes by more than the
+    tolerance."""
+    t = np.append(np.arange(traj.start_time, traj.end_time, KEEP_DISTANCE_DT), traj.end_time)
+    q, _, _ = traj.sample(t)
+    d = tcp_distances(cell, q, arms)
+    change = np.abs(d - d[0])
+    worst = int(np.argmax(change))
+    kept = KeptDistance(float(d[0]), float(change[worst]))
+    if kept.deviation > KEEP_DISTANCE_TOLERANCE:
+        a, b = arms
+        raise Refused(
+            f"the distance between the {a} and {b} fingertips must stay "
+            f"{1000 * kept.distance:.1f} mm (within {1000 * KEEP_DISTANCE_TOLERANCE:g} mm) "
+            f"but is {1000 * d[worst]:.1f} mm at t={t[worst]:.3f} s"
+        )
+    return kept
+
+
+def tcp_distances(cell: CellModel, Q: Vec, arms: tuple[str, str]) -> Vec:
+    """Distance between two arms' TCPs at each whole-cell state (k, nq)."""
+    model, data = cell.model, cell.model.createData()
+    a, b = (cell.tcp[arm] for arm in arms)
+    out = np.empty(len(Q))
+    for i, q in enumerate(Q):
+        pin.forwardKinematics(model, data, q)
+        pa = pin.updateFramePlacement(model, data, a).translation
+        pb = pin.updateFramePlacement(model, data, b).translation
+        out[i] = float(np.linalg.norm(pa - pb))
+    return out

@@ -1,0 +1,246 @@
+"""Segments to a Program: the executor's compiler.
+
+For each segment, in order: the ``before`` gripper events (what each gripper holds is kept in
+step with the collision checker), the arm paths solved into joint rows by the strategy
+(:mod:`~cellengine.execute.strategies`), each part timed and merged onto one time axis
+(:mod:`~cellengine.execute.merge`; async parts scheduled, :mod:`~cellengine.execute.schedule`),
+each timed part through the gate before it is added, a kept distance checked along the
+segment, then the ``after`` events at the segment's end.
+
+Compiling is pure: nothing moves, the caller's checker is not changed (the compiler attaches
+held objects to its own), and the same inputs give the same program. The first segment that
+cannot run stops the compile with an InputError naming the step, the segment and why.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from cellengine.execute.checks import gate, kept_distance
+from cellengine.execute.held import Holding
+from cellengine.execute.merge import MERGES, Merge, Merged, merge_rows, on_one_axis
+from cellengine.execute.refused import Refused, in_plan_terms
+from cellengine.execute.schedule import SCHEDULE_DT, schedule
+from cellengine.execute.split import SPLIT_THRESHOLD
+from cellengine.execute.strategies import STRATEGIES, Part, Strategy, solve_segment
+from cellengine.motion.collision import CollisionChecker
+from cellengine.motion.gate import SAMPLE_DT, GateReport
+from cellengine.motion.robot import CellModel
+from cellengine.motion.trajectory import Trajectory, concatenate
+from cellengine.program import CompiledSegment, Program, Segment, TimedEvent
+from cellengine.world import World
+
+Vec = NDArray[np.float64]
+
+
+class Compiler:
+    """Compiles segments one after another from ``q_start`` at t = 0 (``add``), keeping where
+    the arms are, the time, and what each gripper holds; ``program()`` is the result so far."""
+
+    def __init__(
+        self,
+        world: World,
+        cell: CellModel,
+        checker: CollisionChecker,
+        q_start: ArrayLike,
+        strategy: Strategy = "split",
+        *,
+        merge: Merge = "joint",
+        split_threshold: float = SPLIT_THRESHOLD,
+        plan_file: Path | None = None,
+    ) -> None:
+        if strategy not in STRATEGIES:
+            raise ValueError(f"unknown strategy '{strategy}'; known: {', '.join(STRATEGIES)}")
+        if merge not in MERGES:
+            raise ValueError(f"unknown merge '{merge}'; known: {', '.join(MERGES)}")
+        q = np.array(q_start, dtype=float)
+        if q.shape != (cell.nq,) or not np.isfinite(q).all():
+            raise ValueError(f"q_start must be {cell.nq} finite values, got shape {q.shape}")
+        self.cell = cell
+        self.strategy: Strategy = strategy
+        self.merge: Merge = merge
+        self.split_threshold = split_threshold
+        self.plan_file = plan_file
+        # its own checker: attaching held objects must not change the caller's
+        self.checker = CollisionChecker(checker.scene)
+        self.holding = Holding(world, self.checker)
+        self.q = q
+        self.t = 0.0
+        self.segments: list[CompiledSegment] = []
+        self.events: list[TimedEvent] = []
+
+    def add(self, segment: Segment) -> CompiledSegment:
+        """Compile one segment after those already added; InputError if it cannot run."""
+        try:
+            compiled = self._compile(segment)
+        except Refused as e:
+            raise in_plan_terms(segment, str(e), self.plan_file) from None
+        self.segments.append(compiled)
+        self.q = np.array(compiled.trajectory.q[-1])
+        self.t = compiled.trajectory.end_time
+        return compiled
+
+    def program(self) -> Program:
+        return Program(self.cell.joint_names, tuple(self.segments), tuple(self.events))
+
+    # ------------------------------------------------------------------------------ one segment
+
+    def _compile(self, segment: Segment) -> CompiledSegment:
+        started = time.perf_counter()
+        t0 = self.t
+        self._events(segment.before, t0)
+        parts = solve_segment(
+            self.cell, self.checker, segment, self.q, self.strategy, self.split_threshold
+        )
+        merge = self._merge_for(segment)
+        pieces: list[Trajectory] = []
+        figures: list[tuple[Part, Merged, GateReport, dict[str, float]]] = []
+        t, q = t0, self.q
+        for part in parts:
+            merged = merge_rows(self.cell, q, part.rows, part.coupled, merge)
+            traj, report, starts = self._timed(part, merged, t, q)
+            pieces.append(traj)
+            figures.append((part, merged, report, starts))
+            t, q = traj.end_time, np.array(traj.q[-1])
+        trajectory = concatenate(pieces) if len(pieces) > 1 else pieces[0]
+        kept = None
+        if segment.keep_distance is not None:
+            kept = kept_distance(trajectory, self.cell, segment.keep_distance)
+        self._events(segment.after, trajectory.end_time)
+        summary = _report(
+            segment, self.strategy, _merge_name(parts, merge, self.strategy), figures, kept
+        )
+        summary["planning_time_s"] = time.perf_counter() - started
+        summary["start_s"] = t0
+        summary["duration_s"] = trajectory.end_time - t0
+        return CompiledSegment(segment, self.strategy, trajectory, summary)
+
+    def _merge_for(self, segment: Segment) -> Merge:
+        """A coupling (closed chain, kept distance) needs one time law for both arms: the
+        published merge, which retimes one arm point by point, would break it."""
+        if segment.closed_chain is not None or segment.keep_distance is not None:
+            return "joint"
+        return self.merge
+
+    def _events(self, events: Iterable[Any], t: float) -> None:
+        for e in events:
+            try:
+                self.holding.set(e.arm, e.holds)
+            except (ValueError, KeyError) as err:
+                raise Refused(f"the {e.arm} gripper cannot hold '{e.holds}': {err}") from None
+            self.events.append(TimedEvent(t, e))
+
+    def _timed(
+        self, part: Part, merged: Merged, t: float, q: Vec
+    ) -> tuple[Trajectory, GateReport, dict[str, float]]:
+        """The part's trajectory at its place on the program's time axis, through the gate,
+        and each arm's start in it. Async parts of several arms are scheduled; when the gate's
+        1 ms samples find a collision the scheduler's coarser ones missed, they are scheduled
+        again at the gate's resolution."""
+        if self.strategy != "async" or part.solved != "apart" or len(merged.alone) < 2:
+            traj = merged.trajectory.shifted(t)
+            return traj, gate(traj, self.cell, self.checker), {}
+        refused = Refused("unreachable")
+        for dt in (SCHEDULE_DT, SAMPLE_DT):
+            starts = schedule(self.cell, q, merged.alone, self.checker.check_batch, dt=dt)
+            traj = on_one_axis(self.cell, q, merged.alone, starts).shifted(t)
+            try:
+                return traj, gate(traj, self.cell, self.checker), starts
+            except Refused as e:
+                refused = e
+        raise refused
+
+
+def compile_segments(
+    world: World,
+    cell: CellModel,
+    checker: CollisionChecker,
+    segments: Iterable[Segment],
+    q_start: ArrayLike,
+    strategy: Strategy = "split",
+    *,
+    merge: Merge = "joint",
+    split_threshold: float = SPLIT_THRESHOLD,
+    plan_file: Path | None = None,
+) -> Program:
+    """The program of ``segments`` from the cell configuration ``q_start`` (see the module
+    notes). ``merge`` chooses which merge times two-arm parts (both are in the report)."""
+    compiler = Compiler(
+        world,
+        cell,
+        checker,
+        q_start,
+        strategy,
+        merge=merge,
+        split_threshold=split_threshold,
+        plan_file=plan_file,
+    )
+    for segment in segments:
+        compiler.add(segment)
+    return compiler.program()
+
+
+# ------------------------------------------------------------------------------ report
+
+
+def _merge_name(parts: list[Part], merge: Merge, strategy: Strategy) -> str:
+    if not any(len(p.rows) > 1 for p in parts):
+        return "none"  # one arm or none: nothing to merge
+    if strategy == "async" and any(p.solved == "apart" for p in parts):
+        return "async"
+    return merge
+
+
+def _report(
+    segment: Segment,
+    strategy: Strategy,
+    merge: str,
+    figures: list[tuple[Part, Merged, GateReport, dict[str, float]]],
+    kept: Any,
+) -> dict[str, Any]:
+    """What report.json says of a segment: plain JSON values."""
+    fraction: dict[str, float] = {}
+    for part, *_ in figures:
+        for arm, f in part.fraction.items():
+            fraction[arm] = min(f, fraction.get(arm, 1.0))
+    distances = [r.min_arm_distance for _, _, r, _ in figures if r.min_arm_distance is not None]
+    closest = min(
+        (r for _, _, r, _ in figures if r.min_arm_distance is not None),
+        key=lambda r: r.min_arm_distance or 0.0,
+        default=None,
+    )
+    return {
+        "step": segment.step,
+        "label": segment.label,
+        "strategy": strategy,
+        "solved": sorted({p.solved for p, *_ in figures}),
+        "merge": merge,
+        "parts": len(figures),
+        "split_at": [dict(p.split_at) for p, *_ in figures if p.split_at],
+        "delays_s": [s for *_, s in figures if s],
+        "fraction": fraction,
+        "durations_s": {m: sum(f.durations[m] for _, f, _, _ in figures) for m in MERGES},
+        "time_optimal_bound_s": sum(f.bound for _, f, _, _ in figures),
+        "jerk_limited_bound_s": sum(f.bound_jerk for _, f, _, _ in figures),
+        "min_arm_distance_m": min(distances) if distances else None,
+        "closest_pair": list(closest.closest_pair or ()) if closest is not None else None,
+        "keep_distance": None
+        if kept is None
+        else {
+            "arms": list(segment.keep_distance or ()),
+            "distance_m": kept.distance,
+            "deviation_m": kept.deviation,
+        },
+        "checks": {
+            "cartesian_fraction": True,
+            "gate": True,
+            "gate_samples": sum(r.samples for _, _, r, _ in figures),
+            "keep_distance": None if kept is None else True,
+        },
+    }

@@ -1,0 +1,95 @@
+"""Joint rows to timed trajectories, with the executor's one choice of jerk limits.
+
+Every trajectory the executor builds is jerk-limited: ``JERK_PER_ACCELERATION`` times each
+joint's acceleration limit (full acceleration reached in 0.1 s). A servo stream without a jerk
+limit makes a UR arm shake; 10x is the usual industrial choice and keeps the S-curve ramps a
+small share of moves of a second or more (on very short moves they dominate; the report gives
+the time-optimal bound, with no jerk limit, beside the jerk-limited one).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from cellengine.motion.robot import Limits
+from cellengine.motion.timing import time_optimal, time_parameterize
+from cellengine.motion.trajectory import Trajectory
+
+Vec = NDArray[np.float64]
+
+JERK_PER_ACCELERATION = 10.0  # 1/s: jerk limit = 10 x acceleration limit, per joint
+# Rows closer than this (rad or m, largest joint) are one: a zero-length spline interval.
+SAME_ROW = 1e-9
+# An inner row closer to the previous one than this share of the median step is dropped. Two
+# paths resampled onto one grid (the union of both arms' waypoint parameters) give rows a
+# fraction of a millimetre apart; a cubic spline's third derivative jumps at every row, and
+# pieces that short make the timing's jerk and between-sample bounds (and so the durations)
+# worse for nothing: the rows around them pin the same curve.
+THIN_ROW = 0.5
+
+
+def jerk_limits(limits: Limits) -> Vec:
+    out: Vec = JERK_PER_ACCELERATION * np.asarray(limits.acceleration, dtype=float)
+    return out
+
+
+def distinct(rows: Vec) -> Vec:
+    """The rows without consecutive repeats (the first of each run kept)."""
+    R = np.asarray(rows, dtype=float)
+    if len(R) < 2:
+        return R
+    keep = np.concatenate([[True], np.abs(np.diff(R, axis=0)).max(axis=1) > SAME_ROW])
+    out: Vec = R[keep]
+    return out
+
+
+def thinned(rows: Vec) -> Vec:
+    """:func:`distinct` rows without inner rows much closer to the previous kept row than
+    the median step (the first and last rows are always kept)."""
+    R = distinct(rows)
+    if len(R) < 3:
+        return R
+    steps = np.linalg.norm(np.diff(R, axis=0), axis=1)
+    gap = THIN_ROW * float(np.median(steps))
+    keep = [0]
+    for i in range(1, len(R) - 1):
+        if np.linalg.norm(R[i] - R[keep[-1]]) >= gap:
+            keep.append(i)
+    if np.linalg.norm(R[-1] - R[keep[-1]]) < gap and len(keep) > 1:
+        keep.pop()  # the last row stays; the one just before it goes instead
+    keep.append(len(R) - 1)
+    out: Vec = R[keep]
+    return out
+
+
+def moves(rows: Vec) -> bool:
+    """Whether the rows go anywhere at all."""
+    return len(distinct(rows)) >= 2
+
+
+def timed(rows: Vec, limits: Limits, names: Sequence[str]) -> Trajectory:
+    """The jerk-limited trajectory through ``rows`` (rest to rest); one point when they do
+    not move."""
+    R = thinned(rows)
+    if len(R) < 2:
+        return still(R[0], names)
+    return time_parameterize(R, limits, jerk=jerk_limits(limits), joint_names=tuple(names))
+
+
+def fastest(rows: Vec, limits: Limits) -> float:
+    """The time-optimal duration through ``rows`` (velocity and acceleration limits only):
+    the lower bound of any timing of the same path."""
+    R = thinned(rows)
+    if len(R) < 2:
+        return 0.0
+    return time_optimal(R, limits).duration
+
+
+def still(q: Vec, names: Sequence[str], t: float = 0.0) -> Trajectory:
+    """Standing at ``q``: a one-point trajectory at time ``t``."""
+    qa = np.asarray(q, dtype=float)[None, :]
+    z = np.zeros_like(qa)
+    return Trajectory(tuple(names), np.array([t]), qa, z, z)

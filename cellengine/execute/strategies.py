@@ -1,0 +1,206 @@
+"""The execution strategies: how one segment's arm paths become joint rows, in parts.
+
+- ``split`` (the published one): two Cartesian paths are planned each on its own, the other
+  arm standing where it is, and split where one arm's waypoint comes within a threshold of the
+  other arm (:mod:`cellengine.execute.split`); the parts run one after the other, each planned
+  from where the previous one left the arms.
+- ``sync``: both arms as one 12-DOF group, following both Cartesian paths together on one grid
+  (:func:`~cellengine.motion.cartesian.dual_cartesian_path`).
+- ``async``: each arm planned on its own, the other standing at its start; the scheduler
+  (:mod:`cellengine.execute.schedule`) starts each as soon as it is safe.
+
+What every strategy shares: a transit of both arms is one 12-DOF query (one planner proves the
+pair free; planning each arm against the other standing would free neither), except under
+async, whose point is that the arms move on their own. A segment whose arms are coupled (a
+closed chain, or a distance to keep while both move) is always solved on one grid, whatever
+the strategy: only one time law for both keeps the coupling (the published method too follows
+one arm's waypoints with the other there). A transit of one arm and a Cartesian path of the
+other are solved apart.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from cellengine.execute import solve
+from cellengine.execute.refused import Refused
+from cellengine.execute.split import SPLIT_THRESHOLD, split_point
+from cellengine.motion.collision import CollisionChecker
+from cellengine.motion.robot import CellModel
+from cellengine.program import ArmPath, Segment
+
+Vec = NDArray[np.float64]
+Strategy = Literal["split", "sync", "async"]
+STRATEGIES: tuple[Strategy, ...] = ("split", "sync", "async")
+Solved = Literal["still", "one_arm", "together", "apart"]
+
+
+@dataclass(frozen=True)
+class Part:
+    """Joint rows of a piece of a segment, before timing.
+
+    ``rows``: each moving arm's joint rows, the start first, in the segment's path order.
+    ``coupled``: the whole-cell rows when the arms were solved on one grid (row i of every arm
+    belongs to one moment), else None. ``fraction``: each arm's Cartesian path fraction (1 for
+    a transit; a short path is refused before a Part exists)."""
+
+    start: Vec
+    rows: Mapping[str, Vec]
+    coupled: Vec | None
+    fraction: Mapping[str, float]
+    solved: Solved
+    split_at: Mapping[str, int] = field(default_factory=dict)  # waypoint index per arm
+
+    def end(self, cell: CellModel) -> Vec:
+        if self.coupled is not None:
+            out: Vec = self.coupled[-1].copy()
+            return out
+        q = self.start.copy()
+        for arm, r in self.rows.items():
+            q[cell.slices[arm]] = r[-1]
+        return q
+
+
+def solve_segment(
+    cell: CellModel,
+    checker: CollisionChecker,
+    segment: Segment,
+    q: Vec,
+    strategy: Strategy,
+    threshold: float = SPLIT_THRESHOLD,
+) -> list[Part]:
+    """The parts of ``segment`` from the cell configuration ``q``."""
+    paths = _by_arm(cell, segment)
+    if not paths:
+        return [Part(q, {}, None, {}, "still")]
+    kinds = {p.kind for p in paths.values()}
+    if segment.closed_chain is not None:
+        return [_closed_chain(cell, checker, segment.closed_chain, paths, q)]
+    if len(paths) == 1:
+        return [_apart(cell, checker, paths, q, "one_arm")]
+    coupled = segment.keep_distance is not None
+    if kinds == {"transit"} and strategy != "async":
+        return [_transit_together(cell, checker, paths, q)]
+    if kinds == {"cartesian"} and (strategy == "sync" or coupled):
+        return [_cartesian_together(cell, checker, paths, q)]
+    if kinds == {"cartesian"} and strategy == "split":
+        return _split(cell, checker, paths, q, threshold)
+    return [_apart(cell, checker, paths, q, "apart")]
+
+
+def _by_arm(cell: CellModel, segment: Segment) -> dict[str, ArmPath]:
+    out: dict[str, ArmPath] = {}
+    for p in segment.paths:
+        if p.arm not in cell.arms:
+            raise Refused(f"unknown arm '{p.arm}' (the cell has {', '.join(cell.arms)})")
+        if p.arm in out:
+            raise Refused(f"the {p.arm} arm has two paths in one segment")
+        out[p.arm] = p
+    return out
+
+
+def _closed_chain(
+    cell: CellModel,
+    checker: CollisionChecker,
+    chain: tuple[str, str],
+    paths: Mapping[str, ArmPath],
+    q: Vec,
+) -> Part:
+    leader, follower = chain
+    path = paths.get(leader)
+    if path is None or path.kind != "cartesian":
+        raise Refused(f"a closed chain needs a Cartesian path of its leader, the {leader} arm")
+    rows, fraction = solve.closed_chain(cell, checker, leader, follower, path.poses, q)
+    return _coupled_part(cell, q, rows, {leader: fraction, follower: fraction})
+
+
+def _transit_together(
+    cell: CellModel, checker: CollisionChecker, paths: Mapping[str, ArmPath], q: Vec
+) -> Part:
+    rows = solve.transit(cell, checker, {a: p.poses[-1] for a, p in paths.items()}, q)
+    return _coupled_part(cell, q, rows, {a: 1.0 for a in paths})
+
+
+def _cartesian_together(
+    cell: CellModel, checker: CollisionChecker, paths: Mapping[str, ArmPath], q: Vec
+) -> Part:
+    rows, fraction = solve.dual_cartesian(cell, checker, {a: p.poses for a, p in paths.items()}, q)
+    return _coupled_part(cell, q, rows, {a: fraction for a in paths})
+
+
+def _coupled_part(cell: CellModel, q: Vec, rows: Vec, fraction: Mapping[str, float]) -> Part:
+    per_arm = {a: rows[:, cell.slices[a]] for a in fraction}
+    return Part(q, per_arm, rows, dict(fraction), "together")
+
+
+def _apart(
+    cell: CellModel,
+    checker: CollisionChecker,
+    paths: Mapping[str, ArmPath],
+    q: Vec,
+    solved: Solved,
+) -> Part:
+    """Each arm on its own from ``q``, the other arms standing there."""
+    rows: dict[str, Vec] = {}
+    fraction: dict[str, float] = {}
+    for arm, p in paths.items():
+        if p.kind == "transit":
+            cell_rows = solve.transit(cell, checker, {arm: p.poses[-1]}, q)
+            rows[arm], fraction[arm] = cell_rows[:, cell.slices[arm]], 1.0
+        else:
+            rows[arm], fraction[arm] = solve.cartesian(cell, checker, arm, p.poses, q)
+    return Part(q, rows, None, fraction, solved)
+
+
+def _split(
+    cell: CellModel,
+    checker: CollisionChecker,
+    paths: Mapping[str, ArmPath],
+    q: Vec,
+    threshold: float,
+) -> list[Part]:
+    """The published loop: split, plan the first parts apart, move on from their end."""
+    left = {a: np.asarray(p.poses) for a, p in paths.items()}
+    done = {a: 0 for a in paths}  # waypoints of each arm already in earlier parts
+    parts: list[Part] = []
+    while any(len(w) for w in left.values()):
+        tcp = {a: cell.arms[a].fk(q[cell.slices[a]])[:3, 3] for a in left if len(left[a])}
+        point = split_point({a: w for a, w in left.items() if len(w)}, tcp, threshold)
+        cut = {a: len(w) for a, w in left.items()}
+        if point is not None:
+            cut.update(point.index)
+        now = {
+            a: ArmPath(a, "cartesian", _at_least_two(cell, a, q, w[: cut[a]]))
+            for a, w in left.items()
+            if cut[a] > 0
+        }
+        part = _apart(cell, checker, now, q, "apart")
+        if point is not None:
+            part = Part(
+                part.start,
+                part.rows,
+                None,
+                part.fraction,
+                "apart",
+                {a: done[a] + cut[a] for a in left},
+            )
+        parts.append(part)
+        q = part.end(cell)
+        for a in left:
+            done[a] += cut[a]
+            left[a] = left[a][cut[a] :]
+    return parts
+
+
+def _at_least_two(cell: CellModel, arm: str, q: Vec, W: Vec) -> Vec:
+    """An ArmPath needs two poses: a one-waypoint piece gets the arm's own pose first (the
+    Cartesian path starts there anyway)."""
+    if len(W) >= 2:
+        return W
+    out: Vec = np.concatenate([cell.arms[arm].fk(q[cell.slices[arm]])[None], W])
+    return out

@@ -1,0 +1,139 @@
+"""Hand-made segments on the cable-routing cell, shared by the executor's tests and bench."""
+
+from __future__ import annotations
+
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from cellengine.info.load import load_world
+from cellengine.motion.collision import CollisionChecker
+from cellengine.motion.robot import CellModel, build_cell_model
+from cellengine.motion.scene import build_scene
+from cellengine.motion.trajectory import Trajectory
+from cellengine.program import ArmPath, GripperEvent, Segment
+from cellengine.world import World
+
+Vec = NDArray[np.float64]
+CELL = Path(__file__).resolve().parents[2] / "cells" / "cable_routing" / "cell.yaml"
+DOWN = np.diag([1.0, -1.0, -1.0])  # TCP z pointing down, x along the cell's x
+STEP = 0.005  # m between Cartesian waypoints (the skills' step)
+
+
+@cache
+def cable_cell() -> tuple[World, CellModel, CollisionChecker]:
+    world = load_world(CELL)
+    cell = build_cell_model(world)
+    return world, cell, CollisionChecker(build_scene(cell, world))
+
+
+def home(cell: CellModel) -> Vec:
+    return cell.join({n: a.home for n, a in cell.arms.items()})
+
+
+def pose(xyz: tuple[float, float, float], R: Vec = DOWN) -> Vec:
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R, xyz
+    return T
+
+
+def line(a: tuple[float, float, float], b: tuple[float, float, float], R: Vec = DOWN) -> Vec:
+    """TCP poses from a to b, STEP apart, orientation R."""
+    n = max(2, int(np.ceil(np.linalg.norm(np.subtract(b, a)) / STEP)) + 1)
+    ps = np.add(a, np.linspace(0, 1, n)[:, None] * np.subtract(b, a))
+    return np.array([pose(tuple(p), R) for p in ps])
+
+
+def arc(start: tuple[float, float, float], centre: tuple[float, float, float], angle: float) -> Vec:
+    """TCP poses turning ``start`` about the vertical axis through ``centre`` by ``angle``
+    (rad), orientation fixed: the distance to the centre stays the same."""
+    r = np.subtract(start, centre)
+    n = max(2, int(np.ceil(abs(angle) * np.linalg.norm(r[:2]) / STEP)) + 1)
+    out = []
+    for a in np.linspace(0.0, angle, n):
+        c, s = np.cos(a), np.sin(a)
+        p = np.add(centre, [c * r[0] - s * r[1], s * r[0] + c * r[1], r[2]])
+        out.append(pose(tuple(p)))
+    return np.array(out)
+
+
+def states(traj: Trajectory, dt: float = 0.001) -> Vec:
+    """The trajectory's positions every ``dt`` from its start, its end included."""
+    t = np.append(np.arange(traj.start_time, traj.end_time, dt), traj.end_time)
+    q, _, _ = traj.sample(t)
+    out: Vec = q
+    return out
+
+
+def tcp(cell: CellModel, arm: str, Q: Vec) -> Vec:
+    """The arm's TCP poses (k, 4, 4) at whole-cell states (k, nq)."""
+    return np.array([cell.arms[arm].fk(q[cell.slices[arm]]) for q in Q])
+
+
+LEFT_READY = (0.40, 0.15, 0.20)
+RIGHT_READY = (0.40, -0.15, 0.20)
+
+
+def ready() -> Segment:
+    """Both arms from home to above the routing platform, tools down (a transit)."""
+    return Segment(
+        0,
+        "ready",
+        (
+            ArmPath("left", "transit", pose(LEFT_READY)[None]),
+            ArmPath("right", "transit", pose(RIGHT_READY)[None]),
+        ),
+        before=(GripperEvent("left", "open"), GripperEvent("right", "open")),
+    )
+
+
+def reference_segments() -> list[Segment]:
+    """A transit of both arms, a Cartesian line of one arm, a dual Cartesian move, a closed
+    chain move, and a kept-distance arc about the other hand."""
+    lx, ly, lz = LEFT_READY
+    rx, ry, rz = RIGHT_READY
+    return [
+        ready(),
+        Segment(
+            1,
+            "left line",
+            (ArmPath("left", "cartesian", line(LEFT_READY, (lx + 0.1, ly, lz))),),
+            after=(GripperEvent("left", "grasp", "cable1"),),
+        ),
+        Segment(
+            1,
+            "both down",
+            (
+                ArmPath("left", "cartesian", line((lx + 0.1, ly, lz), (lx + 0.1, ly, lz - 0.05))),
+                ArmPath("right", "cartesian", line(RIGHT_READY, (rx, ry + 0.05, rz - 0.1))),
+            ),
+        ),
+        Segment(
+            2,
+            "lift together",
+            (
+                ArmPath(
+                    "right",
+                    "cartesian",
+                    line((rx, ry + 0.05, rz - 0.1), (rx, ry + 0.05, rz)),
+                ),
+            ),
+            before=(GripperEvent("right", "grasp", "cable1"),),
+            closed_chain=("right", "left"),
+        ),
+        Segment(
+            2,
+            "left arc about the right hand",
+            (
+                ArmPath(
+                    "left",
+                    "cartesian",
+                    arc((lx + 0.1, ly, lz + 0.05), (rx, ry + 0.05, rz), -0.4),
+                ),
+            ),
+            keep_distance=("left", "right"),
+            after=(GripperEvent("left", "open"),),
+        ),
+    ]
