@@ -3,9 +3,11 @@ painter's algorithm over shaded triangles, capsules drawn as thick round-capped 
 time slider and playback, joint plots, the step timeline and the steps table. No library.
 
 The data (``#ce-data``): ``{"report": report_data(...), "replay": replay_data(...), "title"}``.
-When the page has drawn, ``body[data-status]`` is ``ok`` and ``body[data-canvas]`` the 3D
-canvas's rectangle (x,y,w,h in CSS pixels); on any error it is ``error`` and ``#errors`` says
-why (tests read both with a headless browser's --dump-dom).
+When the page has drawn, ``body[data-status]`` is ``ok``, ``body[data-canvas]`` the 3D
+canvas's rectangle (x,y,w,h in CSS pixels), ``data-drawn`` the number of shapes and
+``data-cables`` of cable lines in the first frame; on any error the status is ``error`` and
+``#errors`` says why (tests read these with a headless browser's --dump-dom). The page's URL
+may say where to start: ``#t=2.5&az=-0.75&el=0.55`` (seconds from the start, camera angles).
 """
 
 JS = r"""
@@ -486,13 +488,13 @@ JS = r"""
     if (state.trails) drawTrails(V);
     const [i, f] = locate(state.t);
     addLinks(V, i, f, prims);
-    addHands(V, i, f, prims);
+    const cables = addHands(V, i, f, prims);
     if (state.keys) addKeypoints(V, prims);
     prims.sort((a, b) => b.z - a.z);
     for (const p of prims) drawPrim(p);
     drawAxes(V);
     drawArmLabels(V);
-    return ground.length + prims.length;
+    return { shapes: ground.length + prims.length, cables };
   }
 
   // ---------------------------------------------------------------- plots
@@ -985,7 +987,8 @@ JS = r"""
     const r = canvas.getBoundingClientRect();
     document.body.dataset.canvas = [r.left + window.scrollX, r.top + window.scrollY, r.width,
       r.height].map(Math.round).join(',');
-    document.body.dataset.drawn = String(drawn);
+    document.body.dataset.drawn = String(drawn.shapes);
+    document.body.dataset.cables = String(drawn.cables);
     if (document.body.dataset.status !== 'error') document.body.dataset.status = 'ok';
   }
   try {

@@ -1,0 +1,120 @@
+"""report.html in headless Chromium (Debian's chromium; .ci/run installs it): it loads
+without errors and draws the cell.
+
+Two runs per page: --dump-dom reads what the page says of itself (``data-status``, the 3D
+canvas's rectangle, errors caught into ``#errors``), --screenshot shows what it drew. No skip:
+without Chromium these tests fail, saying how to install it.
+"""
+
+from __future__ import annotations
+
+import html as html_lib
+import os
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cellengine.report import write_report
+from tests.report.png import read_png
+from tests.report.programs import cable_cell, sample_program
+
+WINDOW = (1400, 1000)
+BACKGROUND = np.array([0xE9, 0xED, 0xF3])  # the 3D view's background (page_js BG)
+FLAGS = (
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--hide-scrollbars",
+    "--host-resolver-rules=MAP * ~NOTFOUND",  # nothing may come from the network anyway
+    f"--window-size={WINDOW[0]},{WINDOW[1]}",
+    "--virtual-time-budget=5000",
+)
+
+
+def chromium() -> str:
+    """The Chromium executable: $CELLENGINE_CHROMIUM, chromium, chromium-browser."""
+    for name in (os.environ.get("CELLENGINE_CHROMIUM"), "chromium", "chromium-browser"):
+        found = shutil.which(name) if name else None
+        if found:
+            return found
+    pytest.fail(
+        "Chromium not found (looked for $CELLENGINE_CHROMIUM, chromium, chromium-browser): "
+        "install Debian's chromium with `apt-get install -y chromium` (.ci/run does); "
+        "the report's browser tests cannot run without it"
+    )
+
+
+def run_chromium(url: str, profile: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    cmd = [chromium(), *FLAGS, f"--user-data-dir={profile}", *args, url]
+    result = subprocess.run(cmd, capture_output=True, text=True, timeout=180, check=False)
+    assert result.returncode == 0, f"chromium exited {result.returncode}: {result.stderr[-2000:]}"
+    return result
+
+
+def dump_dom(page: Path, profile: Path, fragment: str = "") -> tuple[dict[str, str], str]:
+    """The body's attributes and the text of #errors after the page has run."""
+    dom = run_chromium(page.as_uri() + fragment, profile, "--dump-dom").stdout
+    body = re.search(r"<body([^>]*)>", dom)
+    assert body is not None, f"no <body> in the dumped DOM: {dom[:500]}"
+    attrs = dict(re.findall(r'([\w-]+)="([^"]*)"', body.group(1)))
+    errors = re.search(r'<pre id="errors"[^>]*>(.*?)</pre>', dom, re.S)
+    return attrs, html_lib.unescape(errors.group(1)) if errors else ""
+
+
+def screenshot(page: Path, profile: Path, out: Path, fragment: str = "") -> Path:
+    run_chromium(page.as_uri() + fragment, profile, f"--screenshot={out}")
+    assert out.is_file(), "chromium wrote no screenshot"
+    return out
+
+
+@pytest.fixture(scope="module")
+def report_page(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    world, cell = cable_cell()
+    out = tmp_path_factory.mktemp("browser")
+    _, html_path = write_report(out, sample_program(cell), world, cell, {"plan": "p.yaml"})
+    return html_path
+
+
+def test_report_loads_without_errors_and_draws(report_page: Path, tmp_path: Path) -> None:
+    fragment = "#t=2.5"  # both grippers hold the cable: it is drawn between the hands
+    attrs, errors = dump_dom(report_page, tmp_path / "profile", fragment)
+    assert attrs.get("data-status") == "ok", f"page status {attrs.get('data-status')}: {errors}"
+    assert errors.strip() == ""
+    assert int(attrs["data-drawn"]) > 200  # triangles, link shapes, hands
+    assert attrs["data-cables"] == "1"
+    x, y, w, h = (int(v) for v in attrs["data-canvas"].split(","))
+    assert w > 400 and h > 300 and x + w <= WINDOW[0] and y + h <= WINDOW[1]
+
+    shot = screenshot(report_page, tmp_path / "profile", tmp_path / "shot.png", fragment)
+    image = read_png(shot.read_bytes(), rows=y + h)[y : y + h, x : x + w, :3].astype(int)
+    pixels = image.reshape(-1, 3)
+    drawn = np.abs(pixels - BACKGROUND).max(axis=1) > 12
+    share = float(drawn.mean())
+    assert share > 0.15, f"only {share:.1%} of the 3D view differs from its background"
+    r, g, b = pixels[:, 0], pixels[:, 1], pixels[:, 2]
+    blue = (b > r + 60) & (b > g + 20)  # the left arm
+    orange = (r > b + 80) & (r > g + 30)  # the right arm
+    assert blue.sum() > 1000 and orange.sum() > 1000, (int(blue.sum()), int(orange.sum()))
+    assert len(np.unique(pixels, axis=0)) > 200  # shaded, not flat fills
+
+
+def test_errors_in_the_page_are_caught(report_page: Path, tmp_path: Path) -> None:
+    """The harness sees a failing page: a script error ends in data-status 'error' with the
+    message in #errors (so the test above would catch one)."""
+    broken = tmp_path / "broken.html"
+    text = report_page.read_text(encoding="utf-8")
+    marker = "'use strict';"
+    assert marker in text
+    broken.write_text(text.replace(marker, marker + "\nnull.boom();", 1), encoding="utf-8")
+    attrs, errors = dump_dom(broken, tmp_path / "profile")
+    assert attrs.get("data-status") == "error"
+    assert "null" in errors and "init" not in errors  # a top-level TypeError, from the guard
