@@ -499,6 +499,7 @@ JS = r"""
 
   // ---------------------------------------------------------------- plots
   function niceTicks(lo, hi, count) {
+    if (!(hi > lo)) return { ticks: [lo], digits: 0 };
     const raw = (hi - lo) / Math.max(1, count);
     const mag = Math.pow(10, Math.floor(Math.log10(raw)));
     const step = [1, 2, 2.5, 5, 10].map((m) => m * mag).find((s) => s >= raw) || 10 * mag;
@@ -740,8 +741,12 @@ JS = r"""
     RP.steps.forEach((s, k) => bar(steps, s, STEP_COLORS[k % STEP_COLORS.length],
       '#' + s.step + ' ' + s.label, '#' + s.step + ' ' + s.label + ': ' + fmt(s.start, 2) +
       ' to ' + fmt(s.end, 2) + ' s', tl.steps));
-    const segs = lane('thin', 'Segments (colour: strategy; ' + Object.entries(STRATEGY_COLORS)
-      .map(([k]) => k).join(', ') + ')');
+    const segs = lane('thin', 'Segments');
+    const key = segs.previousSibling;
+    for (const [name, color] of Object.entries(STRATEGY_COLORS)) {
+      key.append(el('span', { style: 'margin-left:12px' },
+        el('span', { class: 'dot', style: 'background:' + color }), name));
+    }
     RP.segments.forEach((s) => bar(segs, s, STRATEGY_COLORS[s.strategy] || '#64748b', s.label,
       s.label + ' [' + s.strategy + ']: ' + fmt(s.end - s.start, 2) + ' s', tl.segments));
     if (RP.events.length) {

@@ -55,7 +55,10 @@ def replay_data(
 ) -> dict[str, Any]:
     """The replay embedded in report.html (see the module's notes for the layout)."""
     times = sample_times(program, rate, max_samples)
-    q, qd = sample_program(program, times, joint_order(program, cell.joint_names))
+    if program.segments:
+        q, qd = sample_program(program, times, joint_order(program, cell.joint_names))
+    else:  # nothing moves: the cell at home
+        q, qd = _home(cell)[None], np.zeros((1, cell.nq))
     geometry, tcp = placements(cell, q)
     distance = ArmDistance(cell).series(q)
     start, end = program_span(program)
@@ -86,6 +89,12 @@ def replay_data(
         "events": [event_entry(e) for e in program.events],
         "cable": cable_spans(program, world),
     }
+
+
+def _home(cell: CellModel) -> Vec:
+    return cell.join(
+        {n: arm.home if arm.home is not None else np.zeros(arm.nq) for n, arm in cell.arms.items()}
+    )
 
 
 def _round(a: Any, decimals: int) -> Any:

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cellengine.program import Program
 from cellengine.report import write_report
 from tests.report.png import read_png
 from tests.report.programs import cable_cell, sample_program
@@ -118,3 +119,12 @@ def test_errors_in_the_page_are_caught(report_page: Path, tmp_path: Path) -> Non
     attrs, errors = dump_dom(broken, tmp_path / "profile")
     assert attrs.get("data-status") == "error"
     assert "null" in errors and "init" not in errors  # a top-level TypeError, from the guard
+
+
+def test_an_empty_program_loads(tmp_path: Path) -> None:
+    """No segments, no events: the cell at home, nothing to play, no error."""
+    world, cell = cable_cell()
+    _, page = write_report(tmp_path / "run", Program(cell.joint_names, (), ()), world, cell)
+    attrs, errors = dump_dom(page, tmp_path / "profile")
+    assert attrs.get("data-status") == "ok", errors
+    assert int(attrs["data-drawn"]) > 100 and attrs["data-cables"] == "0"

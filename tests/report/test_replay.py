@@ -10,6 +10,7 @@ import pytest
 import trimesh
 
 from cellengine.info.cell import Obstacle
+from cellengine.motion.trajectory import Trajectory
 from cellengine.program import CompiledSegment, GripperEvent, Program, Segment, TimedEvent
 from cellengine.report import replay_data
 from cellengine.report.replay import REPLAY_RATE, cable_spans, decimate, obstacle_mesh
@@ -208,3 +209,27 @@ def test_obstacle_meshes() -> None:
     assert cyl.bounds == pytest.approx(np.array([[-0.1, -0.1, -0.2], [0.1, 0.1, 0.2]]), abs=1e-9)
     ball = obstacle_mesh(Obstacle.model_validate({"sphere": {"radius": 0.05}}))
     assert np.linalg.norm(ball.vertices, axis=1) == pytest.approx(0.05)
+
+
+def test_program_joint_order_does_not_matter(replay: dict) -> None:
+    world, cell = cable_cell()
+    program = make_program(cell)
+    perm = np.arange(12)[::-1]
+    names = tuple(program.joint_names[i] for i in perm)
+
+    def permuted(cs: CompiledSegment) -> CompiledSegment:
+        t = cs.trajectory
+        traj = Trajectory(names, t.t, t.q[:, perm], t.qd[:, perm], t.qdd[:, perm])
+        return CompiledSegment(cs.segment, cs.strategy, traj, cs.report)
+
+    other = Program(names, tuple(permuted(cs) for cs in program.segments), program.events)
+    again = replay_data(other, cell, world)
+    assert again["q"] == replay["q"] and again["links"] == replay["links"]
+
+
+def test_empty_program_shows_the_cell_at_home() -> None:
+    world, cell = cable_cell()
+    out = replay_data(Program(cell.joint_names, (), ()), cell, world)
+    assert out["times"] == [0.0] and out["duration"] == 0.0
+    assert [s[0] for s in out["q"]] == pytest.approx(home(cell), abs=1e-5)
+    assert out["steps"] == [] and out["segments"] == [] and out["cable"] == []
