@@ -148,7 +148,7 @@ class Compiler:
             return traj, gate(traj, self.cell, self.checker), {}
         refused = Refused("unreachable")
         for dt in (SCHEDULE_DT, SAMPLE_DT):
-            starts = schedule(self.cell, q, merged.alone, self.checker.check_batch, dt=dt)
+            starts = schedule(self.cell, q, merged.alone, self.checker, dt=dt)
             traj = on_one_axis(self.cell, q, merged.alone, starts).shifted(t)
             try:
                 return traj, gate(traj, self.cell, self.checker), starts
@@ -237,6 +237,7 @@ def _report(
             "distance_m": kept.distance,
             "deviation_m": kept.deviation,
         },
+        "checks_passed": True,  # a check that fails stops the compile
         "checks": {
             "cartesian_fraction": True,
             "gate": True,

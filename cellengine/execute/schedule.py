@@ -4,17 +4,20 @@ Arms solved apart are each planned against the others standing where they start,
 them at once can collide where both arms pass through one place at one time. The scheduler
 takes the arms in order: the first starts at once; each next one's trajectory is checked
 against those already scheduled, with the whole cell's state sampled every ``dt`` over the
-time the new arm moves, and its start is pushed back by ``step`` until no sample collides.
-The time before its start needs no check: the arms already running were planned with it
-standing at its start.
+time the new arm moves, and its start is pushed back by ``step`` until at no sample is it
+closer than ``clearance`` to an arm already running. A margin rather than bare contact:
+between samples the arms move, and a schedule that only just misses is one a small tracking
+error turns into a collision. The time before its start needs no check: the arms already
+running were planned with it standing at its start.
 
 Once every arm already running has stopped, a delay no longer changes anything: an arm that
-still collides then collides with where the others end, and is refused.
+still comes too close then comes too close to where the others end, and is refused.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -25,20 +28,27 @@ from cellengine.motion.robot import CellModel
 from cellengine.motion.trajectory import Trajectory
 
 Vec = NDArray[np.float64]
-CollidingRows = Callable[[Vec], NDArray[np.bool_]]  # whole-cell states (k, nq) -> (k,)
 
 SCHEDULE_DT = 0.01  # s between the states checked for each candidate start
-DELAY_STEP = 0.05  # s by which a colliding arm's start is pushed back
+DELAY_STEP = 0.05  # s by which an arm's start is pushed back
+SCHEDULE_CLEARANCE = 0.01  # m: the least distance between two arms moving on their own
+
+
+class ArmDistance(Protocol):
+    def distance(self, q: Vec, between: tuple[str, str] | None = None) -> tuple[float, object]:
+        """The least distance (m) between two arms' objects at the cell state q."""
+        ...
 
 
 def schedule(
     cell: CellModel,
     q: Vec,
     alone: Mapping[str, Trajectory],
-    colliding: CollidingRows,
+    checker: ArmDistance,
     *,
     dt: float = SCHEDULE_DT,
     step: float = DELAY_STEP,
+    clearance: float = SCHEDULE_CLEARANCE,
 ) -> dict[str, float]:
     """Each arm's start time (s from the part's start), in ``alone``'s order."""
     starts: dict[str, float] = {}
@@ -46,32 +56,22 @@ def schedule(
         if not starts:  # the first arm runs at once: nothing is running yet
             starts[arm] = 0.0
             continue
-        scheduled = {a: alone[a] for a in starts}
-        busy_until = max((starts[a] + alone[a].duration for a in starts), default=0.0)
+        running = {a: alone[a] for a in starts}
+        busy_until = max(starts[a] + alone[a].duration for a in starts)
         delay = 0.0
-        while _collides(cell, q, scheduled, starts, arm, traj, delay, colliding, dt):
+        while True:
+            together = on_one_axis(cell, q, {**running, arm: traj}, {**starts, arm: delay})
+            t = np.append(np.arange(delay, delay + traj.duration, dt), delay + traj.duration)
+            states, _, _ = together.sample(t)
+            d = min(checker.distance(s, (arm, other))[0] for s in states for other in running)
+            if d >= clearance:
+                break
             if delay >= busy_until:
                 raise Refused(
-                    f"async: the {arm} arm's motion collides with where "
-                    f"{' and '.join(starts)} stand(s) after moving"
+                    f"async: the {arm} arm's motion comes within {1000 * d:.1f} mm of "
+                    f"{' and '.join(running)} (at least {1000 * clearance:g} mm) even after "
+                    "it has stopped"
                 )
             delay = min(delay + step, busy_until)
         starts[arm] = delay
     return starts
-
-
-def _collides(
-    cell: CellModel,
-    q: Vec,
-    scheduled: Mapping[str, Trajectory],
-    starts: Mapping[str, float],
-    arm: str,
-    traj: Trajectory,
-    delay: float,
-    colliding: CollidingRows,
-    dt: float,
-) -> bool:
-    together = on_one_axis(cell, q, {**scheduled, arm: traj}, {**starts, arm: delay})
-    t = np.append(np.arange(delay, delay + traj.duration, dt), delay + traj.duration)
-    states, _, _ = together.sample(t)
-    return bool(colliding(states).any())

@@ -46,8 +46,8 @@ class Part:
 
     ``rows``: each moving arm's joint rows, the start first, in the segment's path order.
     ``coupled``: the whole-cell rows when the arms were solved on one grid (row i of every arm
-    belongs to one moment), else None. ``fraction``: each arm's Cartesian path fraction (1 for
-    a transit; a short path is refused before a Part exists)."""
+    belongs to one moment), else None. ``fraction``: each Cartesian arm's path fraction (a
+    transit has none; a short path is refused before a Part exists, so these are 1)."""
 
     start: Vec
     rows: Mapping[str, Vec]
@@ -116,25 +116,27 @@ def _closed_chain(
     if path is None or path.kind != "cartesian":
         raise Refused(f"a closed chain needs a Cartesian path of its leader, the {leader} arm")
     rows, fraction = solve.closed_chain(cell, checker, leader, follower, path.poses, q)
-    return _coupled_part(cell, q, rows, {leader: fraction, follower: fraction})
+    return _coupled_part(cell, q, rows, {leader: fraction, follower: fraction}, chain)
 
 
 def _transit_together(
     cell: CellModel, checker: CollisionChecker, paths: Mapping[str, ArmPath], q: Vec
 ) -> Part:
     rows = solve.transit(cell, checker, {a: p.poses[-1] for a, p in paths.items()}, q)
-    return _coupled_part(cell, q, rows, {a: 1.0 for a in paths})
+    return _coupled_part(cell, q, rows, {}, tuple(paths))
 
 
 def _cartesian_together(
     cell: CellModel, checker: CollisionChecker, paths: Mapping[str, ArmPath], q: Vec
 ) -> Part:
     rows, fraction = solve.dual_cartesian(cell, checker, {a: p.poses for a, p in paths.items()}, q)
-    return _coupled_part(cell, q, rows, {a: fraction for a in paths})
+    return _coupled_part(cell, q, rows, {a: fraction for a in paths}, tuple(paths))
 
 
-def _coupled_part(cell: CellModel, q: Vec, rows: Vec, fraction: Mapping[str, float]) -> Part:
-    per_arm = {a: rows[:, cell.slices[a]] for a in fraction}
+def _coupled_part(
+    cell: CellModel, q: Vec, rows: Vec, fraction: Mapping[str, float], arms: tuple[str, ...]
+) -> Part:
+    per_arm = {a: rows[:, cell.slices[a]] for a in arms}
     return Part(q, per_arm, rows, dict(fraction), "together")
 
 
@@ -150,8 +152,7 @@ def _apart(
     fraction: dict[str, float] = {}
     for arm, p in paths.items():
         if p.kind == "transit":
-            cell_rows = solve.transit(cell, checker, {arm: p.poses[-1]}, q)
-            rows[arm], fraction[arm] = cell_rows[:, cell.slices[arm]], 1.0
+            rows[arm] = solve.transit(cell, checker, {arm: p.poses[-1]}, q)[:, cell.slices[arm]]
         else:
             rows[arm], fraction[arm] = solve.cartesian(cell, checker, arm, p.poses, q)
     return Part(q, rows, None, fraction, solved)

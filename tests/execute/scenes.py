@@ -137,3 +137,74 @@ def reference_segments() -> list[Segment]:
             after=(GripperEvent("left", "open"),),
         ),
     ]
+
+
+def crossing() -> tuple[Segment, Segment]:
+    """Where the published split matters: the left hand crosses towards where the right hand
+    stands while the right hand moves away. Planned apart in one piece, the left arm's path
+    runs into the right arm standing at its start; split, it is planned against the right
+    arm where it has got to. (After ``ready``.)"""
+    seg = Segment(
+        1,
+        "cross",
+        (
+            ArmPath("left", "cartesian", line(LEFT_READY, (0.40, -0.10, 0.20))),
+            ArmPath("right", "cartesian", line(RIGHT_READY, (0.40, -0.35, 0.20))),
+        ),
+    )
+    return ready(), seg
+
+
+RIGHT_HIGH = (0.40, -0.15, 0.35)
+
+
+def sweep() -> tuple[Segment, Segment, Segment]:
+    """Where async waits: the left hand sweeps out to y = -5 cm and back while the right hand
+    comes down through where the left is at the middle of its sweep. Each path is free with
+    the other arm standing at its start; run at once they collide. (After ``ready``, a move
+    of the right hand up.)"""
+    out = line(LEFT_READY, (0.40, -0.05, 0.20))
+    back = line((0.40, -0.05, 0.20), LEFT_READY)
+    up = Segment(1, "right up", (ArmPath("right", "cartesian", line(RIGHT_READY, RIGHT_HIGH)),))
+    seg = Segment(
+        1,
+        "sweep",
+        (
+            ArmPath("left", "cartesian", np.concatenate([out, back[1:]])),
+            ArmPath("right", "cartesian", line(RIGHT_HIGH, (0.40, -0.02, 0.20))),
+        ),
+    )
+    return ready(), up, seg
+
+
+def synchronised() -> dict[str, Segment]:
+    """Two-arm Cartesian moves for the merges (after ``ready``): parallel lines of 20 and
+    10 cm (the shorter arm can follow the longer one's timing everywhere), and a line beside
+    an L whose corner the faster arm must take slowly."""
+    lx, ly, lz = LEFT_READY
+    rx, ry, rz = RIGHT_READY
+    corner = (rx + 0.06, ry, rz)
+    return {
+        "parallel": Segment(
+            1,
+            "parallel lines",
+            (
+                ArmPath("left", "cartesian", line(LEFT_READY, (lx + 0.2, ly, lz))),
+                ArmPath("right", "cartesian", line(RIGHT_READY, (rx + 0.1, ry, rz))),
+            ),
+        ),
+        "corner": Segment(
+            1,
+            "line and corner",
+            (
+                ArmPath("left", "cartesian", line(LEFT_READY, (lx + 0.2, ly, lz))),
+                ArmPath(
+                    "right",
+                    "cartesian",
+                    np.concatenate(
+                        [line(RIGHT_READY, corner), line(corner, (rx + 0.06, ry - 0.06, rz))[1:]]
+                    ),
+                ),
+            ),
+        ),
+    }

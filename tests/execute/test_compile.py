@@ -68,7 +68,8 @@ def test_reports_say_what_was_checked(program: Program) -> None:
         r = s.report
         assert r["strategy"] == s.strategy
         assert r["checks"]["gate"] is True and r["checks"]["gate_samples"] > 0
-        assert set(r["fraction"]) == set(s.segment.arms()) | set(s.segment.closed_chain or ())
+        cartesian = {p.arm for p in s.segment.paths if p.kind == "cartesian"}
+        assert set(r["fraction"]) == cartesian | set(s.segment.closed_chain or ())
         assert all(f == 1.0 for f in r["fraction"].values())
         assert r["duration_s"] == pytest.approx(s.trajectory.duration)
         assert r["planning_time_s"] > 0
