@@ -88,6 +88,7 @@ table.joints td, table.joints th { padding: 1px 4px; font-size: 12px; }
 .axis { position: relative; height: 16px; font-size: 10px; color: var(--muted); }
 .axis span { position: absolute; transform: translateX(-50%); white-space: nowrap; }
 .axis span:last-child { transform: translateX(-100%); }
+.axis span:first-child { transform: none; }
 .plots { display: grid; grid-template-columns: repeat(auto-fit, minmax(380px, 1fr)); gap: 12px; }
 .plot-title { display: flex; justify-content: space-between; font-size: 12px; margin: 6px 0 2px; }
 .plot-title span:last-child { color: var(--muted); }

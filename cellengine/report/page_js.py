@@ -87,6 +87,13 @@ JS = r"""
     const s = name.startsWith(arm + '_') ? name.slice(arm.length + 1) : name;
     return s.replace(/_joint$/, '');
   }
+  function capture(target, e) {
+    try {
+      target.setPointerCapture(e.pointerId);
+    } catch (err) {
+      // a synthetic or already released pointer: dragging works without capture
+    }
+  }
   function pairText(p) { return Array.isArray(p) ? p.join(' \u2194 ') : DASH; }
   function valueText(v) {
     if (v === null || v === undefined) return DASH;
@@ -598,7 +605,7 @@ JS = r"""
       const r = cv.getBoundingClientRect();
       seek(T0 + (e.clientX - r.left - M.l) / (r.width - M.l - M.r) * DUR);
     }
-    cv.addEventListener('pointerdown', (e) => { cv.setPointerCapture(e.pointerId); pick(e); });
+    cv.addEventListener('pointerdown', (e) => { capture(cv, e); pick(e); });
     cv.addEventListener('pointermove', (e) => { if (e.buttons) pick(e); });
     plots.push({ draw });
   }
@@ -931,7 +938,7 @@ JS = r"""
     let drag = null;
     canvas.addEventListener('pointerdown', (e) => {
       drag = { x: e.clientX, y: e.clientY, pan: e.button !== 0 || e.shiftKey };
-      canvas.setPointerCapture(e.pointerId);
+      capture(canvas, e);
       canvas.classList.add('dragging');
     });
     canvas.addEventListener('pointermove', (e) => {

@@ -128,3 +128,54 @@ def test_an_empty_program_loads(tmp_path: Path) -> None:
     attrs, errors = dump_dom(page, tmp_path / "profile")
     assert attrs.get("data-status") == "ok", errors
     assert int(attrs["data-drawn"]) > 100 and attrs["data-cables"] == "0"
+
+
+INTERACT = """
+<script>
+(function () {
+  const c = document.getElementById('view');
+  const r = c.getBoundingClientRect();
+  const at = (type, x, y, extra) => c.dispatchEvent(new PointerEvent(type, Object.assign(
+    { clientX: r.left + x, clientY: r.top + y, bubbles: true, pointerId: 7, buttons: 1 },
+    extra || {})));
+  at('pointerdown', 100, 100); at('pointermove', 160, 130); at('pointerup', 160, 130);
+  at('pointerdown', 100, 100, { shiftKey: true }); at('pointermove', 130, 90);
+  at('pointerup', 130, 90);
+  c.dispatchEvent(new WheelEvent('wheel', { deltaY: -300, bubbles: true, cancelable: true }));
+  c.dispatchEvent(new MouseEvent('dblclick', { bubbles: true }));
+  for (const id of ['btn-trails', 'btn-keys', 'btn-wire', 'btn-reset']) {
+    document.getElementById(id).click();
+  }
+  document.querySelectorAll('.bar')[1].click();
+  document.querySelector('tr.clickable').click();
+  const plot = document.querySelector('canvas.plot');
+  const pr = plot.getBoundingClientRect();
+  plot.dispatchEvent(new PointerEvent('pointerdown', { clientX: pr.left + pr.width / 2,
+    clientY: pr.top + 20, bubbles: true, pointerId: 8, buttons: 1 }));
+  document.dispatchEvent(new KeyboardEvent('keydown', { key: 'ArrowRight', bubbles: true }));
+  const s = document.getElementById('slider');
+  s.value = '1'; s.dispatchEvent(new Event('input'));
+  const speed = document.getElementById('speed');
+  speed.value = '2'; speed.dispatchEvent(new Event('change'));
+  document.getElementById('play').click();
+  setTimeout(function () {
+    document.body.dataset.clock = document.getElementById('clock').textContent;
+    document.body.dataset.play = document.getElementById('play').textContent;
+  }, 1000);
+})();
+</script>
+"""
+
+
+def test_interactions_do_not_fail(report_page: Path, tmp_path: Path) -> None:
+    """Orbit, pan, zoom, reset, toggles, timeline, table, plot, keys, slider, speed and play:
+    no error; the slider sets the time and play starts playing. (Playback advances on
+    requestAnimationFrame, which headless Chromium's virtual time fires a few times at most.)"""
+    page = tmp_path / "interact.html"
+    text = report_page.read_text(encoding="utf-8")
+    page.write_text(text.replace("</body>", INTERACT + "</body>"), encoding="utf-8")
+    attrs, errors = dump_dom(page, tmp_path / "profile")
+    assert attrs.get("data-status") == "ok", errors
+    assert "Pause" in attrs["data-play"]
+    now, total = (float(v.strip(" s")) for v in attrs["data-clock"].split("/"))
+    assert total == 6.0 and 1.0 <= now < 3.5, attrs["data-clock"]
