@@ -67,9 +67,8 @@ class Compiler:
         self.merge: Merge = merge
         self.split_threshold = split_threshold
         self.plan_file = plan_file
-        # its own checker: attaching held objects must not change the caller's
-        self.checker = CollisionChecker(checker.scene)
-        self.holding = Holding(world, self.checker)
+        # checkers of its own: attaching held objects must not change the caller's
+        self.holding = Holding(world, checker.scene)
         self.q = q
         self.t = 0.0
         self.segments: list[CompiledSegment] = []
@@ -85,6 +84,11 @@ class Compiler:
         self.q = np.array(compiled.trajectory.q[-1])
         self.t = compiled.trajectory.end_time
         return compiled
+
+    @property
+    def checker(self) -> CollisionChecker:
+        """The collision checker of the cell with what the grippers hold now."""
+        return self.holding.checker
 
     def program(self) -> Program:
         return Program(self.cell.joint_names, tuple(self.segments), tuple(self.events))

@@ -65,7 +65,7 @@ class Merged:
     trajectory: Trajectory
     alone: Mapping[str, Trajectory]  # each moving arm timed on its own (its joints, from 0)
     durations: Mapping[str, float]  # merge name -> duration (s)
-    bound: float  # the slower arm's time-optimal duration (no jerk limit)
+    bound: float  # the slower arm's time-optimal duration (TOPP-RA, no jerk limit)
     bound_jerk: float  # the slower arm's jerk-limited duration on its own
 
 
