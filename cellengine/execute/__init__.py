@@ -5,7 +5,7 @@
 strategies.py, merge.py and schedule.py for the choices.
 """
 
-from cellengine.execute.compile import Compiler, compile_segments
+from cellengine.execute.compile import Compiler, compile_segments, home_configuration
 from cellengine.execute.merge import MERGES, Merge
 from cellengine.execute.strategies import STRATEGIES, Strategy
 from cellengine.execute.timeline import program_trajectory
@@ -17,5 +17,6 @@ __all__ = [
     "Merge",
     "Strategy",
     "compile_segments",
+    "home_configuration",
     "program_trajectory",
 ]

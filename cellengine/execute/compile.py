@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from cellengine.errors import InputError
 from cellengine.execute.checks import gate, kept_distance
 from cellengine.execute.held import Holding
 from cellengine.execute.merge import MERGES, Merge, Merged, merge_rows, on_one_axis
@@ -75,10 +76,14 @@ class Compiler:
         self.events: list[TimedEvent] = []
 
     def add(self, segment: Segment) -> CompiledSegment:
-        """Compile one segment after those already added; InputError if it cannot run."""
+        """Compile one segment after those already added; InputError if it cannot run (the
+        compiler is then as it was before: a caller may try another segment instead)."""
+        events, held, checker = len(self.events), self.holding.by_arm, self.holding.checker
         try:
             compiled = self._compile(segment)
         except Refused as e:
+            del self.events[events:]
+            self.holding.by_arm, self.holding.checker = held, checker
             raise in_plan_terms(segment, str(e), self.plan_file) from None
         self.segments.append(compiled)
         self.q = np.array(compiled.trajectory.q[-1])
@@ -159,6 +164,18 @@ class Compiler:
             except Refused as e:
                 refused = e
         raise refused
+
+
+def home_configuration(cell: CellModel) -> Vec:
+    """Every arm at its cell.yaml ``home``: where a program starts by default."""
+    missing = [name for name, arm in cell.arms.items() if arm.home is None]
+    if missing:
+        raise InputError.at(
+            f"robots.{missing[0]}.home is not given: a program needs every arm's start "
+            "configuration",
+            None,
+        )
+    return cell.join({name: np.asarray(arm.home) for name, arm in cell.arms.items()})
 
 
 def compile_segments(

@@ -24,7 +24,7 @@ STEP = 0.005  # m between Cartesian waypoints (the skills' step)
 
 @cache
 def cable_cell() -> tuple[World, CellModel, CollisionChecker]:
-    world = load_world(CELL)
+    world = load_world(CELL, CELL.parent / "objects.yaml")
     cell = build_cell_model(world)
     return world, cell, CollisionChecker(build_scene(cell, world))
 

@@ -197,3 +197,45 @@ def test_held_objects_follow_the_gripper_events() -> None:
     assert set(c.checker.scene.held) == {"cable1@left", "cable1@right"}
     c.add(reference_segments()[4])
     assert set(c.checker.scene.held) == {"cable1@right"}  # left opened after the arc
+
+
+def test_a_refused_segment_leaves_the_compiler_as_it_was() -> None:
+    from cellengine.execute import Compiler
+
+    world, cell, checker = cable_cell()
+    c = Compiler(world, cell, checker, home(cell))
+    c.add(ready())
+    q, t, events, held = c.q.copy(), c.t, list(c.events), c.checker.scene.held
+    bad = Segment(
+        1,
+        "grasp and reach too far",
+        (ArmPath("left", "transit", pose((1.5, 0.15, 0.2))[None]),),
+        before=(GripperEvent("left", "grasp", "cable1"),),
+    )
+    with pytest.raises(InputError):
+        c.add(bad)
+    assert np.array_equal(c.q, q) and c.t == t and c.events == events
+    assert c.checker.scene.held == held and len(c.segments) == 1
+    c.add(reference_segments()[1])  # and it goes on from there
+    assert len(c.program().segments) == 2
+
+
+def test_home_configuration() -> None:
+    from cellengine.execute import home_configuration
+
+    _, cell, _ = cable_cell()
+    assert np.array_equal(home_configuration(cell), home(cell))
+
+
+def test_held_shapes() -> None:
+    from cellengine.execute.held import held_object
+
+    world, _, checker = cable_cell()
+    connector = held_object(world, checker.scene, "left", "cable1.connector")
+    assert connector.name == "cable1.connector@left"
+    assert np.allclose(connector.shape.halfSide * 2, [0.035, 0.031, 0.016])
+    piece = held_object(world, checker.scene, "right", "cable1")
+    assert np.allclose(piece.shape.halfSide * 2, 0.006)
+    assert "routing.guide1" in piece.allowed and "table" not in piece.allowed
+    other = held_object(world, checker.scene, "right", "something")
+    assert np.allclose(other.shape.halfSide * 2, 0.01)
