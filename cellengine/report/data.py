@@ -58,7 +58,7 @@ def report_data(
     first segment's label up to ':'); ``extra`` adds top-level keys (it may not replace one)."""
     distance = _distance_fn(program, cell)
     segments = [_segment(i, cs, distance) for i, cs in enumerate(program.segments)]
-    steps = _steps(segments, step_labels or {})
+    steps = _steps(segments, step_names(program, step_labels))
     out: dict[str, Any] = {
         "format": REPORT_FORMAT,
         "joint_names": list(program.joint_names),
@@ -79,9 +79,29 @@ def event_entry(e: TimedEvent) -> dict[str, Any]:
     return {"time": float(e.time), **_gripper(e.event)}
 
 
-def step_label(label: str) -> str:
-    """The step part of a segment label: 'RouteCable guide2: lift' -> 'RouteCable guide2'."""
-    return label.split(":", 1)[0].strip() or label
+def step_label(labels: Sequence[str]) -> str:
+    """A step's name from its segments' labels: the words before ':' that all of them begin
+    with ('RouteCable guide2: lift', 'RouteCable guide2: insert' -> 'RouteCable guide2'), else
+    the first label's first word (the skill: 'RouteCable guide1: ...', 'RouteCable guide2: ...',
+    'cable1: release' -> 'RouteCable')."""
+    heads = [label.split(":", 1)[0].split() for label in labels]
+    if not heads or not heads[0]:
+        return labels[0] if labels else ""
+    common: list[str] = []
+    for words in zip(*heads, strict=False):  # up to the shortest
+        if any(w != words[0] for w in words):
+            break
+        common.append(words[0])
+    return " ".join(common) or heads[0][0]
+
+
+def step_names(program: Program, given: Mapping[int, str] | None = None) -> dict[int, str]:
+    """Each plan step's name: ``given`` (from the plan), else :func:`step_label`."""
+    labels: dict[int, list[str]] = {}
+    for cs in program.segments:
+        labels.setdefault(int(cs.segment.step), []).append(cs.segment.label)
+    given = given or {}
+    return {step: given.get(step) or step_label(parts) for step, parts in labels.items()}
 
 
 # ---------------------------------------------------------------------------------- segments
@@ -213,10 +233,7 @@ def _steps(segments: Sequence[Mapping[str, Any]], labels: Mapping[int, str]) -> 
     by_step: dict[int, list[Mapping[str, Any]]] = {}
     for s in segments:
         by_step.setdefault(int(s["step"]), []).append(s)
-    return [
-        _step(step, labels.get(step) or step_label(str(parts[0]["label"])), parts)
-        for step, parts in sorted(by_step.items())
-    ]
+    return [_step(step, labels[step], parts) for step, parts in sorted(by_step.items())]
 
 
 def _step(step: int, label: str, parts: Sequence[Mapping[str, Any]]) -> dict[str, Any]:

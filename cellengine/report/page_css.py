@@ -90,7 +90,8 @@ table.joints td, table.joints th { padding: 1px 4px; font-size: 12px; }
 .axis span:last-child { transform: translateX(-100%); }
 .axis span:first-child { transform: none; }
 .plots { display: grid; grid-template-columns: repeat(auto-fit, minmax(380px, 1fr)); gap: 12px; }
-.plot-title { display: flex; justify-content: space-between; font-size: 12px; margin: 6px 0 2px; }
+.plot-title { display: flex; justify-content: space-between; flex-wrap: wrap; gap: 0 10px;
+  font-size: 12px; margin: 6px 0 2px; }
 .plot-title span:last-child { color: var(--muted); }
 canvas.plot { width: 100%; height: 130px; display: block; cursor: crosshair; }
 .legend { display: flex; flex-wrap: wrap; gap: 2px 10px; font-size: 11px; color: var(--muted);
@@ -101,6 +102,7 @@ tr.clickable:hover td { background: #eef3ff; }
 tr.active td { background: #e3ecff !important; }
 td.pass { color: var(--ok); font-weight: 600; } td.fail { color: var(--bad); font-weight: 600; }
 td.indent { padding-left: 22px; }
+td.nowrap { white-space: nowrap; }
 .muted { color: var(--muted); }
 #errors { margin: 0; padding: 10px 18px; color: #991b1b; background: #fef2f2;
   border-bottom: 1px solid #fecaca; white-space: pre-wrap; }

@@ -170,10 +170,8 @@ JS = r"""
       add(l.points[0], l.points[1], l.points[2]);
       if (l.kind === 'capsule' || l.kind === 'cylinder') add(l.points[3], l.points[4], l.points[5]);
     }
-    for (const arm of RP.arms) {
-      const a = RP.tcp[arm];
-      for (let k = 0; k < a.length; k += 3) add(a[k], a[k + 1], a[k + 2]);
-    }
+    // the arms where they start (their whole paths may reach far out of the work area)
+    for (const arm of RP.arms) add(RP.tcp[arm][0], RP.tcp[arm][1], RP.tcp[arm][2]);
     if (!isFinite(lo[0])) return [[-0.5, -0.5, 0], [0.5, 0.5, 0.5]];
     return [lo, hi];
   }
@@ -181,7 +179,7 @@ JS = r"""
     const [lo, hi] = sceneBounds();
     cam.target = [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2];
     const radius = 0.5 * Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
-    cam.dist = Math.max(0.3, 0.9 * radius / Math.sin(FOV / 2));
+    cam.dist = Math.max(0.3, 0.85 * radius / Math.sin(FOV / 2));
     cam.az = -0.75; // from the front, on the right arm's side: the platforms before the arms
     cam.el = 0.55;
   }
@@ -814,7 +812,7 @@ JS = r"""
         const sg = RE.segments[k];
         const r = el('tr', { class: 'clickable' }, td(sg.label, 'indent'), td(sg.strategy),
           td(valueText(sg.merge)), td(fmt(sg.start_s, 2), 'num'), td(fmt(sg.duration_s, 2), 'num'),
-          td(fractions(sg.cartesian_fraction)), td(fmt(sg.planning_time_s, 3), 'num'),
+          td(fractions(sg.cartesian_fraction), 'nowrap'), td(fmt(sg.planning_time_s, 3), 'num'),
           td(mm(sg.min_arm_distance_m), 'num'), td(pairText(sg.closest_pair)),
           checksCell(sg.checks_passed));
         r.addEventListener('click', () => seek(sg.start_s));

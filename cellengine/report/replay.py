@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 from cellengine.info.cell import Obstacle
 from cellengine.motion.robot import CellModel
 from cellengine.program import Program
-from cellengine.report.data import event_entry, step_label
+from cellengine.report.data import event_entry, step_names
 from cellengine.report.distance import ArmDistance
 from cellengine.report.sampling import joint_order, program_span, sample_program, sample_times
 from cellengine.world import World
@@ -271,13 +271,14 @@ def timeline(program: Program, step_labels: Mapping[int, str]) -> dict[str, Any]
         }
         for i, cs in enumerate(program.segments)
     ]
+    names = step_names(program, step_labels)
     steps: dict[int, dict[str, Any]] = {}
     for s in segments:
         step = steps.setdefault(
             s["step"],
             {
                 "step": s["step"],
-                "label": step_labels.get(s["step"]) or step_label(s["label"]),
+                "label": names[s["step"]],
                 "start": s["start"],
                 "end": s["end"],
             },

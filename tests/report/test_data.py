@@ -11,6 +11,7 @@ import pytest
 from cellengine.motion.gate import GateReport, Violation
 from cellengine.program import CompiledSegment, Program
 from cellengine.report import report_data
+from cellengine.report.data import step_label
 from cellengine.report.distance import ArmDistance
 from cellengine.report.jsonable import jsonable
 from tests.report.programs import cable_cell, sample_program
@@ -151,3 +152,18 @@ def test_jsonable() -> None:
     }
     assert jsonable(np.array([[1, 2]])) == [[1, 2]]
     assert jsonable(np.bool_(True)) is True
+
+
+@pytest.mark.parametrize(
+    ("labels", "name"),
+    [
+        (["RouteCable guide2: lift", "RouteCable guide2: insert"], "RouteCable guide2"),
+        (["RouteCable routing.guide1: a", "RouteCable routing.guide2: b"], "RouteCable"),
+        (["RouteCable guide1: a", "cable1: release and retract"], "RouteCable"),
+        (["PickCable: approach"], "PickCable"),
+        (["lift"], "lift"),
+        ([""], ""),
+    ],
+)
+def test_step_label(labels: list[str], name: str) -> None:
+    assert step_label(labels) == name
