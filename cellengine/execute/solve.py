@@ -38,7 +38,7 @@ Vec = NDArray[np.float64]
 Poses = NDArray[np.float64]
 
 PLANNER_SEED = 0  # OMPL is re-seeded per query: the same segment gives the same path
-PLANNER_TIME = 2.0  # s per transit query
+PLANNER_TIME = 1.0  # s per transit query (one per tier of goals)
 DIRECT_TRIES = 4  # nearest goals tried as a straight joint-space line before planning
 # Transit rows are cut into steps of at most this (rad, largest joint) so that the timing
 # spline, which passes through every row, stays on the planner's straight segments.
@@ -52,26 +52,32 @@ def transit(
     q: Vec,
 ) -> Vec:
     """Whole-cell rows from ``q`` to a configuration putting each arm's TCP at its goal pose
-    (4, 4), the arms moving together; the other arms stand."""
+    (4, 4), the arms moving together; the other arms stand. Goal configurations that keep
+    every arm on its IK branch are tried first (see :func:`_goal_configurations`): a planner
+    given several goals reaches whichever it connects to first, so each tier is its own
+    query."""
     arms = tuple(goals)
     per_arm = [_ik_goals(cell, arm, goals[arm], q) for arm in arms]
-    candidates = _goal_configurations(cell, arms, per_arm, q)
-    free = [g for g in candidates if not checker.in_collision(g)]
-    if not free:
-        contact = checker.check(candidates[0])
+    tiers = _goal_configurations(cell, arms, per_arm, q)
+    free = [[g for g in tier if not checker.in_collision(g)] for tier in tiers]
+    if not any(free):
+        contact = checker.check(tiers[0][0])
         raise Refused(
             f"every IK solution of the transit goal of {_names(arms)} is in collision "
             f"(the nearest: {contact})"
         )
-    for goal in free[:DIRECT_TRIES]:
-        if checker.check_segment(q, goal) is None:
-            return _densified(np.vstack([q, goal]))
-    result = plan_for_arms(
-        cell, checker, arms, q, np.array(free), seed=PLANNER_SEED, time_limit=PLANNER_TIME
-    )
-    if result.path is None:
-        raise Refused(f"no collision-free transit for {_names(arms)}: {result.reason}")
-    return _densified(result.path)
+    reason = ""
+    for tier in (t for t in free if t):
+        for goal in tier[:DIRECT_TRIES]:
+            if checker.check_segment(q, goal) is None:
+                return _densified(np.vstack([q, goal]))
+        result = plan_for_arms(
+            cell, checker, arms, q, np.array(tier), seed=PLANNER_SEED, time_limit=PLANNER_TIME
+        )
+        if result.path is not None:
+            return _densified(result.path)
+        reason = result.reason
+    raise Refused(f"no collision-free transit for {_names(arms)}: {reason}")
 
 
 def _ik_goals(cell: CellModel, arm: str, T_cell_tcp: Poses, q: Vec) -> Vec:
@@ -88,18 +94,36 @@ def _ik_goals(cell: CellModel, arm: str, T_cell_tcp: Poses, q: Vec) -> Vec:
 
 def _goal_configurations(
     cell: CellModel, arms: Sequence[str], per_arm: Sequence[Vec], q: Vec
-) -> list[Vec]:
-    """Every combination of the arms' IK solutions as a cell configuration, nearest ``q``
-    first (joint-space distance; ties keep the solvers' order, so the result is
-    deterministic)."""
+) -> list[list[Vec]]:
+    """Every combination of the arms' IK solutions as a cell configuration, in tiers by how
+    many arms leave their current IK branch (shoulder, elbow and wrist as they are): none
+    first. Within a tier, nearest ``q`` first (joint-space distance; ties keep the solvers'
+    order: deterministic).
+
+    The branch first because a Cartesian path never changes branch: an arm that a transit
+    flips to the nearest solution in joint space (a shoulder flip can be nearer than staying)
+    may find the next Cartesian moves out of that branch's reach, where the branch it came
+    from, the one the plan was made from, reaches them."""
+    keep = [_same_branch(cell, arm, sols, q) for arm, sols in zip(arms, per_arm, strict=True)]
     out = []
-    for combo in itertools.product(*per_arm):
+    for combo in itertools.product(*(range(len(sols)) for sols in per_arm)):
         g = q.copy()
-        for arm, sol in zip(arms, combo, strict=True):
-            g[cell.slices[arm]] = sol
-        out.append(g)
-    out.sort(key=lambda g: float(np.linalg.norm(g - q)))
-    return out
+        for arm, sols, k in zip(arms, per_arm, combo, strict=True):
+            g[cell.slices[arm]] = sols[k]
+        flips = sum(not keep[i][k] for i, k in enumerate(combo))
+        out.append((flips, float(np.linalg.norm(g - q)), g))
+    out.sort(key=lambda item: item[:2])
+    return [[g for f, _, g in out if f == flips] for flips in sorted({f for f, _, _ in out})]
+
+
+def _same_branch(cell: CellModel, arm: str, sols: Vec, q: Vec) -> list[bool]:
+    """For each IK solution, whether it is on the arm's current branch (always, for an arm
+    without a closed form: its solver has no branches)."""
+    ik = arm_ik(cell.arms[arm])
+    if ik.closed_form is None:
+        return [True] * len(sols)
+    now = ik.branch(q[cell.slices[arm]])
+    return [ik.branch(sol) == now for sol in sols]
 
 
 def _densified(path: Vec) -> Vec:

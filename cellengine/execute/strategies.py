@@ -90,7 +90,8 @@ def solve_segment(
         return [_cartesian_together(cell, checker, paths, q)]
     if kinds == {"cartesian"} and strategy == "split":
         return _split(cell, checker, paths, q, threshold)
-    return [_apart(cell, checker, paths, q, "apart")]
+    # async: each arm against those before it standing where they end (see _apart)
+    return [_apart(cell, checker, paths, q, "apart", prioritised=strategy == "async")]
 
 
 def _by_arm(cell: CellModel, segment: Segment) -> dict[str, ArmPath]:
@@ -146,15 +147,26 @@ def _apart(
     paths: Mapping[str, ArmPath],
     q: Vec,
     solved: Solved,
+    *,
+    prioritised: bool = False,
 ) -> Part:
-    """Each arm on its own from ``q``, the other arms standing there."""
+    """Each arm on its own from ``q``, the other arms standing there (the published way).
+
+    ``prioritised`` (LaValle's prioritised planning): each arm is planned with the arms
+    before it standing where they end, the arms after it where they start. Then running the
+    arms one after the other is free by construction, so the async scheduler, which can always
+    fall back to that, never meets an arm whose goal is taken by another's."""
     rows: dict[str, Vec] = {}
     fraction: dict[str, float] = {}
+    here = q.copy()
     for arm, p in paths.items():
         if p.kind == "transit":
-            rows[arm] = solve.transit(cell, checker, {arm: p.poses[-1]}, q)[:, cell.slices[arm]]
+            found = solve.transit(cell, checker, {arm: p.poses[-1]}, here)[:, cell.slices[arm]]
+            rows[arm] = found
         else:
-            rows[arm], fraction[arm] = solve.cartesian(cell, checker, arm, p.poses, q)
+            rows[arm], fraction[arm] = solve.cartesian(cell, checker, arm, p.poses, here)
+        if prioritised:
+            here[cell.slices[arm]] = rows[arm][-1]
     return Part(q, rows, None, fraction, solved)
 
 

@@ -8,12 +8,14 @@ import pytest
 from cellengine.errors import InputError
 from cellengine.execute import Compiler
 from cellengine.execute.merge import on_one_axis
+from cellengine.execute.refused import Refused
 from cellengine.execute.retime import timed
 from cellengine.execute.schedule import SCHEDULE_CLEARANCE, schedule
-from cellengine.execute.strategies import solve_segment
+from cellengine.execute.strategies import _apart, solve_segment
 from cellengine.motion.gate import check_cell_trajectory
 from cellengine.motion.trajectory import Trajectory
-from tests.execute.scenes import cable_cell, home, states, sweep
+from cellengine.program import ArmPath, Segment
+from tests.execute.scenes import LEFT_READY, RIGHT_HIGH, cable_cell, home, line, states, sweep
 
 
 @pytest.fixture(scope="module")
@@ -77,17 +79,9 @@ def test_one_step_earlier_would_come_too_close(swept: tuple[Compiler, np.ndarray
     assert closest < SCHEDULE_CLEARANCE
 
 
-def test_an_arm_in_the_way_of_where_the_other_ends_is_refused() -> None:
+def _collide_at_the_end() -> Segment:
     """The right hand comes down onto where the left hand ends: no delay helps."""
-    from cellengine.program import ArmPath, Segment
-    from tests.execute.scenes import LEFT_READY, RIGHT_HIGH, line
-
-    world, cell, checker = cable_cell()
-    ready_seg, up, _ = sweep()
-    c = Compiler(world, cell, checker, home(cell), "async")
-    c.add(ready_seg)
-    c.add(up)
-    seg = Segment(
+    return Segment(
         1,
         "collide at the end",
         (
@@ -95,9 +89,34 @@ def test_an_arm_in_the_way_of_where_the_other_ends_is_refused() -> None:
             ArmPath("right", "cartesian", line(RIGHT_HIGH, (0.40, -0.02, 0.27))),
         ),
     )
+
+
+def test_async_plans_each_arm_against_where_the_earlier_ones_end() -> None:
+    world, cell, checker = cable_cell()
+    ready_seg, up, _ = sweep()
+    c = Compiler(world, cell, checker, home(cell), "async")
+    c.add(ready_seg)
+    c.add(up)
     with pytest.raises(InputError) as e:
-        c.add(seg)
-    assert str(e.value).startswith(
-        "<input>: step 2 (collide at the end): async: the right arm's motion comes within "
+        c.add(_collide_at_the_end())
+    message = str(e.value)
+    assert message.startswith(
+        "<input>: step 2 (collide at the end): the right arm's Cartesian path stops at "
     )
-    assert str(e.value).endswith("mm of left (at least 10 mm) even after it has stopped")
+    assert "collision between 'left/" in message
+
+
+def test_the_scheduler_refuses_an_arm_that_collides_where_the_other_ends() -> None:
+    world, cell, checker = cable_cell()
+    ready_seg, up, _ = sweep()
+    c = Compiler(world, cell, checker, home(cell), "async")
+    c.add(ready_seg)
+    c.add(up)
+    paths = {p.arm: p for p in _collide_at_the_end().paths}
+    part = _apart(cell, checker, paths, c.q, "apart")  # both against the other's start
+    own = {a: timed(r, cell.arms[a].limits, cell.arms[a].joint_names) for a, r in part.rows.items()}
+    with pytest.raises(Refused) as e:
+        schedule(cell, c.q, own, checker)
+    assert (
+        str(e.value) == "async: the right arm's motion collides with left even after it has stopped"
+    )
