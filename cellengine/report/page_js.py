@@ -296,32 +296,59 @@ JS = r"""
       }
     }
   }
-  function addHands(V, i, f, out) {
+  function handsAt(i, f) {
     const tcp = {};
+    for (const arm of RP.arms) tcp[arm] = tcpAt(arm, i, f);
+    return tcp;
+  }
+  // a cable at time t: through the slots it has been placed in so far, then the hands holding
+  // it (the hand nearer the last slot first)
+  function cablePath(c, tcp) {
+    const t = state.t;
+    const pts = c.anchors.filter((a) => a.time <= t + 1e-9).map((a) => a.p);
+    let span = null;
+    for (const h of c.held) if (h.start <= t + 1e-9 && t <= h.end + 1e-9) span = h;
+    const hands = span ? span.arms.map((a) => tcp[a]).filter(Boolean) : [];
+    if (hands.length === 2 && pts.length) {
+      const last = pts[pts.length - 1];
+      const d = (p) => Math.hypot(p[0] - last[0], p[1] - last[1], p[2] - last[2]);
+      if (d(hands[1]) < d(hands[0])) hands.reverse();
+    }
+    return [pts, pts.concat(hands)];
+  }
+  // drawn over everything: the cable and the fingertips are what the replay is about
+  function drawCables(V, tcp) {
+    let count = 0;
+    ctx.lineCap = 'round';
+    ctx.lineJoin = 'round';
+    for (const c of RP.cables) {
+      const [anchors, path] = cablePath(c, tcp);
+      const q = path.map((p) => project(V, p[0], p[1], p[2]));
+      if (path.length < 2 || q.some((p) => p[2] < NEAR)) continue;
+      const z = q.reduce((sum, p) => sum + p[2], 0) / q.length;
+      const stroke = () => {
+        ctx.beginPath();
+        q.forEach((p, k) => (k ? ctx.lineTo(p[0], p[1]) : ctx.moveTo(p[0], p[1])));
+        ctx.stroke();
+      };
+      const w = Math.max(3, 0.006 * V.focal / z);
+      ctx.strokeStyle = '#111827'; ctx.lineWidth = w; stroke();
+      ctx.strokeStyle = '#8b95a5'; ctx.lineWidth = Math.max(1, 0.3 * w); stroke();
+      for (let k = 0; k < anchors.length; k++) {
+        ctx.beginPath(); ctx.arc(q[k][0], q[k][1], 3, 0, 2 * Math.PI);
+        ctx.fillStyle = '#facc15'; ctx.fill();
+        ctx.strokeStyle = '#111827'; ctx.lineWidth = 1.2; ctx.stroke();
+      }
+      count += 1;
+    }
     for (const arm of RP.arms) {
-      tcp[arm] = tcpAt(arm, i, f);
       const q = project(V, tcp[arm][0], tcp[arm][1], tcp[arm][2]);
       if (q[2] < NEAR) continue;
-      out.push({ type: 'dot', z: q[2] - 0.03, x: q[0], y: q[1], r: 3.5, fill: '#ffffff',
-        stroke: armColor[arm] });
+      ctx.beginPath(); ctx.arc(q[0], q[1], 3.5, 0, 2 * Math.PI);
+      ctx.fillStyle = '#ffffff'; ctx.fill();
+      ctx.strokeStyle = armColor[arm]; ctx.lineWidth = 2; ctx.stroke();
     }
-    let cables = 0;
-    for (const span of RP.cable) {
-      if (state.t < span.start - 1e-9 || state.t > span.end + 1e-9) continue;
-      for (let k = 0; k + 1 < span.arms.length; k++) {
-        const pa = tcp[span.arms[k]];
-        const pb = tcp[span.arms[k + 1]];
-        if (!pa || !pb) continue;
-        const a = project(V, pa[0], pa[1], pa[2]);
-        const b = project(V, pb[0], pb[1], pb[2]);
-        if (a[2] < NEAR || b[2] < NEAR) continue;
-        out.push({ type: 'line', z: Math.min(a[2], b[2]) - 0.02, ax: a[0], ay: a[1], bx: b[0],
-          by: b[1], w: Math.max(3, 0.006 * V.focal / ((a[2] + b[2]) / 2)), color: '#1f2937',
-          core: '#6b7280' });
-        cables += 1;
-      }
-    }
-    return cables;
+    return count;
   }
   function addKeypoints(V, out) {
     for (const kp of RP.keypoints) {
@@ -376,12 +403,6 @@ JS = r"""
       g.addColorStop(1, css(p.color, 0.7));
       ctx.fillStyle = g;
       ctx.beginPath(); ctx.arc(p.x, p.y, r, 0, 2 * Math.PI); ctx.fill();
-    } else if (p.type === 'line') {
-      ctx.lineCap = 'round';
-      ctx.strokeStyle = p.color; ctx.lineWidth = p.w;
-      segment(ctx, p.ax, p.ay, p.bx, p.by);
-      ctx.strokeStyle = p.core; ctx.lineWidth = Math.max(1, p.w * 0.3);
-      segment(ctx, p.ax, p.ay, p.bx, p.by);
     } else if (p.type === 'dot') {
       ctx.beginPath(); ctx.arc(p.x, p.y, p.r, 0, 2 * Math.PI);
       ctx.fillStyle = p.fill; ctx.fill();
@@ -493,10 +514,10 @@ JS = r"""
     if (state.trails) drawTrails(V);
     const [i, f] = locate(state.t);
     addLinks(V, i, f, prims);
-    const cables = addHands(V, i, f, prims);
     if (state.keys) addKeypoints(V, prims);
     prims.sort((a, b) => b.z - a.z);
     for (const p of prims) drawPrim(p);
+    const cables = drawCables(V, handsAt(i, f));
     drawAxes(V);
     drawArmLabels(V);
     return { shapes: ground.length + prims.length, cables };
@@ -868,7 +889,7 @@ JS = r"""
       box.append(el('span', {}, el('span', { class: 'dot', style: 'background:' + armColor[arm] }),
         arm));
     }
-    if (RP.cable.length) {
+    if (RP.cables.length) {
       box.append(el('span', {}, el('span', { class: 'dot', style: 'background:#1f2937' }),
         'cable'));
     }
@@ -884,9 +905,12 @@ JS = r"""
     for (const p of plots) p.draw();
     updateTimeline();
     updateTable();
+    updateClock();
+    return drawn;
+  }
+  function updateClock() {
     slider.value = String(state.t);
     clock.textContent = fmt(state.t - T0, 2) + ' / ' + fmt(T1 - T0, 2) + ' s';
-    return drawn;
   }
   let pending = false;
   function invalidate() {
@@ -894,7 +918,11 @@ JS = r"""
     pending = true;
     requestAnimationFrame(() => { pending = false; render(); });
   }
-  function seek(t) { state.t = clampT(t); invalidate(); }
+  function seek(t) {
+    state.t = clampT(t);
+    updateClock(); // at once; the drawing waits for the next frame
+    invalidate();
+  }
   function tick(now) {
     if (!state.playing) return;
     if (state.last !== null) {

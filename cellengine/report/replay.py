@@ -1,6 +1,6 @@
 """What report.html draws: the cell's static meshes, every arm link's shape and both TCPs
-sampled along the program, joint positions and velocities, the step timeline, gripper events
-and when the cable runs between the hands.
+sampled along the program, joint positions and velocities, the step timeline, gripper events,
+and the cables: which hands hold each when, and the slots it has been placed in.
 
 Everything is in the cell frame, metres and radians. Per sample arrays are flat lists, one per
 link (``stride`` numbers per sample), so the page indexes them without nesting:
@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 
 from cellengine.info.cell import Obstacle
 from cellengine.motion.robot import CellModel
-from cellengine.program import Program
+from cellengine.program import Program, TimedEvent
 from cellengine.report.data import event_entry, step_names
 from cellengine.report.distance import ArmDistance
 from cellengine.report.sampling import joint_order, program_span, sample_program, sample_times
@@ -87,7 +87,7 @@ def replay_data(
         ],
         **timeline(program, step_labels or {}),
         "events": [event_entry(e) for e in program.events],
-        "cable": cable_spans(program, world),
+        "cables": cables(program, world),
     }
 
 
@@ -287,45 +287,69 @@ def timeline(program: Program, step_labels: Mapping[int, str]) -> dict[str, Any]
     return {"segments": segments, "steps": [steps[k] for k in sorted(steps)]}
 
 
-def cable_spans(program: Program, world: World) -> list[dict[str, Any]]:
-    """Intervals during which two or more arms hold the same cable (or its connector): the
-    page draws the cable as a line between their fingertips."""
-    cables = set(world.objects.cables)
-    holding: dict[str, str | None] = {}
-    spans: list[dict[str, Any]] = []
-    open_: dict[str, dict[str, Any]] = {}
-    _, end = program_span(program)
-    for e in sorted(program.events, key=lambda e: e.time):
-        holds = e.event.holds
-        holding[e.event.arm] = _cable_of(holds, cables) if holds else None
-        _update_spans(holding, open_, spans, float(e.time))
-    for span in open_.values():
-        span["end"] = end
-        spans.append(span)
-    return sorted(spans, key=lambda s: (s["start"], s["cable"]))
+def cables(program: Program, world: World) -> list[dict[str, Any]]:
+    """Each cable some gripper holds: when which arms hold it (``held``: intervals with the
+    same non-empty set of arms) and where it is fixed (``anchors``: the slot of a segment's
+    ``facts``, e.g. a guide it was inserted into, from that segment's end). The page draws a
+    cable through its anchors so far and then the hands holding it."""
+    names = set(world.objects.cables)
+    events = sorted(program.events, key=lambda e: e.time)
+    held = _held_spans(events, names, program_span(program)[1])
+    anchors: dict[str, list[dict[str, Any]]] = {}
+    for cs in program.segments:
+        slot = cs.segment.facts.get("slot")
+        if slot is None or np.shape(slot) != (3,):
+            continue
+        end = cs.trajectory.end_time
+        cable = cs.segment.facts.get("cable") or _held_at(events, names, end)
+        if cable in names:
+            guide = cs.segment.facts.get("guide")
+            anchors.setdefault(str(cable), []).append(
+                {"time": end, "guide": guide, "p": _round(slot, DECIMALS)}
+            )
+    return [
+        {"name": c, "held": held.get(c, []), "anchors": anchors.get(c, [])}
+        for c in sorted(set(held) | set(anchors))
+    ]
 
 
-def _cable_of(name: str, cables: set[str]) -> str | None:
-    head = name.split(".", 1)[0]
+def _cable_of(name: str | None, cables: set[str]) -> str | None:
+    if name is None:
+        return None
+    head = name.split(".", 1)[0]  # cable1.connector: cable1
     return name if name in cables else head if head in cables else None
 
 
-def _update_spans(
-    holding: Mapping[str, str | None],
-    open_: dict[str, dict[str, Any]],
-    spans: list[dict[str, Any]],
-    t: float,
-) -> None:
-    arms_of: dict[str, list[str]] = {}
-    for arm, cable in holding.items():
-        if cable is not None:
+def _holding(events: Sequence[TimedEvent], cables: set[str], until: float) -> dict[str, str]:
+    """arm -> cable it holds after the events before ``until``."""
+    out: dict[str, str | None] = {}
+    for e in events:
+        if e.time >= until:
+            break
+        out[e.event.arm] = _cable_of(e.event.holds, cables)
+    return {arm: c for arm, c in out.items() if c is not None}
+
+
+def _held_at(events: Sequence[TimedEvent], cables: set[str], t: float) -> str | None:
+    held = sorted(set(_holding(events, cables, t).values()))
+    return held[0] if len(held) == 1 else None
+
+
+def _held_spans(
+    events: Sequence[TimedEvent], cables: set[str], end: float
+) -> dict[str, list[dict[str, Any]]]:
+    """cable -> intervals during which the same arms (one or more) hold it."""
+    spans: dict[str, list[dict[str, Any]]] = {}
+    times = sorted({float(e.time) for e in events})
+    for k, t in enumerate(times):
+        arms_of: dict[str, list[str]] = {}
+        for arm, cable in _holding(events, cables, t + 1e-9).items():
             arms_of.setdefault(cable, []).append(arm)
-    for cable in list(open_):
-        if open_[cable]["arms"] != sorted(arms_of.get(cable, [])):
-            span = open_.pop(cable)
-            span["end"] = t
-            if span["end"] > span["start"]:
-                spans.append(span)
-    for cable, arms in arms_of.items():
-        if len(arms) >= 2 and cable not in open_:
-            open_[cable] = {"cable": cable, "arms": sorted(arms), "start": t, "end": t}
+        until = times[k + 1] if k + 1 < len(times) else end
+        for cable, arms in arms_of.items():
+            mine = spans.setdefault(cable, [])
+            if mine and mine[-1]["arms"] == sorted(arms) and mine[-1]["end"] == t:
+                mine[-1]["end"] = until
+            elif until > t:
+                mine.append({"arms": sorted(arms), "start": t, "end": until})
+    return spans

@@ -13,7 +13,7 @@ from cellengine.info.cell import Obstacle
 from cellengine.motion.trajectory import Trajectory
 from cellengine.program import CompiledSegment, GripperEvent, Program, Segment, TimedEvent
 from cellengine.report import replay_data
-from cellengine.report.replay import REPLAY_RATE, cable_spans, decimate, obstacle_mesh
+from cellengine.report.replay import REPLAY_RATE, cables, decimate, obstacle_mesh
 from cellengine.report.sampling import sample_program, sample_times
 from tests.report.programs import cable_cell, home, trajectory
 from tests.report.programs import sample_program as make_program
@@ -151,27 +151,43 @@ def test_timeline_events_and_cable(replay: dict) -> None:
         (2, "sync"),
     ]
     assert [e["time"] for e in replay["events"]] == [2.0, 2.0, 6.0]
-    # both hands hold cable1 (one by its connector) from the grasp to the right's release
-    assert replay["cable"] == [
-        {"cable": "cable1", "arms": ["left", "right"], "start": 2.0, "end": 6.0}
+    # both hands hold cable1 (one by its connector) from the grasp to the right's release;
+    # segment 2's facts place it in guide2's slot at its end
+    assert replay["cables"] == [
+        {
+            "name": "cable1",
+            "held": [{"arms": ["left", "right"], "start": 2.0, "end": 6.0}],
+            "anchors": [{"time": 6.0, "guide": "routing.guide2", "p": [0.3, -0.2, 0.065]}],
+        }
     ]
 
 
-def test_cable_spans_open_at_the_end_and_other_objects() -> None:
+def test_cables_held_by_one_or_two_hands_and_anchored() -> None:
     world, cell = cable_cell()
-    program = make_program(cell)
+    program = make_program(cell)  # segment 2 (3 s to 6 s) ends with a slot in its facts
     events = (
         TimedEvent(0.5, GripperEvent("left", "grasp", "vial1")),  # not a cable
         TimedEvent(1.0, GripperEvent("left", "slide", "cable1")),
-        TimedEvent(1.5, GripperEvent("right", "grasp", "cable1")),
+        TimedEvent(1.5, GripperEvent("right", "grasp", "cable1.connector")),
+        TimedEvent(2.0, GripperEvent("left", "grasp", "cable1")),  # same hands: one span
         TimedEvent(2.5, GripperEvent("left", "open", None)),
         TimedEvent(4.0, GripperEvent("left", "grasp", "cable1")),
     )
-    spans = cable_spans(Program(program.joint_names, program.segments, events), world)
-    assert spans == [
-        {"cable": "cable1", "arms": ["left", "right"], "start": 1.5, "end": 2.5},
-        {"cable": "cable1", "arms": ["left", "right"], "start": 4.0, "end": 6.0},
+    out = cables(Program(program.joint_names, program.segments, events), world)
+    assert out == [
+        {
+            "name": "cable1",
+            "held": [
+                {"arms": ["left"], "start": 1.0, "end": 1.5},
+                {"arms": ["left", "right"], "start": 1.5, "end": 2.5},
+                {"arms": ["right"], "start": 2.5, "end": 4.0},
+                {"arms": ["left", "right"], "start": 4.0, "end": 6.0},
+            ],
+            "anchors": [{"time": 6.0, "guide": "routing.guide2", "p": [0.3, -0.2, 0.065]}],
+        }
     ]
+    # nobody holds a cable: nothing to draw, whatever the facts say
+    assert cables(Program(program.joint_names, program.segments, ()), world) == []
 
 
 def test_sampling_rate_is_capped_and_gaps_hold() -> None:
@@ -232,4 +248,4 @@ def test_empty_program_shows_the_cell_at_home() -> None:
     out = replay_data(Program(cell.joint_names, (), ()), cell, world)
     assert out["times"] == [0.0] and out["duration"] == 0.0
     assert [s[0] for s in out["q"]] == pytest.approx(home(cell), abs=1e-5)
-    assert out["steps"] == [] and out["segments"] == [] and out["cable"] == []
+    assert out["steps"] == [] and out["segments"] == [] and out["cables"] == []
