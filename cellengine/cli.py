@@ -6,11 +6,13 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from cellengine.commands import import_remodel, schema, show, validate
+from cellengine.commands import import_remodel, plan, run, schema, show, validate
 from cellengine.errors import EXIT_USAGE, CellError
 
 COMMANDS = {
     "validate": validate,
+    "plan": plan,
+    "run": run,
     "show": show,
     "schema": schema,
     "import": import_remodel,

@@ -1,0 +1,61 @@
+"""`cellengine plan PLAN [--out DIR]`: compile a plan to a validated program (no driver)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from cellengine.errors import EXIT_OK, UsageError, display_path
+from cellengine.pipeline import Compiled, Progress, compile_plan, write_plan_outputs
+
+EXECUTIONS = ("split", "sync", "async")
+
+
+def add_parser(sub: Any, name: str) -> None:
+    p = sub.add_parser(
+        name,
+        help="compile a plan into trajectories and a report (no motion)",
+        description="Compile PLAN: skills, motion planning, time parameterisation "
+        "and the trajectory gate; write trajectory.json, report.json and "
+        "report.html. Nothing is sent to a driver.",
+    )
+    add_common(p)
+    p.set_defaults(run=run)
+
+
+def add_common(p: argparse.ArgumentParser) -> None:
+    p.add_argument("plan", type=Path, metavar="PLAN")
+    p.add_argument("--out", type=Path, default=Path("run"), help="run directory (default: run)")
+    p.add_argument("--execution", choices=EXECUTIONS, help="override the plan's execution")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+
+
+def compile_from_args(args: argparse.Namespace) -> Compiled:
+    if not args.plan.is_file():
+        raise UsageError.at("no such plan file", args.plan)
+    progress = None if args.quiet else _progress()
+    return compile_plan(args.plan, args.execution, progress=progress)
+
+
+def _progress() -> Progress:
+    t0 = time.perf_counter()
+
+    def show(step: int, steps: int, skill: str) -> None:
+        print(f"[{step + 1}/{steps}] {skill}  ({time.perf_counter() - t0:.1f} s)", file=sys.stderr)
+
+    return show
+
+
+def run(args: argparse.Namespace) -> int:
+    compiled = compile_from_args(args)
+    paths = write_plan_outputs(compiled, args.out)
+    if not args.quiet:
+        print(
+            f"compiled {len(compiled.program.segments)} segments, "
+            f"{compiled.program.duration:.2f} s of motion ({compiled.strategy})"
+        )
+        print(f"report: {display_path(paths['html'])}")
+    return EXIT_OK

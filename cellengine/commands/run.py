@@ -1,0 +1,86 @@
+"""`cellengine run PLAN`: compile, write the run directory, and play it on the cell's driver
+(the simulated cell by default), with an append-only journal flushed at every entry."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+from typing import IO, Any
+
+from cellengine.commands.plan import add_common, compile_from_args
+from cellengine.drivers.base import Driver
+from cellengine.drivers.play import segment_events
+from cellengine.drivers.registry import make_driver
+from cellengine.errors import EXIT_OK, display_path
+from cellengine.pipeline import Compiled, write_plan_outputs
+
+
+def add_parser(sub: Any, name: str) -> None:
+    p = sub.add_parser(
+        name,
+        help="compile a plan and run it on the cell's driver",
+        description="Compile PLAN, write the run directory, and execute it on "
+        "the cell's driver (the simulated cell unless the cell says otherwise).",
+    )
+    add_common(p)
+    p.add_argument("--driver", help="driver to use instead of the cell's (e.g. sim)")
+    p.add_argument("--realtime", action="store_true", help="simulated cell: in real time")
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    compiled = compile_from_args(args)
+    paths = write_plan_outputs(compiled, args.out)
+    driver = _driver(compiled, args)
+    with (args.out / "journal.jsonl").open("a") as journal, driver:
+        _entry(journal, "start", plan=str(compiled.loaded.plan.file), driver=type(driver).__name__)
+        driver.configure()
+        driver.activate()
+        _play(compiled, driver, journal, quiet=args.quiet)
+        driver.deactivate()
+        _entry(journal, "end", duration=compiled.program.duration)
+    if not args.quiet:
+        print(
+            f"ran {len(compiled.program.segments)} segments, "
+            f"{compiled.program.duration:.2f} s of motion ({compiled.strategy})"
+        )
+        print(f"report: {display_path(paths['html'])}")
+    return EXIT_OK
+
+
+def _driver(compiled: Compiled, args: argparse.Namespace) -> Driver:
+    world, cell = compiled.world, compiled.cell
+    joints = {name: arm.joint_names for name, arm in cell.arms.items()}
+    options: dict[str, Any] = {}
+    if (args.driver or world.cell.driver.kind) == "sim":
+        options = {"realtime": args.realtime, "q0": compiled.program.segments[0].trajectory.q[0]}
+    return make_driver(world.cell, joints, objects=world.objects, kind=args.driver, **options)
+
+
+def _play(compiled: Compiled, driver: Driver, journal: IO[str], quiet: bool) -> None:
+    program = compiled.program
+    for i, (segment, events) in enumerate(
+        zip(program.segments, segment_events(program), strict=True)
+    ):
+        seg = segment.segment
+        _entry(journal, "sent", step=seg.step, segment=i, label=seg.label)
+        driver.execute(segment, events)
+        grippers = {arm: list(driver.gripper(arm)) for arm in compiled.cell.arms}
+        _entry(
+            journal,
+            "finished",
+            step=seg.step,
+            segment=i,
+            label=seg.label,
+            q=[round(float(v), 6) for v in driver.joint_state()],
+            grippers=grippers,
+        )
+
+
+def _entry(journal: IO[str], kind: str, **fields: Any) -> None:
+    """One journal line, on disk before the next thing happens."""
+    journal.write(json.dumps({"time": time.time(), "entry": kind, **fields}) + "\n")
+    journal.flush()
+    os.fsync(journal.fileno())

@@ -1,0 +1,148 @@
+"""From a plan file to a validated Program, and from a Program to a run directory.
+
+`cellengine plan`, `cellengine run` and `cellengine validate` share this: load and check the
+files, build the cell's robot models and collision scene, turn the steps into segments with
+the skills, compile the segments (strategy, merges, the gate) into a Program.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from cellengine.errors import InputError, Problem
+from cellengine.execute.compile import Compiler, home_configuration
+from cellengine.info.load import LoadedPlan, load_plan
+from cellengine.info.yamlio import load_yaml
+from cellengine.motion.collision import CollisionChecker
+from cellengine.motion.robot import CellModel, build_cell_model
+from cellengine.motion.scene import build_scene
+from cellengine.program import Program, Segment
+from cellengine.skill import Skill
+from cellengine.world import World
+
+Progress = Callable[[int, int, str], None]  # (step index, number of steps, skill)
+
+
+@dataclass(frozen=True)
+class Compiled:
+    loaded: LoadedPlan
+    cell: CellModel
+    program: Program
+    strategy: str
+
+    @property
+    def world(self) -> World:
+        return self.loaded.world
+
+
+def plan_segments(world: World, steps: Sequence[Skill]) -> list[Segment]:
+    """Every step's segments. The cable skills share one state through the whole plan."""
+    from skills.cable import CableSkill, plan_cable_steps
+
+    for i, step in enumerate(steps):
+        if not isinstance(step, CableSkill):
+            raise InputError(
+                Problem(
+                    f"steps[{i}]: {step.skill} cannot be compiled to motion yet (only the "
+                    "cable skills PickCable, PlaceConnector and RouteCable can)"
+                )
+            )
+    return plan_cable_steps(world, steps)[0]
+
+
+def compile_plan(
+    path: Path,
+    strategy: str | None = None,
+    merge: str = "joint",
+    progress: Progress | None = None,
+) -> Compiled:
+    """Load, check and compile ``path``; InputError (in plan terms) when it cannot run."""
+    loaded = load_plan(path)
+    world, plan = loaded.world, loaded.plan
+    cell = build_cell_model(world)
+    checker = CollisionChecker(build_scene(cell, world))
+    chosen = strategy or plan.execution
+    segments = _with_file(plan.file, lambda: plan_segments(world, plan.steps))
+    compiler = Compiler(
+        world,
+        cell,
+        checker,
+        home_configuration(cell),
+        chosen,  # type: ignore[arg-type]
+        merge=merge,  # type: ignore[arg-type]
+        plan_file=plan.file,
+    )
+    for segment in segments:
+        if progress is not None and (not compiler.segments or segment.step != _last_step(compiler)):
+            progress(segment.step, len(plan.steps), plan.steps[segment.step].skill)
+        compiler.add(segment)
+    return Compiled(loaded, cell, compiler.program(), chosen)
+
+
+def _last_step(compiler: Compiler) -> int:
+    return compiler.segments[-1].segment.step
+
+
+def _with_file(plan_file: Path, make: Callable[[], list[Segment]]) -> list[Segment]:
+    """Skill errors begin with the step (``steps[2] RouteCable guide3: ...``): put them at
+    that step's line in the plan file."""
+    try:
+        return make()
+    except InputError as e:
+        doc = load_yaml(plan_file)
+        problems = []
+        for p in e.problems:
+            if p.file:
+                problems.append(p)
+                continue
+            m = re.match(r"steps\[(\d+)\]", p.message)
+            line, col = (doc.where(("steps", int(m.group(1)))) if m else None) or (None, None)
+            problems.append(Problem(p.message, str(plan_file), line, col))
+        raise InputError(problems) from None
+
+
+def trajectory_json(program: Program) -> dict[str, Any]:
+    """trajectory.json (DESIGN 3.5): one time axis for both arms, gripper events."""
+    from cellengine.motion.trajectory import concatenate
+
+    traj = concatenate([s.trajectory for s in program.segments])
+    out = traj.to_json()
+    out["events"] = [
+        {
+            "time_from_start": e.time,
+            "arm": e.event.arm,
+            "kind": "gripper",
+            "mode": e.event.mode,
+            "holds": e.event.holds,
+        }
+        for e in program.events
+    ]
+    return out
+
+
+def write_plan_outputs(compiled: Compiled, out: Path) -> dict[str, Path]:
+    """trajectory.json, report.json and report.html into ``out``; written to temporary
+    names first and moved into place, so a failure leaves no half-written file."""
+    from cellengine.report.write import write_report
+
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {"trajectory": out / "trajectory.json"}
+    tmp = out / ".trajectory.json.tmp"
+    tmp.write_text(json.dumps(trajectory_json(compiled.program)) + "\n")
+    plan = compiled.loaded.plan
+    extra = {
+        "plan": str(plan.file),
+        "execution": compiled.strategy,
+        "duration": compiled.program.duration,
+    }
+    report_json, report_html = write_report(
+        out, compiled.program, compiled.world, compiled.cell, extra, title=plan.file.name
+    )
+    tmp.replace(paths["trajectory"])
+    paths.update({"report": report_json, "html": report_html})
+    return paths
