@@ -1,13 +1,56 @@
-"""Cable-routing skills (the published REMODEL method). Parameters now; motion in #4."""
+"""Cable-routing skills: the published dual-arm method (paper 003, Algorithm 1, Fig. 4).
+
+Each skill's ``plan(world, state)`` turns its step into :class:`~cellengine.program.Segment` s
+of fingertip (TCP) poses in the cell frame, gripper events and couplings, and returns them
+with the :class:`~skills.cable_state.CableState` after them. :func:`plan_cable_steps` chains
+a plan's steps (it looks ahead so PickCable gives the connector end to the arm that will
+place it) and ends each cable with :func:`release_and_retract` (Algorithm 1, line 35).
+Frames, symbols and offsets: :mod:`skills.cable_geometry`.
+
+Arms. PlaceConnector's ``arm`` places the connector; with ``auto`` the arm whose base is
+nearer the connector guide does (or, without a look-ahead, the arm already holding the
+connector end). PickCable gives that arm the connector end. The other arm routes: after the
+connector is placed it holds the cable in its sliding jaws and carries it guide to guide; the
+connector arm becomes the "other arm", which grasps the cable before each guide so the two
+hands can swing it, taut, into the slot.
+
+Feasibility comes first: each skill computes all its poses and checks them (cable length,
+reach of every key pose by inverse kinematics, a sliding angle that clears the guide) before
+it returns any segment, and raises :class:`~cellengine.errors.InputError` naming the step
+and the guide.
+"""
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+import math
+import weakref
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, replace
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
+import numpy as np
 from pydantic import Field
 
+from cellengine import geometry as g
+from cellengine.errors import InputError, Problem, known
+from cellengine.geometry import Mat
 from cellengine.info.units import count
+from cellengine.motion import interpolate as ip
+from cellengine.program import ArmPath, GripperEvent, Segment
 from cellengine.skill import CableRef, GuideRef, KeypointRef, Skill, register
+from cellengine.world import World
+from skills import cable_geometry as cg
+from skills.cable_state import CableState
+
+if TYPE_CHECKING:
+    from cellengine.motion.robot import CellModel
+
+OPEN, SLIDE, GRASP = "open", "slide", "grasp"  # jaw modes the method uses (the tool's table)
+Poses = cg.Poses
+
+
+# =========================================================================== the skills
 
 
 @register
@@ -20,6 +63,24 @@ class PickCable(Skill):
         tuple[KeypointRef, KeypointRef], count(2, "keypoints [connector end, other end]")
     ] = Field(alias="from")
 
+    def plan(self, world: World, state: CableState) -> tuple[list[Segment], CableState]:
+        """Algorithm 1, PICKCABLE: pick configuration; approach, grasp and retract both ends
+        at once; turn both hands along the cable; the far hand goes down on a circle about
+        the connector hand (the cable then slides back against gravity), slides up the
+        cable to the connector hand and comes back up on a circle; both grippers' z aligned
+        with the routing platform."""
+        where = f"steps[{state.step}] PickCable {self.cable}"
+        arms = _two_arms(world, where)
+        conn_ref, free_ref = self.from_
+        c_arm = state.connector_arm or _nearest_arm(world, arms, conn_ref)
+        f_arm = _other(arms, c_arm)
+        for arm in arms:
+            _check_jaw(world, arm, where)
+        geo = _pick_geometry(world, state, self.cable, conn_ref, free_ref, c_arm, f_arm)
+        _check_reach(world, c_arm, geo.reach(c_arm), where)
+        _check_reach(world, f_arm, geo.reach(f_arm), where)
+        return _emit_pick(self, state, geo, c_arm, f_arm)
+
 
 @register
 class PlaceConnector(Skill):
@@ -29,6 +90,35 @@ class PlaceConnector(Skill):
     cable: CableRef
     guide: GuideRef
 
+    def connector_arm(self, world: World, holder: str | None = None) -> str:
+        """The arm that places the connector: ``arm`` if it names one; with ``auto``,
+        ``holder`` (the arm holding the connector end) if given, else the arm whose base is
+        nearer the guide."""
+        where = f"PlaceConnector {self.guide}"
+        arms = _two_arms(world, where)
+        if self.arm in arms:
+            return self.arm
+        if self.arm != "auto":
+            raise _error(
+                f"{where}: arm must be one robot or 'auto', not '{self.arm}'" + known(arms)
+            )
+        return holder if holder is not None else _nearest_arm(world, arms, self.guide)
+
+    def plan(self, world: World, state: CableState) -> tuple[list[Segment], CableState]:
+        """Algorithm 1, PLACECONNECTOR: align the held cable with the connector guide (both
+        hands as one rigid pair); approach, insert and retract keypoints; release and retract
+        the connector gripper; then pull_distance."""
+        where = f"steps[{state.step}] PlaceConnector {self.guide}"
+        c_arm = self.connector_arm(world, state.connector_arm)
+        arms = _two_arms(world, where)
+        f_arm = _other(arms, c_arm)
+        _require_hold(state, c_arm, self.cable, where, "the connector end (plan PickCable first)")
+        _require_hold(state, f_arm, self.cable, where, "the cable (plan PickCable first)")
+        geo = _place_geometry(world, state, self, c_arm, f_arm, where)
+        _check_reach(world, c_arm, geo.reach(c_arm), where)
+        _check_reach(world, f_arm, geo.reach(f_arm), where)
+        return _emit_place(self, state, geo, c_arm, f_arm)
+
 
 @register
 class RouteCable(Skill):
@@ -37,3 +127,897 @@ class RouteCable(Skill):
     skill: Literal["RouteCable"]
     cable: CableRef
     guides: tuple[GuideRef, ...] = Field(min_length=1)
+
+    def plan(self, world: World, state: CableState) -> tuple[list[Segment], CableState]:
+        """Algorithm 1, ROUTECABLE, for each guide: the other arm lets go of the previous
+        guide; the routing gripper turns to face the guide and approaches it sliding; slides
+        R_cable more at the sliding angle theta; the other arm grasps the cable where the
+        routing gripper stopped; the routing gripper pulls the cable taut, lifts it over the
+        guide, swings it over the slot and inserts it on circles about the other hand."""
+        where = f"steps[{state.step}] RouteCable"
+        r_arm, o_arm = _routing_arms(world, state, self.cable, where)
+        _check_jaw(world, r_arm, where)
+        _check_jaw(world, o_arm, where)
+        plans: list[GuidePlan] = []
+        sim = state
+        for guide in self.guides:
+            gp = _guide_plan(world, sim, self.cable, guide, r_arm, o_arm)
+            _check_reach(world, r_arm, gp.reach_routing(), gp.where)
+            _check_reach(world, o_arm, gp.reach_other(), gp.where)
+            _check_length(world, sim, self.cable, gp)
+            sim = gp.after(sim, r_arm, o_arm, self.cable)
+            plans.append(gp)
+        segments: list[Segment] = []
+        for gp in plans:
+            more, state = _emit_guide(state, gp, r_arm, o_arm, self.cable)
+            segments += more
+        return segments, state
+
+
+CableSkill = PickCable | PlaceConnector | RouteCable
+
+
+def plan_cable_steps(
+    world: World, steps: Sequence[Skill], state: CableState | None = None
+) -> tuple[list[Segment], CableState]:
+    """Every step's segments, chained through one state (from the arms' homes unless given).
+    Before a PickCable, looks ahead to the PlaceConnector of the same cable for its arm and
+    guide; when a cable's last step is done (another PickCable follows, or the plan ends),
+    releases it and retracts the arms."""
+    state = state if state is not None else CableState.at_home(world)
+    segments: list[Segment] = []
+    for i, step in enumerate(steps):
+        if not isinstance(step, PickCable | PlaceConnector | RouteCable):
+            raise TypeError(f"steps[{i}]: {step.skill} is not a cable skill")
+        if isinstance(step, PickCable):
+            if state.held:
+                more, state = release_and_retract(state)
+                segments += more
+            state = _look_ahead(world, replace(state, step=i), step, steps[i + 1 :])
+        more, state = step.plan(world, replace(state, step=i))
+        segments += more
+    more, state = release_and_retract(state)
+    return segments + more, state
+
+
+def release_and_retract(state: CableState) -> tuple[list[Segment], CableState]:
+    """Algorithm 1, line 35: every gripper that holds the cable opens and goes up."""
+    holding = [a for a in state.arms if a in state.held]
+    if not holding:
+        return [], state
+    label = f"{state.cable}: release and retract"
+    b = _Builder(state)
+    b.add(
+        label,
+        # Back out along each hand's approach direction (up, for the top grasps here).
+        [_up(state.tcp[a], a, -state.tcp[a][:3, 2], cg.RETRACT_HEIGHT) for a in holding],
+        before=[GripperEvent(a, OPEN) for a in holding],
+    )
+    done = replace(
+        b.state, cable=None, connector_arm=None, routing_arm=None, place_guide=None, route=()
+    )
+    return b.segments, replace(done, guides=(), pull_distance=0.0)
+
+
+# =========================================================================== building segments
+
+
+class _Builder:
+    """Appends segments for one step and keeps the state in step with them: each path's last
+    pose becomes its arm's TCP, each event its gripper's mode."""
+
+    def __init__(self, state: CableState) -> None:
+        self.state = state
+        self.segments: list[Segment] = []
+
+    def add(
+        self,
+        label: str,
+        paths: Iterable[ArmPath],
+        *,
+        before: Iterable[GripperEvent] = (),
+        after: Iterable[GripperEvent] = (),
+        closed_chain: tuple[str, str] | None = None,
+        keep_distance: tuple[str, str] | None = None,
+        facts: Mapping[str, Any] | None = None,
+    ) -> None:
+        seg = Segment(
+            step=self.state.step,
+            label=label,
+            paths=tuple(paths),
+            before=tuple(before),
+            after=tuple(after),
+            closed_chain=closed_chain,
+            keep_distance=keep_distance,
+            facts=MappingProxyType(dict(facts or {})),
+        )
+        state = self.state
+        for event in seg.before:
+            state = state.gripped(event)
+        for path in seg.paths:
+            state = state.moved(path.arm, path.poses[-1])
+        for event in seg.after:
+            state = state.gripped(event)
+        self.state = state
+        self.segments.append(seg)
+
+    def mode_event(self, arm: str, mode: str, holds: str | None) -> list[GripperEvent]:
+        """The event that puts ``arm`` in ``mode``, or none if it is in it already."""
+        return [] if self.state.mode.get(arm) == mode else [GripperEvent(arm, mode, holds)]
+
+
+def _cartesian(arm: str, poses: Poses) -> ArmPath:
+    return ArmPath(arm, "cartesian", poses)
+
+
+def _transit(arm: str, T_cell_tcp: Mat) -> ArmPath:
+    return ArmPath(arm, "transit", np.asarray(T_cell_tcp)[None])
+
+
+def _up(T: Mat, arm: str, up: cg.Vec, height: float) -> ArmPath:
+    return _cartesian(arm, cg.line(T, cg.lifted(T, up, height)))
+
+
+def _stand_back(state: CableState, arm: str, up: cg.Vec) -> Poses:
+    """Up by RETRACT_HEIGHT, then STAND_BACK back along the route (its last two points: the
+    pivot and the slot of the last guide)."""
+    T = state.tcp[arm]
+    T_up = cg.lifted(T, up, cg.RETRACT_HEIGHT)
+    last = np.asarray(state.route[-2:], dtype=float)
+    back = -cg.horizontal(last[-1] - last[0], up)
+    return ip.concatenate(
+        [cg.line(T, T_up), cg.line(T_up, cg.at(T_up, T_up[:3, 3] + cg.STAND_BACK * back))]
+    )
+
+
+def _vec(v: Any) -> list[float]:
+    return [float(x) for x in np.asarray(v, dtype=float).reshape(-1)]
+
+
+# =========================================================================== PickCable
+
+
+@dataclass(frozen=True)
+class _PickGeometry:
+    up: cg.Vec
+    grasp: Mapping[str, Mat]  # each hand's grasp pose
+    retracted: Mapping[str, Mat]
+    faced: Mapping[str, Poses]  # each hand turned along the cable
+    lower: Poses  # the far hand down on a circle about the connector hand
+    slide: Poses  # then up the cable to it
+    raise_: Poses  # and back up on a circle
+    align: tuple[Poses, Poses] | None  # both hands: z along the routing platform's -z
+    s: Mapping[str, float]  # where each hand holds the cable, at the grasp
+    s_slid: float  # where the far hand holds it after the slide
+    connector_arm: str
+    far_arm: str
+
+    def reach(self, arm: str) -> list[tuple[str, Mat]]:
+        out = [("pick approach", cg.lifted(self.grasp[arm], self.up, cg.APPROACH_HEIGHT))]
+        out += [("pick grasp", self.grasp[arm]), ("pick retract", self.retracted[arm])]
+        out += [("turn along the cable", self.faced[arm][-1])]
+        if arm == self.far_arm:
+            out += [("slide start", self.lower[-1]), ("slide end", self.slide[-1])]
+            out += [("raised", self.raise_[-1])]
+        if self.align is not None:
+            out += [("aligned", self.align[0 if arm == self.connector_arm else 1][-1])]
+        return out
+
+    def end(self, arm: str) -> str:
+        return "connector end" if arm == self.connector_arm else "free end"
+
+
+def _pick_geometry(
+    world: World,
+    state: CableState,
+    name: str,
+    conn_ref: str,
+    free_ref: str,
+    c_arm: str,
+    f_arm: str,
+) -> _PickGeometry:
+    cable = world.cable(name)
+    up = cg.platform_up(world, conn_ref)
+    hand_f = _hand(world, f_arm)
+    conn_len = cable.connector.length if cable.connector is not None else 0.0
+    # Combs: keypoint x runs along the cable towards its end. The connector rests against
+    # the comb's outer face, so the connector hand holds its centre there; without a
+    # connector it takes the cable end like the other hand. Both hold the cable with x
+    # towards increasing s: from the connector end into the cable, from the cable to the
+    # free end.
+    K_a, K_b = world.pose(conn_ref), world.pose(free_ref)
+    x_a, x_b = cg.horizontal(K_a[:3, 0], up), cg.horizontal(K_b[:3, 0], up)
+    half_a = world.dimensions(conn_ref).get("length", 0.0) / 2.0
+    half_b = world.dimensions(free_ref).get("length", 0.0) / 2.0
+    hand_c = _hand(world, c_arm)
+    reach_a = conn_len / 2.0 if cable.connector is not None else hand_c.x_offset
+    # Tipped apart along the cable from the grasp on (the connector hand must keep its tip
+    # relative to the connector until it lets go of it).
+    T_c = cg.tcp_frame(K_a[:3, 3] + (half_a + reach_a) * x_a, -x_a, up, x_a, cg.LEAN)
+    T_f = cg.tcp_frame(K_b[:3, 3] + (half_b + hand_f.x_offset) * x_b, x_b, up, x_b, cg.LEAN)
+    T_c_up = cg.lifted(T_c, up, cg.RETRACT_HEIGHT)
+    T_f_up = cg.lifted(T_f, up, cg.RETRACT_HEIGHT)
+    chord = cg.horizontal(T_f_up[:3, 3] - T_c_up[:3, 3], up)
+    faced_c = cg.turn_in_place(T_c_up, cg.tcp_frame(T_c_up[:3, 3], chord, up, -chord, cg.LEAN))
+    faced_f = cg.turn_in_place(T_f_up, cg.tcp_frame(T_f_up[:3, 3], chord, up, chord, cg.LEAN))
+    # Down on a circle about the connector hand, turning with it (the hand leans away from
+    # the connector hand, its x staying along the chord), so the cable slides back against
+    # gravity when the hand then moves up the chord (paper, section III-B).
+    centre = faced_c[-1][:3, 3]
+    axis = np.cross(chord, up)
+    lower = cg.arc(faced_f[-1], centre, axis, -cg.SLIDE_DOWN_ANGLE, turn=True)
+    spacing = _connector_spacing(world, state.place_guide, conn_len, hand_f)
+    towards = cg.unit(lower[-1][:3, 3] - centre)
+    slide = cg.line(lower[-1], cg.at(lower[-1], centre + spacing * towards))
+    raise_ = cg.arc(slide[-1], centre, axis, cg.SLIDE_DOWN_ANGLE, turn=True)
+    align = _align_z(world, state.place_guide, faced_c[-1], raise_[-1], up)
+    return _PickGeometry(
+        up=up,
+        grasp={c_arm: T_c, f_arm: T_f},
+        retracted={c_arm: T_c_up, f_arm: T_f_up},
+        faced={c_arm: faced_c, f_arm: faced_f},
+        lower=lower,
+        slide=slide,
+        raise_=raise_,
+        align=align,
+        s={c_arm: -conn_len / 2.0, f_arm: cable.length - hand_f.end_margin},
+        s_slid=spacing - conn_len / 2.0,
+        connector_arm=c_arm,
+        far_arm=f_arm,
+    )
+
+
+def _connector_spacing(world: World, guide: str | None, conn_len: float, hand: cg.Hand) -> float:
+    """Connector centre to the other hand's fingertips when placing: the connector guide's
+    exit face (or the connector's rear face, if it sticks out), then X_offset."""
+    guide_len = world.dimensions(guide).get("length", 0.0) if guide is not None else 0.0
+    return max(guide_len, conn_len) / 2.0 + hand.x_offset
+
+
+def _align_z(
+    world: World, guide: str | None, T_c: Mat, T_f: Mat, up: cg.Vec
+) -> tuple[Poses, Poses] | None:
+    """Both hands turned as one pair about the connector hand until its z is the routing
+    platform's -z; None when it already is (a level platform: the circles above turned the
+    far hand back)."""
+    target = -cg.platform_up(world, guide) if guide is not None else -up
+    z = T_c[:3, 2]
+    angle = cg.angle_between(z, target)
+    if angle < cg.TINY_ANGLE:
+        return None
+    R = cg.rotation_about(np.cross(z, target), angle)
+    T_c1 = g.transform(R @ T_c[:3, :3], T_c[:3, 3])
+    return cg.pair_line(T_c, T_c1, g.inverse(T_c) @ T_f)
+
+
+def _emit_pick(
+    step: PickCable, state: CableState, geo: _PickGeometry, c_arm: str, f_arm: str
+) -> tuple[list[Segment], CableState]:
+    name = step.cable
+    label = f"PickCable {name}"
+    b = _Builder(replace(state, cable=name, connector_arm=c_arm))
+    arms = (c_arm, f_arm)
+    above = {a: cg.lifted(geo.grasp[a], geo.up, cg.APPROACH_HEIGHT) for a in arms}
+    b.add(
+        f"{label}: pick configuration",
+        [_transit(a, above[a]) for a in arms],
+        before=[GripperEvent(a, OPEN) for a in arms],
+    )
+    b.add(
+        f"{label}: approach and grasp",
+        [_cartesian(a, cg.line(above[a], geo.grasp[a])) for a in arms],
+        after=[GripperEvent(a, GRASP, name) for a in arms],
+        facts={
+            "cable": name,
+            "grasps": {
+                a: {"from": ref, "end": geo.end(a), "s": geo.s[a]}
+                for a, ref in zip(arms, step.from_, strict=True)
+            },
+        },
+    )
+    for a in arms:
+        b.state = b.state.hold(a, name, geo.s[a])
+    # Both hands lift the cable out of the combs together: one object, moved rigidly.
+    b.add(
+        f"{label}: retract",
+        [_cartesian(a, cg.line(geo.grasp[a], geo.retracted[a])) for a in arms],
+        closed_chain=(c_arm, f_arm),
+    )
+    b.add(f"{label}: turn along the cable", [_cartesian(a, geo.faced[a]) for a in arms])
+    b.add(f"{label}: down", [_cartesian(f_arm, geo.lower)], keep_distance=(c_arm, f_arm))
+    b.add(
+        f"{label}: slide to the connector",
+        [_cartesian(f_arm, geo.slide)],
+        before=[GripperEvent(f_arm, SLIDE, name)],
+        facts={"spacing": float(np.linalg.norm(geo.slide[-1][:3, 3] - geo.lower[0][:3, 3]))},
+    )
+    b.state = b.state.hold(f_arm, name, geo.s_slid)
+    b.add(
+        f"{label}: up",
+        [_cartesian(f_arm, geo.raise_)],
+        before=[GripperEvent(f_arm, GRASP, name)],
+        keep_distance=(c_arm, f_arm),
+    )
+    if geo.align is not None:
+        b.add(
+            f"{label}: align with the routing platform",
+            [_cartesian(c_arm, geo.align[0]), _cartesian(f_arm, geo.align[1])],
+            closed_chain=(c_arm, f_arm),
+            keep_distance=(c_arm, f_arm),
+        )
+    return b.segments, b.state
+
+
+# =========================================================================== PlaceConnector
+
+
+@dataclass(frozen=True)
+class _PlaceGeometry:
+    guide: str
+    connector_arm: str
+    up: cg.Vec
+    slot: cg.Vec
+    axis: cg.Vec  # from the connector to its cable
+    gap: float
+    adjust: Poses | None  # the other hand slides to where the placing needs it
+    T_c_f: Mat  # the other hand in the connector hand's TCP frame, while both carry
+    align: tuple[Poses, Poses]
+    approach: tuple[Poses, Poses]
+    insert: tuple[Poses, Poses]
+    retract: Poses
+    rear: cg.Vec  # the connector's rear face, seated
+    pull_distance: float
+    s_other: float
+
+    def reach(self, arm: str) -> list[tuple[str, Mat]]:
+        i = 0 if arm == self.connector_arm else 1
+        out = [("aligned", self.align[i][-1]), ("connector approach", self.approach[i][-1])]
+        out += [("connector insert", self.insert[i][-1])]
+        if i == 0:
+            out += [("connector retract", self.retract[-1])]
+        return out
+
+
+def _place_geometry(
+    world: World,
+    state: CableState,
+    step: PlaceConnector,
+    c_arm: str,
+    f_arm: str,
+    where: str,
+) -> _PlaceGeometry:
+    cable = world.cable(step.cable)
+    conn_len = cable.connector.length if cable.connector is not None else 0.0
+    up = cg.platform_up(world, step.guide)
+    slot = cg.position(world, step.guide)
+    # The connector guide's keypoint x points from the connector to its cable (models.xml).
+    axis = cg.horizontal(cg.keypoint_x(world, step.guide), up)
+    dims = world.dimensions(step.guide)
+    if "length" not in dims:
+        raise _error(f"{where}: guide '{step.guide}' has no length dimension (along the cable)")
+    hand_f = _hand(world, f_arm)
+    spacing = _connector_spacing(world, step.guide, conn_len, hand_f)
+    T_c0, T_f0 = state.tcp[c_arm], state.tcp[f_arm]
+    # Carrying, the other hand holds the cable `spacing` ahead of the connector's centre,
+    # both hands leaning apart: that relative pose does not depend on where the pair is.
+    T_c_f = _pair_pose(spacing, up)
+    T_f_want = T_c0 @ T_c_f
+    adjust = None
+    if not _same_pose(T_f0, T_f_want):
+        adjust = cg.line(T_f0, T_f_want)
+    T_c_ins = cg.tcp_frame(slot, axis, up, -axis, cg.LEAN)
+    T_c_app = cg.lifted(T_c_ins, up, cg.APPROACH_HEIGHT)
+    T_c_al = cg.tcp_frame(T_c0[:3, 3], axis, up, -axis, cg.LEAN)
+    align = cg.pair_line(T_c0, T_c_al, T_c_f)
+    approach = cg.pair_line(T_c_al, T_c_app, T_c_f)
+    insert = cg.pair_line(T_c_app, T_c_ins, T_c_f)
+    retract = cg.line(T_c_ins, cg.lifted(T_c_ins, up, cg.RETRACT_HEIGHT))
+    # pull_distance: the cable from the seated connector's rear face to the routing
+    # fingertips: the guide beyond the connector (its exit wall, and the connector's play in
+    # the pocket) plus X_offset (the fingers' half-length and the gap A).
+    pull = spacing - conn_len / 2.0
+    return _PlaceGeometry(
+        guide=step.guide,
+        connector_arm=c_arm,
+        up=up,
+        slot=slot,
+        axis=axis,
+        gap=dims.get("gap", 0.0),
+        adjust=adjust,
+        T_c_f=T_c_f,
+        align=align,
+        approach=approach,
+        insert=insert,
+        retract=retract,
+        rear=slot + conn_len / 2.0 * axis,
+        pull_distance=pull,
+        s_other=pull,
+    )
+
+
+def _pair_pose(spacing: float, up: cg.Vec) -> Mat:
+    """T_connector-hand_other-hand when both hold the cable ``spacing`` apart, leaning apart."""
+    x = cg.horizontal(_any_normal(up), up)
+    origin = np.zeros(3)
+    T_c = cg.tcp_frame(origin, x, up, -x, cg.LEAN)
+    return g.inverse(T_c) @ cg.tcp_frame(origin + spacing * x, x, up, x, cg.LEAN)
+
+
+def _any_normal(up: cg.Vec) -> cg.Vec:
+    v = np.array([1.0, 0.0, 0.0]) if abs(up[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    out: cg.Vec = v - up * float(v @ up)
+    return out
+
+
+def _same_pose(A: Mat, B: Mat, tol_m: float = 1e-3, tol_rad: float = math.radians(1.0)) -> bool:
+    dp = float(np.linalg.norm(A[:3, 3] - B[:3, 3]))
+    return (
+        dp <= tol_m
+        and cg.angle_between(A[:3, 0], B[:3, 0]) <= tol_rad
+        and (cg.angle_between(A[:3, 2], B[:3, 2]) <= tol_rad)
+    )
+
+
+def _emit_place(
+    step: PlaceConnector, state: CableState, geo: _PlaceGeometry, c_arm: str, f_arm: str
+) -> tuple[list[Segment], CableState]:
+    name = step.cable
+    label = f"PlaceConnector {step.guide}"
+    b = _Builder(replace(state, connector_arm=c_arm))
+    pair = (c_arm, f_arm)
+    if geo.adjust is not None:
+        b.add(
+            f"{label}: slide to the placing grasp",
+            [_cartesian(f_arm, geo.adjust)],
+            before=b.mode_event(f_arm, SLIDE, name),
+            after=[GripperEvent(f_arm, GRASP, name)],
+        )
+    # The cable between the connector and the other hand is short and straight: both hands
+    # carry it as one rigid piece, and its length between them stays what it is.
+    for what, paths in (("align with the guide", geo.align), ("approach", geo.approach)):
+        b.add(
+            f"{label}: {what}",
+            [_cartesian(c_arm, paths[0]), _cartesian(f_arm, paths[1])],
+            before=b.mode_event(f_arm, GRASP, name),
+            closed_chain=pair,
+            keep_distance=pair,
+        )
+    b.add(
+        f"{label}: insert",
+        [_cartesian(c_arm, geo.insert[0]), _cartesian(f_arm, geo.insert[1])],
+        after=[GripperEvent(c_arm, OPEN)],
+        closed_chain=pair,
+        keep_distance=pair,
+        facts={
+            "guide": step.guide,
+            "slot": _vec(geo.slot),
+            "axis": _vec(geo.axis),
+            "gap": geo.gap,
+            "connector_arm": c_arm,
+            "tcp": _vec(geo.insert[0][-1][:3, 3]),
+        },
+    )
+    b.add(
+        f"{label}: retract",
+        [_cartesian(c_arm, geo.retract)],
+        facts={"pull_distance": geo.pull_distance},
+    )
+    s = b.state.hold(f_arm, name, geo.s_other)
+    return b.segments, replace(
+        s,
+        routing_arm=f_arm,
+        place_guide=None,
+        guides=(step.guide,),
+        route=(_point(geo.rear),),
+        pull_distance=geo.pull_distance,
+    )
+
+
+# =========================================================================== RouteCable
+
+
+@dataclass(frozen=True)
+class GuidePlan:
+    """One guide of RouteCable: the published quantities and every pose (cell frame)."""
+
+    guide: str
+    where: str
+    dims: cg.GuideDims
+    up: cg.Vec
+    slot: cg.Vec  # S: the slot keypoint
+    axis: cg.Vec  # u: the cable's direction through the guide, along the route
+    side: float  # +1: slide to the left of u (up x u), -1: to the right
+    x_offset: float
+    a: float
+    r_lift: float
+    r_insert: float
+    r_cable: float
+    theta_min: float
+    theta: float
+    pull: float  # pulled to tension after the other hand grasps
+    elevation: float  # of the lift, seen from the pivot
+    reorient: Poses | None
+    approach: Poses  # to Ap: X_offset before the near face, facing the guide
+    slide: Poses  # R_cable from Ap at theta
+    other_above: Mat
+    pivot: Mat  # the other hand's grasp: Ap, where the routing hand stopped
+    pull_path: Poses
+    lift: Poses
+    swing: Poses
+    insert: Poses
+    laid: float  # route length from the connector's rear face to Ap
+
+    @property
+    def radius(self) -> float:
+        """Distance between the hands during lift and insert: R_cable + the pull."""
+        return self.r_cable + self.pull
+
+    def reach_routing(self) -> list[tuple[str, Mat]]:
+        return [
+            ("approach", self.approach[-1]),
+            ("slide end", self.slide[-1]),
+            ("pull", self.pull_path[-1]),
+            ("lift", self.lift[-1]),
+            ("above the slot", self.swing[-1]),
+            ("insert", self.insert[-1]),
+        ]
+
+    def reach_other(self) -> list[tuple[str, Mat]]:
+        return [("pivot approach", self.other_above), ("pivot grasp", self.pivot)]
+
+    def after(self, state: CableState, r_arm: str, o_arm: str, cable: str) -> CableState:
+        """The state once this guide holds the cable: both hands grasping, the routing hand
+        R past the guide, the other at the pivot."""
+        ap = self.pivot[:3, 3]
+        route = (*state.route, _point(ap), _point(self.slot))
+        s = replace(
+            state,
+            tcp={**state.tcp, r_arm: self.insert[-1], o_arm: self.pivot},
+            mode={**state.mode, r_arm: GRASP, o_arm: GRASP},
+            guides=(*state.guides, self.guide),
+            route=route,
+            pull_distance=self.radius - (self.dims.length / 2.0 + self.x_offset),
+        )
+        s = s.hold(o_arm, cable, self.laid)
+        return s.hold(r_arm, cable, self.laid + self.radius)
+
+
+def _point(v: cg.Vec) -> tuple[float, float, float]:
+    return (float(v[0]), float(v[1]), float(v[2]))
+
+
+def _guide_plan(
+    world: World, state: CableState, cable: str, guide: str, r_arm: str, o_arm: str
+) -> GuidePlan:
+    where = f"steps[{state.step}] RouteCable {guide}"
+    dims = cg.GuideDims.of(world, guide, where)
+    hand = _hand(world, r_arm)
+    up = cg.platform_up(world, guide)
+    slot = cg.position(world, guide)
+    last = np.asarray(state.route[-1], dtype=float)
+    # The guide's cable axis is its keypoint x; the cable goes through it away from the
+    # last point of the route.
+    axis = cg.horizontal(cg.keypoint_x(world, guide), up)
+    if float(axis @ (slot - last)) < 0.0:
+        axis = -axis
+    x_off = hand.x_offset
+    a = cg.APPROACH_GAP
+    rl = cg.r_lift(dims.length, dims.height, x_off, cg.Z_OFFSET)
+    ri = cg.r_insert(dims.length, x_off)
+    r_cable = max(rl, ri)
+    t_min = cg.theta_min(hand.width, dims.width, a)
+    theta = t_min + cg.THETA_MARGIN
+    if theta > cg.THETA_MAX:
+        raise _error(
+            f"{where}: no sliding angle clears the guide: theta must exceed "
+            f"atan((W_gripper + W_guide) / (2 A)) = atan(({_mm(hand.width)} + "
+            f"{_mm(dims.width)}) / (2 * {_mm(a)})) = {math.degrees(t_min):.1f} deg, plus "
+            f"{math.degrees(cg.THETA_MARGIN):.0f} deg margin, but beyond "
+            f"{math.degrees(cg.THETA_MAX):.0f} deg the slide hardly moves along the guide"
+        )
+    ap = slot - (dims.length / 2.0 + x_off) * axis
+    # The routing hand tips forward and towards its base, the other hand back and towards
+    # its base: see cg.LEAN.
+    tip_r = cg.unit(axis + _towards_base(world, r_arm, slot, up))
+    tip_o = cg.unit(-axis + _towards_base(world, o_arm, slot, up))
+    T_r0 = state.tcp[r_arm]
+    T_ap = cg.nearer_turn(T_r0, cg.tcp_frame(ap, axis, up, tip_r, cg.LEAN))
+    T_pivot = cg.nearer_turn(state.tcp[o_arm], cg.tcp_frame(ap, axis, up, tip_o, cg.LEAN))
+    pull_r = cg.tension_pull(r_cable)
+    side = _slide_side(world, guide, where, ap, axis, up, theta, r_cable + pull_r, hand)
+    left = np.cross(up, axis)
+    d = math.cos(theta) * axis + side * math.sin(theta) * left
+    reorient = None
+    if cg.rotation_angle(T_r0, T_ap) > cg.TINY_ANGLE:
+        reorient = cg.turn_in_place(T_r0, T_ap)
+        T_r0 = reorient[-1]
+    approach = cg.line(T_r0, T_ap)
+    slide = cg.line(
+        T_ap, cg.nearer_turn(T_ap, cg.tcp_frame(ap + r_cable * d, d, up, tip_r, cg.LEAN))
+    )
+    pull_path = cg.line(slide[-1], cg.at(slide[-1], ap + (r_cable + pull_r) * d))
+    # Lift: up on the circle about the pivot in the vertical plane of the slide, to the
+    # elevation at which radius >= R_lift puts the hand over the guide's far face and
+    # Z_offset over its top. The hand keeps its orientation: turning with the circle would
+    # lean the tool back over the other hand.
+    elevation = math.atan2(dims.height + cg.Z_OFFSET, dims.length + x_off)
+    lift = cg.arc(pull_path[-1], ap, np.cross(d, up), elevation, turn=False)
+    # Swing about the vertical through the pivot until the cable is over the slot, turning
+    # the hand with it (a turn about the vertical keeps its z down).
+    swing = cg.arc(lift[-1], ap, up, -side * theta, turn=True)
+    # Insert: down on the circle until the cable lies along the axis through the slot.
+    insert = cg.arc(swing[-1], ap, np.cross(axis, up), -elevation, turn=False)
+    laid = state.route_length() + float(np.linalg.norm(ap - last))
+    return GuidePlan(
+        guide=guide,
+        where=where,
+        dims=dims,
+        up=up,
+        slot=slot,
+        axis=axis,
+        side=side,
+        x_offset=x_off,
+        a=a,
+        r_lift=rl,
+        r_insert=ri,
+        r_cable=r_cable,
+        theta_min=t_min,
+        theta=theta,
+        pull=pull_r,
+        elevation=elevation,
+        reorient=reorient,
+        approach=approach,
+        slide=slide,
+        other_above=cg.lifted(T_pivot, up, cg.APPROACH_HEIGHT),
+        pivot=T_pivot,
+        pull_path=pull_path,
+        lift=lift,
+        swing=swing,
+        insert=insert,
+        laid=laid,
+    )
+
+
+def _slide_side(
+    world: World,
+    guide: str,
+    where: str,
+    ap: cg.Vec,
+    axis: cg.Vec,
+    up: cg.Vec,
+    theta: float,
+    length: float,
+    hand: cg.Hand,
+) -> float:
+    """The side to slide on: of the two slides at theta, one each side of the guide, the
+    one farther from every other element of the platforms (+1, left of the axis, on a tie);
+    an error if both come within the hand's and the element's radii plus CLEARANCE."""
+    left = np.cross(up, axis)
+    hand_radius = math.hypot(hand.width, 2.0 * hand.half_length) / 2.0
+    elements = cg.footprints(world, guide)
+    best: tuple[float, float] | None = None
+    blocked: list[str] = []
+    for side in (1.0, -1.0):
+        end = ap + length * (math.cos(theta) * axis + side * math.sin(theta) * left)
+        margin, nearest = math.inf, ""
+        for f in elements:
+            m = cg.segment_distance(f.centre, ap, end, up) - f.radius - hand_radius
+            if m < margin:
+                margin, nearest = m, f.name
+        if margin < cg.CLEARANCE:
+            blocked.append(f"{'left' if side > 0 else 'right'} by {nearest}")
+        elif best is None or margin > best[0] + 1e-9:
+            best = (margin, side)
+    if best is None:
+        raise _error(
+            f"{where}: no sliding angle clears the guide: sliding at theta = "
+            f"{math.degrees(theta):.1f} deg is blocked on the " + " and on the ".join(blocked)
+        )
+    return best[1]
+
+
+def _check_length(world: World, state: CableState, name: str, gp: GuidePlan) -> None:
+    """The cable must reach the routing hand when it is farthest out (after the pull) and
+    leave the fingers enough beyond it to hold."""
+    cable = world.cable(name)
+    margin = _hand(world, state.routing_arm or "").end_margin
+    need = gp.laid + gp.radius + margin
+    if need > cable.length + 1e-9:
+        raise _error(
+            f"{gp.where}: cable '{name}' is too short for the route: this guide needs "
+            f"{_mm(need)} mm ({_mm(gp.laid)} mm laid from the connector's rear face to the "
+            f"approach point, R_cable {_mm(gp.r_cable)} mm slid past it, {_mm(gp.pull)} mm "
+            f"pulled to tension, {_mm(margin)} mm for the fingers to hold) but the cable is "
+            f"{_mm(cable.length)} mm long"
+        )
+
+
+def _emit_guide(
+    state: CableState, gp: GuidePlan, r_arm: str, o_arm: str, cable: str
+) -> tuple[list[Segment], CableState]:
+    label = f"RouteCable {gp.guide}"
+    b = _Builder(state)
+    pair = (r_arm, o_arm)
+    if o_arm in b.state.held:
+        # The other hand lets go of the cable at the previous guide, moves up and then back
+        # along the route: straight up, its wrist stays where the routing arm's forearm
+        # passes on its way to the next guide (a collision on plan_one_turn).
+        b.add(
+            f"{label}: release the previous guide",
+            [_cartesian(o_arm, _stand_back(b.state, o_arm, gp.up))],
+            before=[GripperEvent(o_arm, OPEN)],
+        )
+    if gp.reorient is not None:
+        b.add(
+            f"{label}: face the guide",
+            [_cartesian(r_arm, gp.reorient)],
+            before=b.mode_event(r_arm, SLIDE, cable),
+        )
+    b.add(
+        f"{label}: approach sliding",
+        [_cartesian(r_arm, gp.approach)],
+        before=b.mode_event(r_arm, SLIDE, cable),
+    )
+    b.add(
+        f"{label}: slide R_cable",
+        [_cartesian(r_arm, gp.slide)],
+        after=[GripperEvent(r_arm, GRASP, cable)],
+        facts={
+            "guide": gp.guide,
+            "R_lift": gp.r_lift,
+            "R_insert": gp.r_insert,
+            "R_cable": gp.r_cable,
+            "theta_min": gp.theta_min,
+            "theta": gp.theta,
+            "A": gp.a,
+            "X_offset": gp.x_offset,
+            "Z_offset": cg.Z_OFFSET,
+            "side": gp.side,
+        },
+    )
+    b.add(
+        f"{label}: other arm to the cable",
+        [_transit(o_arm, gp.other_above)],
+        before=b.mode_event(o_arm, OPEN, None),
+    )
+    b.add(
+        f"{label}: other arm grasps",
+        [_cartesian(o_arm, cg.line(gp.other_above, gp.pivot))],
+        after=[GripperEvent(o_arm, GRASP, cable)],
+    )
+    # The distance between the hands grows by the pull here, by design: no keep_distance.
+    b.add(f"{label}: pull to tension", [_cartesian(r_arm, gp.pull_path)], facts={"pull": gp.pull})
+    b.add(f"{label}: lift", [_cartesian(r_arm, gp.lift)], keep_distance=pair)
+    b.add(f"{label}: over the slot", [_cartesian(r_arm, gp.swing)], keep_distance=pair)
+    b.add(
+        f"{label}: insert",
+        [_cartesian(r_arm, gp.insert)],
+        keep_distance=pair,
+        facts={
+            "guide": gp.guide,
+            "slot": _vec(gp.slot),
+            "axis": _vec(gp.axis),
+            "gap": gp.dims.gap,
+            "routing_arm": r_arm,
+            "other_arm": o_arm,
+            "radius": gp.radius,
+        },
+    )
+    return b.segments, gp.after(b.state, r_arm, o_arm, cable)
+
+
+# =========================================================================== checks and arms
+
+
+def _error(message: str) -> InputError:
+    return InputError(Problem(message))
+
+
+def _mm(x: float) -> str:
+    return f"{x * 1000.0:.1f}"
+
+
+def _two_arms(world: World, where: str) -> tuple[str, str]:
+    arms = tuple(world.cell.robots)
+    if len(arms) != 2:
+        raise _error(
+            f"{where}: the cable skills need a cell with two arms, this one has {len(arms)}"
+        )
+    return arms[0], arms[1]
+
+
+def _other(arms: tuple[str, str], arm: str) -> str:
+    return arms[1] if arm == arms[0] else arms[0]
+
+
+def _nearest_arm(world: World, arms: tuple[str, str], ref: str) -> str:
+    """The arm whose base is nearer the keypoint (the first on a tie)."""
+    p = cg.position(world, ref)
+    dist = [float(np.linalg.norm(world.cell.robots[a].base.matrix()[:3, 3] - p)) for a in arms]
+    return arms[0] if dist[0] <= dist[1] else arms[1]
+
+
+def _towards_base(world: World, arm: str, p: cg.Vec, up: cg.Vec) -> cg.Vec:
+    """Horizontal unit vector from ``p`` towards the arm's base."""
+    return cg.horizontal(world.cell.robots[arm].base.matrix()[:3, 3] - p, up)
+
+
+def _hand(world: World, arm: str) -> cg.Hand:
+    robot = world.cell.robots[arm]
+    if robot.tool is None or robot.tool not in world.cell.tools:
+        raise _error(f"arm '{arm}' has no tool: the cable skills need a parallel gripper")
+    return cg.Hand.from_tool(world.cell.tools[robot.tool], robot.tool)
+
+
+def _check_jaw(world: World, arm: str, where: str) -> None:
+    robot = world.cell.robots[arm]
+    _hand(world, arm)
+    assert robot.tool is not None
+    jaw = world.cell.tools[robot.tool].jaw
+    missing = [m for m in (OPEN, SLIDE, GRASP) if m not in jaw]
+    if missing:
+        raise _error(
+            f"{where}: tool '{robot.tool}' of arm '{arm}' has no jaw mode "
+            + ", ".join(f"'{m}'" for m in missing)
+            + " (the method opens, slides and grasps)"
+            + known(jaw)
+        )
+
+
+def _require_hold(state: CableState, arm: str, cable: str, where: str, what: str) -> None:
+    hold = state.held.get(arm)
+    if hold is None or hold.cable != cable:
+        raise _error(f"{where}: arm '{arm}' does not hold {what}")
+
+
+def _routing_arms(world: World, state: CableState, cable: str, where: str) -> tuple[str, str]:
+    r_arm = state.routing_arm
+    if state.cable != cable or r_arm is None or not state.route:
+        raise _error(
+            f"{where}: cable '{cable}' has no placed connector (plan PlaceConnector first)"
+        )
+    _require_hold(state, r_arm, cable, where, f"cable '{cable}'")
+    return r_arm, _other(_two_arms(world, where), r_arm)
+
+
+_MODELS: dict[int, tuple[weakref.ref[World], CellModel]] = {}
+
+
+def _cell_model(world: World) -> CellModel:
+    """The world's robots, built once per world (a plan's steps share them)."""
+    from cellengine.motion.robot import build_cell_model
+
+    hit = _MODELS.get(id(world))
+    if hit is not None and hit[0]() is world:
+        return hit[1]
+    model = build_cell_model(world)
+    _MODELS[id(world)] = (weakref.ref(world, lambda _: _MODELS.pop(id(world), None)), model)
+    return model
+
+
+def _check_reach(world: World, arm: str, poses: Sequence[tuple[str, Mat]], where: str) -> None:
+    """Every key pose has an inverse kinematics solution within the arm's joint limits (the
+    executor plans the paths between them; this rejects a guide the arm cannot get to)."""
+    from cellengine.motion.ik import arm_ik
+
+    ik = arm_ik(_cell_model(world).arms[arm])
+    for what, T in poses:
+        if ik.solve(T) is None:
+            x, y, z = (_mm(v) for v in T[:3, 3])
+            raise _error(
+                f"{where}: out of reach of arm '{arm}': the {what} pose at ({x}, {y}, {z}) "
+                "mm has no inverse kinematics solution within its joint limits"
+            )
+
+
+def _look_ahead(
+    world: World, state: CableState, pick: PickCable, rest: Sequence[Skill]
+) -> CableState:
+    """Before a PickCable: the arm and guide of the PlaceConnector that follows for the same
+    cable (before the next PickCable), so the pick hands the connector end to that arm."""
+    for step in rest:
+        if isinstance(step, PickCable):
+            break
+        if isinstance(step, PlaceConnector) and step.cable == pick.cable:
+            return replace(state, connector_arm=step.connector_arm(world), place_guide=step.guide)
+    return replace(state, connector_arm=None, place_guide=None)

@@ -1,0 +1,367 @@
+"""Geometry of the published cable-routing method (paper 003, section III-B and Fig. 4).
+
+TCP frame convention (every pose here is ``T_cell_tcp``, the fingertip centre of the tool's
+``tcp`` in the cell frame):
+
+- ``z_tcp`` points out of the fingertips, the approach direction: down (``-up``) for the top
+  grasps every cable skill uses;
+- ``y_tcp`` is the jaw axis, along which the fingers close: across the cable;
+- ``x_tcp`` runs along the held cable, towards increasing ``s`` (away from the connector, to
+  the free end). So ``x = cable direction``, ``z = -up``, ``y = z x x``. A hand that holds
+  only the cable may instead face the other way (x towards decreasing ``s``, the gripper being
+  symmetric about its tool axis) when that turns its wrist less (:func:`nearer_turn`); the
+  connector hand never does;
+- then each hand's tool is tipped by :data:`LEAN` (15 deg) so its flange moves away from the
+  other hand: the hand behind on the cable (smaller ``s``) tips its flange back along the
+  cable, the hand ahead forward; in RouteCable each also tips towards its own arm's base.
+  ``z_tcp`` is then 15 deg off straight down; the jaw axis ``y_tcp`` stays normal to the
+  cable, so the fingers still close across it. Without the tip the two UR5e wrists collide
+  at the hand spacings the method uses.
+
+A keypoint whose x runs along the cable and whose z is up (a guide's ``slot``, a comb's
+``slot``) gives the top grasp there as ``T_cell_keypoint @ Rx(pi)`` when its x already points
+to increasing ``s``.
+
+The gripper as the method sees it (:class:`Hand`): ``W_gripper`` is the tool's
+``finger_width``, its extent across the cable (DESIGN 3.1 names it so); along the cable the
+fingers are ``finger_thickness`` thick (the paper's pull_distance uses "the fingers
+thickness" with "the guides thickness", both along the cable). The motion layer checks
+collisions against a stand-in box ``finger_width`` square (motion/robot.py), so clearances
+along the cable use half the larger of the two: what the executor will check.
+
+Symbols of the published formulas, with where each value comes from:
+
+- ``L`` guide length along the cable, ``W_guide`` its width across it, ``H`` its height:
+  ``world.dimensions(guide)`` (``length``, ``width``, ``height``);
+- ``W_gripper``: the tool's ``finger_width``;
+- ``A``: the gap between the routing gripper's front and the guide's near face when it stops
+  before the guide (Fig. 4(a)); :data:`APPROACH_GAP`;
+- ``X_offset``: the distance from a guide face to the fingertip centre of a hand holding the
+  cable beside it: ``A`` plus the hand's half-length along the cable. The other hand grasps
+  the cable there (``X_offset`` before the near face: the pivot of the circular moves) and the
+  routing hand ends ``X_offset`` (at least) past the far face;
+- ``Z_offset``: clearance of the lifted cable over the guide's top; :data:`Z_OFFSET`.
+
+Then ``R_lift = sqrt((L + X_offset)^2 + (H + Z_offset)^2)``, ``R_insert = L + 2 X_offset``,
+``R_cable = max(R_lift, R_insert)`` and the sliding angle ``theta > atan((W_gripper +
+W_guide) / (2 A))``. ``H`` is the guide's full height, as published: the hands hold the cable
+at slot height, so this over-estimates what the lift must clear (the slot is near the top)
+and errs towards more cable, never less.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from cellengine import geometry as g
+from cellengine.errors import InputError, Problem
+from cellengine.geometry import Mat
+from cellengine.info.cell import Tool
+from cellengine.motion import interpolate as ip
+from cellengine.world import World
+
+Vec = NDArray[np.float64]
+Poses = NDArray[np.float64]  # (k, 4, 4)
+
+# Offsets of the method (m, rad). Constants of the skills, not of a cell: the paper gives no
+# values; these fit a 6 mm cable and 20 mm fingers with room for a few mm of error.
+APPROACH_GAP = 0.025  # A: gripper front to guide face when the routing hand stops before it
+Z_OFFSET = 0.010  # Z_offset: lifted cable over the guide's top
+CLEARANCE = 0.005  # between a hand and a fixture it works beside (comb, guide wall)
+APPROACH_HEIGHT = 0.060  # a hand comes down onto a grasp or an insert from this high
+RETRACT_HEIGHT = 0.100  # and leaves upwards this far (a comb's slot is 18 mm deep)
+STAND_BACK = 0.100  # the pivot hand, released, then backs off this far along the route
+THETA_MARGIN = math.radians(5.0)  # the sliding angle is this much over its published minimum
+THETA_MAX = math.radians(80.0)  # beyond this the slide hardly moves along the guide
+SLIDE_DOWN_ANGLE = math.radians(30.0)  # PickCable: how far the sliding hand first goes down
+# Each hand tips its tool by this much so that its flange moves away from the other hand: with
+# 200 mm tools straight down, two UR5e wrists and forearms collide when the fingertips are
+# closer than about 100 mm (measured with motion.collision on the cable_routing cell), and the
+# method holds the cable with the hands 46-85 mm apart. Tipped 15 deg apart along the cable,
+# about half of the IK branch pairs are free at 46-57 mm in open space. Where the two arms
+# come from the sides (a route across the cell) RouteCable also tips each flange towards its
+# own arm's base, away from the other arm's forearm (twice the free pairs on plan_one_turn's
+# guide4). A hand holding the connector tips only along the cable and always the same way,
+# so the connector, grasped already tipped, stays level.
+LEAN = math.radians(15.0)
+# Pull that puts the cable in tension, per metre between the hands: the sag of a loosely held
+# span. The paper makes it "a function of the distance between grippers and the cable
+# properties"; objects.yaml gives no stiffness, so only the distance is used.
+TENSION_STRAIN = 0.02
+TINY_ANGLE = 1e-6  # rad: a reorientation smaller than this is no segment
+
+
+# --------------------------------------------------------------------------- frames
+
+
+def unit(v: ArrayLike) -> Vec:
+    a = np.asarray(v, dtype=float)
+    n = float(np.linalg.norm(a))
+    if n < 1e-12:
+        raise ValueError("unit: zero vector")
+    out: Vec = a / n
+    return out
+
+
+def horizontal(v: ArrayLike, up: Vec) -> Vec:
+    """``v`` projected on the plane normal to ``up``, unit length."""
+    a = np.asarray(v, dtype=float)
+    return unit(a - up * float(a @ up))
+
+
+def tcp_frame(
+    position: ArrayLike,
+    x_axis: ArrayLike,
+    up: Vec,
+    flange_towards: ArrayLike | None = None,
+    lean: float = 0.0,
+) -> Mat:
+    """T_cell_tcp of a top grasp at ``position`` holding a cable along ``x_axis``: z = -up
+    tipped by ``lean`` so that the flange (behind the fingertips, on -z) moves towards
+    ``flange_towards`` (made horizontal); y = z x x kept normal to the cable, so the
+    fingers still close across it; x = y x z. See :data:`LEAN`."""
+    c = horizontal(x_axis, up)
+    z = -up
+    if flange_towards is not None and lean != 0.0:
+        z = -math.cos(lean) * up - math.sin(lean) * horizontal(flange_towards, up)
+    y = unit(np.cross(z, c))
+    return g.transform(np.column_stack([np.cross(y, z), y, z]), position)
+
+
+def at(T: Mat, position: ArrayLike) -> Mat:
+    """``T`` moved to ``position``, orientation kept."""
+    out = np.array(T, dtype=float)
+    out[:3, 3] = position
+    return out
+
+
+def lifted(T: Mat, up: Vec, height: float) -> Mat:
+    return at(T, T[:3, 3] + height * up)
+
+
+def rotation_about(axis: ArrayLike, angle: float) -> Mat:
+    return g.axis_angle_to_matrix(list(np.asarray(axis, dtype=float)), angle)
+
+
+def angle_between(a: ArrayLike, b: ArrayLike) -> float:
+    ua, ub = unit(a), unit(b)
+    return math.atan2(float(np.linalg.norm(np.cross(ua, ub))), float(ua @ ub))
+
+
+def signed_angle(a: ArrayLike, b: ArrayLike, axis: Vec) -> float:
+    """Angle (rad, right-handed about ``axis``) from ``a`` to ``b``, both normal to it."""
+    ua, ub = unit(a), unit(b)
+    return math.atan2(float(np.cross(ua, ub) @ axis), float(ua @ ub))
+
+
+# --------------------------------------------------------------------------- paths
+
+
+def line(T0: Mat, T1: Mat) -> Poses:
+    """A straight TCP line within the default steps (5 mm, 2 deg)."""
+    return ip.line(T0, T1)
+
+
+def turn_in_place(T0: Mat, T_target: Mat) -> Poses:
+    """The TCP turned in place to ``T_target``'s orientation."""
+    return ip.line(T0, at(T_target, T0[:3, 3]))
+
+
+def nearer_turn(T_from: Mat, T_to: Mat) -> Mat:
+    """``T_to`` or ``T_to`` turned half a turn about its z, whichever is the smaller rotation
+    from ``T_from``. The parallel gripper is symmetric about its tool axis, so a hand holding
+    only a cable (never one holding the connector, which turns with it) may face either way
+    along it; taking the nearer keeps the wrist from winding up over a route (plan_two_turns
+    turned the routing hand's wrist past its 2 pi limit). The first wins a tie."""
+    flipped = np.array(T_to, dtype=float)
+    flipped[:3, :2] *= -1.0  # Rz(pi): x and y reversed, z kept
+    return (
+        flipped if rotation_angle(T_from, flipped) < rotation_angle(T_from, T_to) - 1e-9 else T_to
+    )
+
+
+def rotation_angle(A: Mat, B: Mat) -> float:
+    """The angle (rad) of the rotation from A's orientation to B's."""
+    return float(np.linalg.norm(ip.rotation_vector(A[:3, :3].T @ B[:3, :3])))
+
+
+def pair_line(T_leader0: Mat, T_leader1: Mat, T_leader_follower: Mat) -> tuple[Poses, Poses]:
+    """Both hands moving one object rigidly (a closed chain): the leader on a line, the
+    follower fixed to it. Steps are halved and the rotation step scaled by the follower's
+    lever so the follower too moves at most 5 mm and 2 deg per step."""
+    lever = float(np.linalg.norm(T_leader_follower[:3, 3]))
+    max_t = ip.MAX_TRANSLATION / 2.0
+    max_r = min(ip.MAX_ROTATION, max_t / lever) if lever > 0 else ip.MAX_ROTATION
+    leader = ip.line(T_leader0, T_leader1, max_translation=max_t, max_rotation=max_r)
+    return leader, leader @ T_leader_follower
+
+
+def arc(T0: Mat, centre: ArrayLike, axis: ArrayLike, angle: float, *, turn: bool) -> Poses:
+    """The TCP on a circle about the axis through ``centre``: its distance to ``centre``
+    stays constant (the cable length between the hands, when the other hand is there)."""
+    return ip.arc_about(T0, centre, axis, angle, turn=turn)
+
+
+# --------------------------------------------------------------------------- the gripper
+
+
+@dataclass(frozen=True)
+class Hand:
+    """The gripper as the method sees it (m)."""
+
+    width: float  # W_gripper: across the cable (finger_width)
+    thickness: float  # the fingers along the cable (finger_thickness)
+    half_length: float  # half the extent along the cable that collision checks see
+
+    @classmethod
+    def from_tool(cls, tool: Tool, tool_name: str) -> Hand:
+        if tool.finger_width is None or tool.finger_thickness is None:
+            missing = "finger_width" if tool.finger_width is None else "finger_thickness"
+            raise InputError(
+                Problem(f"tool '{tool_name}' has no {missing}: the cable skills need both")
+            )
+        half = max(tool.finger_width, tool.finger_thickness) / 2.0
+        return cls(tool.finger_width, tool.finger_thickness, half)
+
+    @property
+    def x_offset(self) -> float:
+        """X_offset: guide face to fingertip centre of a hand beside the guide."""
+        return APPROACH_GAP + self.half_length
+
+    @property
+    def end_margin(self) -> float:
+        """Cable a hand needs beyond its fingertip centre to hold it."""
+        return self.half_length + CLEARANCE
+
+
+# --------------------------------------------------------------------------- the formulas
+
+
+def r_lift(length: float, height: float, x_offset: float, z_offset: float) -> float:
+    """R_lift = sqrt((L + X_offset)^2 + (H + Z_offset)^2): pivot to a point above the guide's
+    far face, Z_offset over its top (Fig. 4(b))."""
+    return math.hypot(length + x_offset, height + z_offset)
+
+
+def r_insert(length: float, x_offset: float) -> float:
+    """R_insert = L + 2 X_offset: X_offset before the guide to X_offset past it (Fig. 4(c))."""
+    return length + 2.0 * x_offset
+
+
+def theta_min(w_gripper: float, w_guide: float, a: float) -> float:
+    """The published bound: theta > atan((W_gripper + W_guide) / (2 A)). Sliding from A
+    before the guide at this angle, the gripper's side passes the guide's side: half the
+    gripper plus half the guide, sideways, over the distance A."""
+    return math.atan((w_gripper + w_guide) / (2.0 * a))
+
+
+def tension_pull(distance: float) -> float:
+    return TENSION_STRAIN * distance
+
+
+# --------------------------------------------------------------------------- the world
+
+
+@dataclass(frozen=True)
+class GuideDims:
+    """A guide's dimensions (m): L along the cable, W across it, H its height, the slot gap."""
+
+    length: float
+    width: float
+    height: float
+    gap: float
+
+    @classmethod
+    def of(cls, world: World, ref: str, where: str) -> GuideDims:
+        dims = world.dimensions(ref)
+        width = _width(dims)
+        missing = [k for k in ("length", "height", "gap") if k not in dims]
+        if width is None:
+            missing.append("width")
+        if missing:
+            raise InputError(
+                Problem(
+                    f"{where}: guide '{ref}' has no {', '.join(missing)} dimension; the "
+                    "published method sizes its moves from length, width, height and gap"
+                )
+            )
+        assert width is not None
+        return cls(dims["length"], width, dims["height"], dims["gap"])
+
+
+def _width(dims: Mapping[str, float]) -> float | None:
+    """``width``, or for a REMODEL guide the across-cable extent of its key's collision
+    columns (``ycol2 - ycol1``)."""
+    if "width" in dims:
+        return dims["width"]
+    if "ycol1" in dims and "ycol2" in dims:
+        return abs(dims["ycol2"] - dims["ycol1"])
+    return None
+
+
+def platform_up(world: World, ref: str) -> Vec:
+    """The z axis of the platform ``ref`` is on, in the cell frame: 'up' for its elements."""
+    platform, _, _ = world.resolve(ref)
+    return unit(platform.T_cell_platform[:3, 2])
+
+
+def position(world: World, ref: str) -> Vec:
+    out: Vec = np.array(world.pose(ref)[:3, 3], dtype=float)
+    return out
+
+
+def keypoint_x(world: World, ref: str) -> Vec:
+    out: Vec = np.array(world.pose(ref)[:3, 0], dtype=float)
+    return out
+
+
+@dataclass(frozen=True)
+class Footprint:
+    """An element as a disc on its platform, for clearance checks of sideways moves."""
+
+    name: str
+    centre: Vec
+    radius: float
+
+
+def footprints(world: World, exclude: str) -> list[Footprint]:
+    """Every platform element but the one ``exclude`` (a reference) is on: its origin and
+    the radius of its footprint (from length and width, else its mesh, else 0)."""
+    _, skip, _ = world.resolve(exclude)
+    out: list[Footprint] = []
+    for pname, platform in world.platforms.items():
+        for element in platform.elements.values():
+            if element is skip:
+                continue
+            T = platform.T_cell_platform @ element.T_platform_element
+            out.append(Footprint(f"{pname}.{element.name}", T[:3, 3], _radius(element)))
+    return out
+
+
+def _radius(element: object) -> float:
+    dims: Mapping[str, float] = getattr(element, "dimensions", {})
+    if "length" in dims and "width" in dims:
+        return math.hypot(dims["length"], dims["width"]) / 2.0
+    mesh = getattr(element, "mesh", None)
+    if mesh is not None:
+        lo, hi = np.asarray(mesh.bounds, dtype=float)
+        return float(np.hypot(*(hi - lo)[:2])) / 2.0
+    return 0.0
+
+
+def segment_distance(p: Vec, a: Vec, b: Vec, up: Vec) -> float:
+    """Horizontal distance (normal to ``up``) from point ``p`` to segment ``a``-``b``."""
+
+    def flat(v: Vec) -> Vec:
+        out: Vec = v - up * float(v @ up)
+        return out
+
+    pa, ab = flat(p - a), flat(b - a)
+    denom = float(ab @ ab)
+    t = 0.0 if denom == 0.0 else min(max(float(pa @ ab) / denom, 0.0), 1.0)
+    return float(np.linalg.norm(pa - t * ab))

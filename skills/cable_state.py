@@ -1,0 +1,118 @@
+"""What the cable skills hand from one step to the next: :class:`CableState`.
+
+A cable skill's ``plan(world, state)`` starts where the previous step left the arms and the
+cable, and returns the state after its last segment. The state is plain data (poses, names,
+lengths); nothing in it talks to a driver.
+
+Lengths along the cable (``s``) are in metres from the connector's rear face, the point where
+the cable leaves the connector (objects.yaml: a cable's ``length`` runs from there to the free
+end); a negative ``s`` is on the connector itself (its centre is at ``-connector.length / 2``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from types import MappingProxyType
+
+import numpy as np
+from numpy.typing import NDArray
+
+from cellengine.geometry import Mat
+from cellengine.program import GripperEvent
+from cellengine.world import World
+
+Point = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class Hold:
+    """What one gripper holds: ``cable`` at ``s`` (m from the connector's rear face)."""
+
+    cable: str
+    s: float
+
+
+def _frozen(T: NDArray[np.float64]) -> Mat:
+    a = np.array(T, dtype=float)
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class CableState:
+    """The cell as the cable skills see it after the last planned segment.
+
+    ``tcp``: T_cell_tcp of every arm. ``mode``: every gripper's jaw mode (a name in its tool's
+    ``jaw`` table; None until a skill sets one). ``held``: what each gripper holds (an arm
+    absent holds nothing). ``step``: the plan step index the next ``plan()`` writes into its
+    segments. ``cable``: the cable being worked on. ``connector_arm``: the arm that holds, or
+    will hold, the connector end (PlaceConnector's arm); ``routing_arm`` the other one, once
+    the connector is placed. ``place_guide``: the connector guide of the coming PlaceConnector,
+    so PickCable can prepare the grasp that guide needs (the published PickCable already
+    slides for "the connector that will be inserted in the following operation").
+    ``guides``: the guides the cable passes through, in order, the connector guide first.
+    ``route``: the points (cell frame, m) the laid cable runs through, from the connector's
+    rear face to the last guide's slot. ``pull_distance``: the cable (m) between the last of
+    those points and the routing fingertips, which the routing hand pulls through the next
+    guide; set by PlaceConnector, updated by every routed guide (published Algorithm 1).
+    """
+
+    tcp: Mapping[str, Mat]
+    mode: Mapping[str, str | None]
+    held: Mapping[str, Hold] = field(default_factory=lambda: MappingProxyType({}))
+    step: int = 0
+    cable: str | None = None
+    connector_arm: str | None = None
+    routing_arm: str | None = None
+    place_guide: str | None = None
+    guides: tuple[str, ...] = ()
+    route: tuple[Point, ...] = ()
+    pull_distance: float = 0.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(
+            self, "tcp", MappingProxyType({a: _frozen(T) for a, T in self.tcp.items()})
+        )
+        object.__setattr__(self, "mode", MappingProxyType(dict(self.mode)))
+        object.__setattr__(self, "held", MappingProxyType(dict(self.held)))
+
+    @classmethod
+    def at_home(cls, world: World) -> CableState:
+        """Every arm's TCP at its home configuration (cell.yaml ``home``; all zeros for an arm
+        without one), grippers in no known mode, nothing held."""
+        # Imported here: building the robots needs the motion layer, which skills only use
+        # for kinematics; importing skills must stay cheap (the plan parser imports them).
+        from cellengine.motion.robot import build_cell_model
+
+        model = build_cell_model(world)
+        tcp = {}
+        for name, arm in model.arms.items():
+            q = arm.home if arm.home is not None else np.zeros(arm.nq)
+            tcp[name] = arm.fk(q)
+        return cls(tcp=tcp, mode={name: None for name in tcp})
+
+    @property
+    def arms(self) -> tuple[str, ...]:
+        return tuple(self.tcp)
+
+    def moved(self, arm: str, T_cell_tcp: Mat) -> CableState:
+        return replace(self, tcp={**self.tcp, arm: T_cell_tcp})
+
+    def gripped(self, event: GripperEvent) -> CableState:
+        """After a gripper event: its mode; nothing held when it opens (an event that holds
+        something keeps the arm's current :class:`Hold`, which the skill sets with ``hold``)."""
+        held = dict(self.held)
+        if event.holds is None:
+            held.pop(event.arm, None)
+        return replace(self, mode={**self.mode, event.arm: event.mode}, held=held)
+
+    def hold(self, arm: str, cable: str, s: float) -> CableState:
+        return replace(self, held={**self.held, arm: Hold(cable, s)})
+
+    def route_length(self) -> float:
+        """Length (m) of the laid cable from the connector's rear face to the last route point."""
+        if len(self.route) < 2:
+            return 0.0
+        p = np.asarray(self.route, dtype=float)
+        return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum())
