@@ -62,10 +62,28 @@ def compile_plan(
     progress: Progress | None = None,
 ) -> Compiled:
     """Load, check and compile ``path``; InputError (in plan terms) when it cannot run."""
-    loaded = load_plan(path)
-    world, plan = loaded.world, loaded.plan
+    return compile_loaded(load_plan(path), strategy, merge, progress)
+
+
+Models = tuple[CellModel, CollisionChecker]
+
+
+def cell_models(world: World) -> Models:
+    """The robots and the collision checker of ``world``'s cell."""
     cell = build_cell_model(world)
-    checker = CollisionChecker(build_scene(cell, world))
+    return cell, CollisionChecker(build_scene(cell, world))
+
+
+def compile_loaded(
+    loaded: LoadedPlan,
+    strategy: str | None = None,
+    merge: str = "joint",
+    progress: Progress | None = None,
+    models: Callable[[World], Models] = cell_models,
+) -> Compiled:
+    """Compile a loaded plan; ``models`` lets a caller reuse one cell's models across plans."""
+    world, plan = loaded.world, loaded.plan
+    cell, checker = models(world)
     chosen = strategy or plan.execution
     segments = _with_file(plan.file, lambda: plan_segments(world, plan.steps))
     compiler = Compiler(

@@ -39,7 +39,8 @@ def test_design_examples_validate_unchanged(
     design_cell: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.chdir(design_cell)
-    assert main(["validate", "."]) == 0, capsys.readouterr().out
+    # the formats contract; running these files end to end is issue #4's
+    assert main(["validate", "--no-compile", "."]) == 0, capsys.readouterr().out
     assert capsys.readouterr().out.splitlines() == [
         "cell.yaml: ok (cell)",
         "objects.yaml: ok (objects)",

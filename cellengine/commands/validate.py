@@ -5,14 +5,16 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from cellengine.errors import EXIT_INVALID, EXIT_OK, InputError, Problem, UsageError, display_path
-from cellengine.info.load import load_objects, load_plan, load_world
+from cellengine.info.load import LoadedPlan, load_objects, load_plan, load_world
 from cellengine.info.yamlio import load_yaml
 from cellengine.motion.robot import build_cell_model
+from cellengine.pipeline import Models, cell_models, compile_loaded
 from cellengine.world import World
 
 KINDS = ("cell", "objects", "plan")
@@ -27,6 +29,11 @@ def add_parser(sub: Any, name: str) -> None:
     )
     p.add_argument("paths", nargs="+", metavar="PATH", type=Path)
     p.add_argument("--format", choices=("text", "json", "github"), default="text")
+    p.add_argument(
+        "--no-compile",
+        action="store_true",
+        help="check files and references only; do not compile plans to motion",
+    )
     p.set_defaults(run=run)
 
 
@@ -38,12 +45,14 @@ class Result:
 
 
 def run(args: argparse.Namespace) -> int:
-    results = validate_paths(args.paths)
+    results = validate_paths(args.paths, compile_plans=not args.no_compile)
     {"text": _text, "json": _json, "github": _github}[args.format](results)
     return EXIT_OK if all(not r.problems for r in results) else EXIT_INVALID
 
 
-def validate_paths(paths: list[Path]) -> list[Result]:
+def validate_paths(paths: list[Path], compile_plans: bool = False) -> list[Result]:
+    """Every cell, objects and plan file in ``paths``; with ``compile_plans``, every plan is
+    also compiled to motion (skills, planning, limits, collisions), as `run` would."""
     files: list[tuple[Path, bool]] = []
     for p in paths:
         if p.is_dir():
@@ -70,13 +79,24 @@ def validate_paths(paths: list[Path]) -> list[Result]:
             raise InputError(loaded.problems)
         return loaded
 
+    models: dict[Path, Models] = {}
+
+    def models_of(world: World) -> Models:
+        key = world.cell_file.resolve()
+        if key not in models:
+            models[key] = cell_models(world)
+        return models[key]
+
+    def compile_one(loaded: LoadedPlan) -> None:
+        compile_loaded(loaded, models=models_of)
+
     results = []
     seen: set[Path] = set()
     for f, explicit in files:
         if f.resolve() in seen:
             continue
         seen.add(f.resolve())
-        result = _validate_file(f, explicit, world_of)
+        result = _validate_file(f, explicit, world_of, compile_one if compile_plans else None)
         if result is not None:
             results.append(result)
     return results
@@ -88,7 +108,9 @@ def _visible(f: Path, top: Path) -> bool:
     )
 
 
-def _validate_file(f: Path, explicit: bool, world_of: Any) -> Result | None:
+def _validate_file(
+    f: Path, explicit: bool, world_of: Any, compile_one: Callable[[LoadedPlan], None] | None
+) -> Result | None:
     try:
         kind = classify(f)
     except InputError as e:
@@ -108,7 +130,9 @@ def _validate_file(f: Path, explicit: bool, world_of: Any) -> Result | None:
         elif kind == "objects":
             load_objects(f)
         else:
-            load_plan(f, world_of)
+            loaded = load_plan(f, world_of)
+            if compile_one is not None:
+                compile_one(loaded)
     except InputError as e:
         result.problems = _unique(e.problems)
     return result

@@ -1,0 +1,91 @@
+"""`cellengine plan` and `cellengine run` on the reference cable-routing cell."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cellengine.cli import main
+from tests.conftest import CELLS
+
+PLAN = CELLS / "cable_routing" / "plan_straight.yaml"
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("run")
+    assert main(["run", str(PLAN), "--out", str(out), "-q"]) == 0
+    return out
+
+
+def test_run_directory_holds_every_file(run_dir: Path) -> None:
+    assert sorted(p.name for p in run_dir.iterdir()) == [
+        "journal.jsonl",
+        "report.html",
+        "report.json",
+        "trajectory.json",
+    ]
+
+
+def test_trajectory_json_is_one_time_axis_for_both_arms(run_dir: Path) -> None:
+    data = json.loads((run_dir / "trajectory.json").read_text())
+    names = data["joint_names"]
+    assert len(names) == 12 and names[0] == "left_shoulder_pan_joint"
+    assert names[6] == "right_shoulder_pan_joint"
+    t = np.array([p["time_from_start"] for p in data["points"]])
+    assert t[0] == 0.0 and np.all(np.diff(t) > 0)
+    assert all(len(p["positions"]) == 12 and len(p["velocities"]) == 12 for p in data["points"])
+    modes = {(e["arm"], e["mode"]) for e in data["events"]}
+    assert {("left", "grasp"), ("right", "grasp"), ("left", "open"), ("right", "open")} <= modes
+    assert all(0.0 <= e["time_from_start"] <= t[-1] for e in data["events"])
+
+
+def test_journal_names_every_segment_sent_and_finished(run_dir: Path) -> None:
+    entries = [json.loads(line) for line in (run_dir / "journal.jsonl").read_text().splitlines()]
+    kinds = [e["entry"] for e in entries]
+    assert kinds[0] == "start" and kinds[-1] == "end"
+    sent = [e for e in entries if e["entry"] == "sent"]
+    finished = [e for e in entries if e["entry"] == "finished"]
+    assert len(sent) == len(finished) > 10
+    assert finished[-1]["step"] == 2  # the plan's last step (RouteCable)
+    assert set(finished[-1]["grippers"]) == {"left", "right"}
+
+
+def test_report_json_per_segment(run_dir: Path) -> None:
+    report = json.loads((run_dir / "report.json").read_text())
+    assert report["execution"] == "split"
+    assert report["duration"] > 0
+
+
+def test_plan_writes_no_journal(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["plan", str(PLAN), "--out", str(tmp_path)]) == 0
+    assert not (tmp_path / "journal.jsonl").exists()
+    out = capsys.readouterr()
+    assert "[3/3] RouteCable" in out.err
+    assert out.out.splitlines()[-1] == f"report: {tmp_path / 'report.html'}"
+
+
+def test_a_step_without_motion_is_refused_at_its_line(tmp_path: Path) -> None:
+    import shutil
+
+    shutil.copytree(CELLS / "cable_routing", tmp_path / "cell")
+    plan = tmp_path / "cell" / "weigh.yaml"
+    plan.write_text(
+        "cell: cell.yaml\nobjects: objects.yaml\nsteps:\n  - {skill: Weigh, object: cable1}\n"
+    )
+    from cellengine.errors import InputError
+    from cellengine.pipeline import compile_plan
+
+    with pytest.raises(InputError) as e:
+        compile_plan(plan)
+    assert str(e.value) == (
+        f"{plan}:4:5: steps[0]: Weigh cannot be compiled to motion yet (only the cable skills "
+        "PickCable, PlaceConnector and RouteCable can)"
+    )
+
+
+def test_no_such_plan_is_a_usage_error(tmp_path: Path) -> None:
+    assert main(["plan", str(tmp_path / "nope.yaml")]) == 2
