@@ -143,6 +143,15 @@ def trajectory_json(program: Program) -> dict[str, Any]:
     return out
 
 
+def step_label(step: Skill) -> str:
+    """A step as people read it: ``RouteCable cable1: routing.guide1, routing.guide2``."""
+    names = [name for _, _, name in step.refs()]
+    if not names:
+        return step.skill
+    head, rest = names[0], names[1:]
+    return f"{step.skill} {head}" + (f": {', '.join(rest)}" if rest else "")
+
+
 def write_plan_outputs(compiled: Compiled, out: Path) -> dict[str, Path]:
     """trajectory.json, report.json and report.html into ``out``; written to temporary
     names first and moved into place, so a failure leaves no half-written file."""
@@ -158,8 +167,15 @@ def write_plan_outputs(compiled: Compiled, out: Path) -> dict[str, Path]:
         "execution": compiled.strategy,
         "duration": compiled.program.duration,
     }
+    labels = {i: step_label(step) for i, step in enumerate(plan.steps)}
     report_json, report_html = write_report(
-        out, compiled.program, compiled.world, compiled.cell, extra, title=plan.file.name
+        out,
+        compiled.program,
+        compiled.world,
+        compiled.cell,
+        extra,
+        step_labels=labels,
+        title=plan.file.name,
     )
     tmp.replace(paths["trajectory"])
     paths.update({"report": report_json, "html": report_html})
