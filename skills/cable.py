@@ -728,13 +728,14 @@ def _guide_plan(
     left = np.cross(up, axis)
     d = math.cos(theta) * axis + side * math.sin(theta) * left
     reorient = None
-    if cg.rotation_angle(T_r0, T_ap) > cg.TINY_ANGLE:
+    if cg.rotation_angle(T_r0, T_ap) > cg.REORIENT_MIN:
         reorient = cg.turn_in_place(T_r0, T_ap)
         T_r0 = reorient[-1]
     approach = cg.line(T_r0, T_ap)
-    slide = cg.line(
-        T_ap, cg.nearer_turn(T_ap, cg.tcp_frame(ap + r_cable * d, d, up, tip_r, cg.LEAN))
-    )
+    # Sliding, the hand turns about the vertical to hold the cable along the slide; the swing
+    # over the slot turns it back, so it inserts in the approach orientation.
+    T_slid = g.transform(cg.rotation_about(up, side * theta) @ T_ap[:3, :3], ap + r_cable * d)
+    slide = cg.line(T_ap, T_slid)
     pull_path = cg.line(slide[-1], cg.at(slide[-1], ap + (r_cable + pull_r) * d))
     # Lift: up on the circle about the pivot in the vertical plane of the slide, to the
     # elevation at which radius >= R_lift puts the hand over the guide's far face and

@@ -94,6 +94,10 @@ LEAN = math.radians(15.0)
 # properties"; objects.yaml gives no stiffness, so only the distance is used.
 TENSION_STRAIN = 0.02
 TINY_ANGLE = 1e-6  # rad: a reorientation smaller than this is no segment
+# RouteCable turns the routing hand in place to face the next guide when its heading changes
+# by more than this; a smaller change (the tip towards the base differs a little from guide
+# to guide) is spread over the approach line.
+REORIENT_MIN = math.radians(10.0)
 
 
 # --------------------------------------------------------------------------- frames
