@@ -15,7 +15,8 @@ cannot run stops the compile with an InputError naming the step, the segment and
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -26,8 +27,10 @@ from cellengine.errors import InputError
 from cellengine.execute.checks import gate, kept_distance
 from cellengine.execute.held import Holding
 from cellengine.execute.merge import MERGES, Merge, Merged, merge_rows, on_one_axis
+from cellengine.execute.preview import preview
 from cellengine.execute.refused import Refused, in_plan_terms
 from cellengine.execute.schedule import SCHEDULE_DT, schedule
+from cellengine.execute.search import add_all
 from cellengine.execute.split import SPLIT_THRESHOLD
 from cellengine.execute.strategies import STRATEGIES, Part, Strategy, solve_segment
 from cellengine.motion.collision import CollisionChecker
@@ -38,6 +41,19 @@ from cellengine.program import CompiledSegment, Program, Segment, TimedEvent
 from cellengine.world import World
 
 Vec = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Mark:
+    """A compiler's state between two segments (q and the held-object state are never
+    changed in place, so keeping them is enough)."""
+
+    q: Vec
+    t: float
+    segments: int
+    events: int
+    held: dict[str, str]
+    checker: CollisionChecker
 
 
 class Compiler:
@@ -75,20 +91,41 @@ class Compiler:
         self.segments: list[CompiledSegment] = []
         self.events: list[TimedEvent] = []
 
-    def add(self, segment: Segment) -> CompiledSegment:
+    def add(
+        self, segment: Segment, following: Sequence[Segment] = (), choice: int = 0
+    ) -> CompiledSegment:
         """Compile one segment after those already added; InputError if it cannot run (the
-        compiler is then as it was before: a caller may try another segment instead)."""
-        events, held, checker = len(self.events), self.holding.by_arm, self.holding.checker
+        compiler is then as it was before: a caller may try another segment instead).
+        ``following``: the segments after it, if known: a transit then reaches its goal in a
+        configuration from which the arm's next Cartesian path can be followed. ``choice``:
+        which goal configuration a transit takes (0: the first that works)."""
+        mark = self.mark()
         try:
-            compiled = self._compile(segment)
+            compiled = self._compile(segment, following, choice)
         except Refused as e:
-            del self.events[events:]
-            self.holding.by_arm, self.holding.checker = held, checker
-            raise in_plan_terms(segment, str(e), self.plan_file) from None
+            self.restore(mark)
+            raise in_plan_terms(segment, e, self.plan_file) from None
         self.segments.append(compiled)
         self.q = np.array(compiled.trajectory.q[-1])
         self.t = compiled.trajectory.end_time
         return compiled
+
+    def mark(self) -> Mark:
+        """Where the compiler is: :meth:`restore` comes back here."""
+        return Mark(
+            self.q,
+            self.t,
+            len(self.segments),
+            len(self.events),
+            self.holding.by_arm,
+            self.holding.checker,
+        )
+
+    def restore(self, mark: Mark) -> None:
+        self.q, self.t = mark.q, mark.t
+        del self.segments[mark.segments :]
+        del self.events[mark.events :]
+        self.holding.by_arm, self.holding.checker = mark.held, mark.checker
 
     @property
     def checker(self) -> CollisionChecker:
@@ -100,12 +137,23 @@ class Compiler:
 
     # ------------------------------------------------------------------------------ one segment
 
-    def _compile(self, segment: Segment) -> CompiledSegment:
+    def _compile(
+        self, segment: Segment, following: Sequence[Segment], choice: int
+    ) -> CompiledSegment:
         started = time.perf_counter()
         t0 = self.t
         self._events(segment.before, t0)
+        has_transit = any(p.kind == "transit" for p in segment.paths)
+        accept = preview(self.cell, self.checker, following) if has_transit else None
         parts = solve_segment(
-            self.cell, self.checker, segment, self.q, self.strategy, self.split_threshold
+            self.cell,
+            self.checker,
+            segment,
+            self.q,
+            self.strategy,
+            self.split_threshold,
+            accept,
+            choice,
         )
         merge = self._merge_for(segment)
         pieces: list[Trajectory] = []
@@ -125,6 +173,7 @@ class Compiler:
         summary = _report(
             segment, self.strategy, _merge_name(parts, merge, self.strategy), figures, kept
         )
+        summary["transit_choice"] = choice
         summary["planning_time_s"] = time.perf_counter() - started
         summary["start_s"] = t0
         summary["duration_s"] = trajectory.end_time - t0
@@ -202,8 +251,7 @@ def compile_segments(
         split_threshold=split_threshold,
         plan_file=plan_file,
     )
-    for segment in segments:
-        compiler.add(segment)
+    add_all(compiler, list(segments))
     return compiler.program()
 
 

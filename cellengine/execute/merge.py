@@ -111,13 +111,15 @@ def joint(
         return on_one_axis(cell, q, alone)
     if coupled is None:
         return stretched(cell, q, alone)
-    together = timed(coupled, cell.limits, cell.joint_names)
     lead = slowest(alone)
     pairing = _grid_pairing(cell, thinned(coupled), lead, alone)
-    if pairing is None:
+    following = None if pairing is None else follow(cell, q, alone[lead], lead, pairing)
+    if following is not None and following.duration <= alone[lead].duration * (1 + 1e-9):
+        return following  # the slower arm's own timing, unslowed: nothing does better
+    together = timed(coupled, cell.limits, cell.joint_names)
+    if following is None or together.duration <= following.duration:
         return together
-    following = follow(cell, q, alone[lead], lead, pairing)
-    return following if following.duration < together.duration else together
+    return following
 
 
 def _grid_pairing(

@@ -19,20 +19,30 @@ class Refused(Exception):
     """A segment that cannot be compiled; the message says why, without the step."""
 
 
+class NoMoreChoices(Refused):
+    """A choice the compiler asked for (the n-th goal configuration of a transit) does not
+    exist: there is nothing more to try at this segment."""
+
+
+class ChoicesExhausted(InputError):
+    """NoMoreChoices in plan terms (only the compiler's search sees it)."""
+
+
 def step_name(segment: Segment) -> str:
     """How messages name a segment: ``step 3 (RouteCable guide2: lift)``; steps count from 1
     as users read the plan (``Segment.step`` is the 0-based index into ``steps``)."""
     return f"step {segment.step + 1} ({segment.label})"
 
 
-def in_plan_terms(segment: Segment, why: str, plan_file: Path | None = None) -> InputError:
+def in_plan_terms(segment: Segment, why: Refused, plan_file: Path | None = None) -> InputError:
     """The error a user sees: the step and segment, then why; at the step's line in the plan
     file when it is known."""
     message = f"{step_name(segment)}: {why}"
+    cls = ChoicesExhausted if isinstance(why, NoMoreChoices) else InputError
     if plan_file is None:
-        return InputError.at(message, None)
+        return cls.at(message, None)
     try:
         line, col = load_yaml(plan_file).where(("steps", segment.step)) or (None, None)
     except InputError:  # the plan file is gone or unreadable: the message alone still helps
         line, col = None, None
-    return InputError.at(message, plan_file, line, col)
+    return cls.at(message, plan_file, line, col)

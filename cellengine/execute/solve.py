@@ -16,12 +16,12 @@ with the moving arms at ``q`` (so the rows of consecutive motions join up), or r
 from __future__ import annotations
 
 import itertools
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
 
-from cellengine.execute.refused import Refused
+from cellengine.execute.refused import NoMoreChoices, Refused
 from cellengine.motion.cartesian import (
     ArmInCell,
     CartesianResult,
@@ -36,6 +36,7 @@ from cellengine.motion.transit import plan_for_arms
 
 Vec = NDArray[np.float64]
 Poses = NDArray[np.float64]
+Accept = Callable[[Vec], bool]  # a goal configuration -> whether what follows can run from it
 
 PLANNER_SEED = 0  # OMPL is re-seeded per query: the same segment gives the same path
 PLANNER_TIME = 1.0  # s per transit query (one per tier of goals)
@@ -50,12 +51,22 @@ def transit(
     checker: CollisionChecker,
     goals: Mapping[str, Poses],
     q: Vec,
+    accept: Accept | None = None,
+    choice: int = 0,
 ) -> Vec:
     """Whole-cell rows from ``q`` to a configuration putting each arm's TCP at its goal pose
-    (4, 4), the arms moving together; the other arms stand. Goal configurations that keep
-    every arm on its IK branch are tried first (see :func:`_goal_configurations`): a planner
-    given several goals reaches whichever it connects to first, so each tier is its own
-    query."""
+    (4, 4), the arms moving together; the other arms stand.
+
+    Goal configurations are tried in tiers (:func:`_goal_configurations`: every arm on its IK
+    branch first), each tier its own query, since a planner given several goals reaches
+    whichever it connects to first. ``accept``: whether what comes next can be done from a
+    goal configuration (:mod:`~cellengine.execute.preview`); goals it refuses go last. Which
+    configuration a pose is reached in decides what the arms can do from there, and only the
+    next moves tell.
+
+    ``choice`` > 0: the choice-th goal configuration in that order, and only it (the compiler
+    comes back with the next choice when a later segment cannot run from the first);
+    :class:`NoMoreChoices` past the last."""
     arms = tuple(goals)
     per_arm = [_ik_goals(cell, arm, goals[arm], q) for arm in arms]
     tiers = _goal_configurations(cell, arms, per_arm, q)
@@ -66,18 +77,52 @@ def transit(
             f"every IK solution of the transit goal of {_names(arms)} is in collision "
             f"(the nearest: {contact})"
         )
+    order = _looking_ahead(free, accept)
+    if choice > 0:
+        every = [g for tier in order for g in tier]
+        if choice >= len(every):
+            raise NoMoreChoices(
+                f"the transit of {_names(arms)} has no other goal configuration to try "
+                f"({len(every)} in all)"
+            )
+        order = iter([[every[choice]]])
     reason = ""
-    for tier in (t for t in free if t):
-        for goal in tier[:DIRECT_TRIES]:
-            if checker.check_segment(q, goal) is None:
-                return _densified(np.vstack([q, goal]))
-        result = plan_for_arms(
-            cell, checker, arms, q, np.array(tier), seed=PLANNER_SEED, time_limit=PLANNER_TIME
-        )
-        if result.path is not None:
-            return _densified(result.path)
-        reason = result.reason
+    for tier in order:
+        rows, reason = _reach(cell, checker, arms, q, tier)
+        if rows is not None:
+            return rows
     raise Refused(f"no collision-free transit for {_names(arms)}: {reason}")
+
+
+def _reach(
+    cell: CellModel, checker: CollisionChecker, arms: Sequence[str], q: Vec, goals: list[Vec]
+) -> tuple[Vec | None, str]:
+    """Rows to one of ``goals`` (nearest first): a straight line when it is free, else
+    planned; or None and why not."""
+    for goal in goals[:DIRECT_TRIES]:
+        if checker.check_segment(q, goal) is None:
+            return _densified(np.vstack([q, goal])), ""
+    result = plan_for_arms(
+        cell, checker, arms, q, np.array(goals), seed=PLANNER_SEED, time_limit=PLANNER_TIME
+    )
+    if result.path is None:
+        return None, result.reason
+    return _densified(result.path), ""
+
+
+def _looking_ahead(tiers: list[list[Vec]], accept: Accept | None) -> Iterator[list[Vec]]:
+    """The tiers with the goals ``accept`` refuses taken out and put last. Lazy: a tier is
+    looked at only when the tiers before it led nowhere."""
+    deferred: list[Vec] = []
+    for tier in tiers:
+        if not tier:
+            continue
+        good = [g for g in tier if accept is None or accept(g)]
+        deferred += [g for g in tier if not any(g is x for x in good)]
+        if good:
+            yield good
+    if deferred:
+        yield deferred
 
 
 def _ik_goals(cell: CellModel, arm: str, T_cell_tcp: Poses, q: Vec) -> Vec:

@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 
 from cellengine.execute import solve
 from cellengine.execute.refused import Refused
+from cellengine.execute.solve import Accept
 from cellengine.execute.split import SPLIT_THRESHOLD, split_point
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.robot import CellModel
@@ -73,8 +74,13 @@ def solve_segment(
     q: Vec,
     strategy: Strategy,
     threshold: float = SPLIT_THRESHOLD,
+    accept: Accept | None = None,
+    choice: int = 0,
 ) -> list[Part]:
-    """The parts of ``segment`` from the cell configuration ``q``."""
+    """The parts of ``segment`` from the cell configuration ``q``. ``accept``: whether the
+    segments after this one can run from a configuration: a transit prefers goals it accepts.
+    ``choice``: which goal configuration a transit takes (0: the first that works; see
+    solve.transit)."""
     paths = _by_arm(cell, segment)
     if not paths:
         return [Part(q, {}, None, {}, "still")]
@@ -82,16 +88,21 @@ def solve_segment(
     if segment.closed_chain is not None:
         return [_closed_chain(cell, checker, segment.closed_chain, paths, q)]
     if len(paths) == 1:
-        return [_apart(cell, checker, paths, q, "one_arm")]
+        return [_apart(cell, checker, paths, q, "one_arm", accept=accept, choice=choice)]
     coupled = segment.keep_distance is not None
     if kinds == {"transit"} and strategy != "async":
-        return [_transit_together(cell, checker, paths, q)]
+        goals = {a: p.poses[-1] for a, p in paths.items()}
+        rows = solve.transit(cell, checker, goals, q, accept, choice)
+        return [_coupled_part(cell, q, rows, {}, tuple(paths))]
     if kinds == {"cartesian"} and (strategy == "sync" or coupled):
         return [_cartesian_together(cell, checker, paths, q)]
     if kinds == {"cartesian"} and strategy == "split":
         return _split(cell, checker, paths, q, threshold)
     # async: each arm against those before it standing where they end (see _apart)
-    return [_apart(cell, checker, paths, q, "apart", prioritised=strategy == "async")]
+    async_ = strategy == "async"
+    return [
+        _apart(cell, checker, paths, q, "apart", prioritised=async_, accept=accept, choice=choice)
+    ]
 
 
 def _by_arm(cell: CellModel, segment: Segment) -> dict[str, ArmPath]:
@@ -120,13 +131,6 @@ def _closed_chain(
     return _coupled_part(cell, q, rows, {leader: fraction, follower: fraction}, chain)
 
 
-def _transit_together(
-    cell: CellModel, checker: CollisionChecker, paths: Mapping[str, ArmPath], q: Vec
-) -> Part:
-    rows = solve.transit(cell, checker, {a: p.poses[-1] for a, p in paths.items()}, q)
-    return _coupled_part(cell, q, rows, {}, tuple(paths))
-
-
 def _cartesian_together(
     cell: CellModel, checker: CollisionChecker, paths: Mapping[str, ArmPath], q: Vec
 ) -> Part:
@@ -149,6 +153,8 @@ def _apart(
     solved: Solved,
     *,
     prioritised: bool = False,
+    accept: Accept | None = None,
+    choice: int = 0,
 ) -> Part:
     """Each arm on its own from ``q``, the other arms standing there (the published way).
 
@@ -161,8 +167,8 @@ def _apart(
     here = q.copy()
     for arm, p in paths.items():
         if p.kind == "transit":
-            found = solve.transit(cell, checker, {arm: p.poses[-1]}, here)[:, cell.slices[arm]]
-            rows[arm] = found
+            found = solve.transit(cell, checker, {arm: p.poses[-1]}, here, accept, choice)
+            rows[arm] = found[:, cell.slices[arm]]
         else:
             rows[arm], fraction[arm] = solve.cartesian(cell, checker, arm, p.poses, here)
         if prioritised:

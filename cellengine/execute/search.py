@@ -1,0 +1,69 @@
+"""Compiling a whole plan: each segment in turn, and back to an earlier transit when a later
+segment cannot run from where it left the arms.
+
+A transit can reach its goal pose in several configurations (IK branches), and which one it
+takes decides what comes after: the next Cartesian path of the same arm is looked at when the
+goal is chosen (solve.transit), but a later move of the *other* arm can run into this arm's
+elbow or wrist as well. When a segment fails, the compiler goes back to the latest transit
+before it (within ``LOOKBACK`` segments), takes that transit's next goal configuration, and
+compiles on from there; a transit out of choices sends it further back. ``BUDGET`` retries in
+all; then the error of the attempt that got furthest is raised (the first of those, on a tie):
+it names the step and segment where the plan really gets stuck.
+
+Deterministic: the choices are tried in one fixed order.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+from cellengine.errors import InputError
+from cellengine.execute.refused import ChoicesExhausted
+from cellengine.program import Segment
+
+if TYPE_CHECKING:
+    from cellengine.execute.compile import Compiler
+
+LOOKBACK = 12  # segments: how far back a failure may send the compiler
+BUDGET = 24  # retries (re-chosen transits) per plan
+
+
+def add_all(compiler: Compiler, segments: Sequence[Segment]) -> None:
+    """Add every segment to ``compiler``, retrying earlier transits' goal configurations as
+    described above; InputError when no retry within the budget gets through."""
+    choices = [0] * len(segments)
+    marks = {}
+    best: tuple[int, InputError] | None = None
+    retries = 0
+    i = 0
+    while i < len(segments):
+        marks[i] = compiler.mark()
+        try:
+            compiler.add(segments[i], segments[i + 1 :], choices[i])
+            i += 1
+            continue
+        except InputError as e:
+            exhausted = isinstance(e, ChoicesExhausted)
+            if not exhausted and (best is None or i > best[0]):
+                best = (i, e)
+            failed = e
+        back = _transit_before(segments, i, include=not exhausted)
+        if back is None or retries >= BUDGET:
+            raise best[1] if best is not None else failed
+        retries += 1
+        for k in range(back + 1, i + 1):
+            choices[k] = 0
+        choices[back] += 1
+        compiler.restore(marks[back])
+        i = back
+
+
+def _transit_before(segments: Sequence[Segment], i: int, *, include: bool) -> int | None:
+    """The latest segment at or before i (before i when not ``include``), within LOOKBACK,
+    that has a transit."""
+    last = i if include else i - 1
+    for k in range(last, max(-1, i - LOOKBACK - 1), -1):
+        if any(p.kind == "transit" for p in segments[k].paths):
+            return k
+    return None
