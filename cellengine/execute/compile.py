@@ -7,15 +7,19 @@ step with the collision checker), the arm paths solved into joint rows by the st
 each timed part through the gate before it is added, a kept distance checked along the
 segment, then the ``after`` events at the segment's end.
 
+A transit's goal configuration is chosen looking at the segments after it
+(:mod:`~cellengine.execute.preview`), and a segment that cannot run sends the compiler back to
+the latest transit for another goal (:mod:`~cellengine.execute.search`); when nothing gets
+through, the compile stops with an InputError naming the step, the segment and why.
+
 Compiling is pure: nothing moves, the caller's checker is not changed (the compiler attaches
-held objects to its own), and the same inputs give the same program. The first segment that
-cannot run stops the compile with an InputError naming the step, the segment and why.
+held objects to its own), and the same inputs give the same program.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -109,6 +113,16 @@ class Compiler:
         self.q = np.array(compiled.trajectory.q[-1])
         self.t = compiled.trajectory.end_time
         return compiled
+
+    def add_all(
+        self, segments: Sequence[Segment], before_each: Callable[[Segment], None] | None = None
+    ) -> Program:
+        """Add ``segments`` in order, each looking ahead to those after it, coming back to an
+        earlier transit when a later segment cannot run (search.py); the program. Prefer it to
+        calling :meth:`add` in a loop, which can neither look ahead nor come back.
+        ``before_each(segment)`` is called before each segment is compiled (progress)."""
+        add_all(self, list(segments), before_each)
+        return self.program()
 
     def mark(self) -> Mark:
         """Where the compiler is: :meth:`restore` comes back here."""
@@ -251,8 +265,7 @@ def compile_segments(
         split_threshold=split_threshold,
         plan_file=plan_file,
     )
-    add_all(compiler, list(segments))
-    return compiler.program()
+    return compiler.add_all(list(segments))
 
 
 # ------------------------------------------------------------------------------ report

@@ -15,7 +15,7 @@ Deterministic: the choices are tried in one fixed order.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 from cellengine.errors import InputError
@@ -29,9 +29,15 @@ LOOKBACK = 12  # segments: how far back a failure may send the compiler
 BUDGET = 24  # retries (re-chosen transits) per plan
 
 
-def add_all(compiler: Compiler, segments: Sequence[Segment]) -> None:
+def add_all(
+    compiler: Compiler,
+    segments: Sequence[Segment],
+    before_each: Callable[[Segment], None] | None = None,
+) -> None:
     """Add every segment to ``compiler``, retrying earlier transits' goal configurations as
-    described above; InputError when no retry within the budget gets through."""
+    described above; InputError when no retry within the budget gets through.
+    ``before_each`` is called with each segment before it is compiled (again when the search
+    comes back to it): for a progress display."""
     choices = [0] * len(segments)
     marks = {}
     best: tuple[int, InputError] | None = None
@@ -39,6 +45,8 @@ def add_all(compiler: Compiler, segments: Sequence[Segment]) -> None:
     i = 0
     while i < len(segments):
         marks[i] = compiler.mark()
+        if before_each is not None:
+            before_each(segments[i])
         try:
             compiler.add(segments[i], segments[i + 1 :], choices[i])
             i += 1
