@@ -378,15 +378,13 @@ def _align_z(
     world: World, guide: str | None, T_c: Mat, T_f: Mat, up: cg.Vec
 ) -> tuple[Poses, Poses] | None:
     """Both hands turned as one pair about the connector hand until its z is the routing
-    platform's -z; None when it already is (a level platform: the circles above turned the
-    far hand back)."""
-    target = -cg.platform_up(world, guide) if guide is not None else -up
-    z = T_c[:3, 2]
-    angle = cg.angle_between(z, target)
-    if angle < cg.TINY_ANGLE:
+    platform's down (tipped back by LEAN, as everywhere); None when it already is (a level
+    platform: the circles above turned the far hand back)."""
+    platform_up = cg.platform_up(world, guide) if guide is not None else up
+    cable = cg.horizontal(T_c[:3, 0], platform_up)
+    T_c1 = cg.tcp_frame(T_c[:3, 3], cable, platform_up, -cable, cg.LEAN)
+    if cg.rotation_angle(T_c, T_c1) < cg.TINY_ANGLE:
         return None
-    R = cg.rotation_about(np.cross(z, target), angle)
-    T_c1 = g.transform(R @ T_c[:3, :3], T_c[:3, 3])
     return cg.pair_line(T_c, T_c1, g.inverse(T_c) @ T_f)
 
 

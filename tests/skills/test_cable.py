@@ -1,0 +1,543 @@
+"""The cable skills on the cable-routing cell's three reference plans (paper 003's experiments).
+
+Each plan is chained through CableState (plan_cable_steps) and the segments are replayed: every
+arm's TCP pose at the start and end of every segment, from the arms' homes. The checks are
+those of issue 4's "What the output must show", made on the skills' own poses, and the
+published quantities worked out by hand for the reference U guide.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from functools import cache
+from types import MappingProxyType
+
+import numpy as np
+import pytest
+
+from cellengine import geometry as g
+from cellengine.errors import InputError
+from cellengine.info.load import load_plan
+from cellengine.motion import interpolate as ip
+from cellengine.program import Segment
+from cellengine.world import World
+from skills import cable_geometry as cg
+from skills.cable import PickCable, PlaceConnector, RouteCable, plan_cable_steps
+from skills.cable_state import CableState
+from tests.conftest import CELLS
+
+PLANS = ("plan_straight", "plan_one_turn", "plan_two_turns")
+CONNECTOR_GUIDE = "routing.connector"
+MM = 1e-3
+
+
+@dataclass(frozen=True)
+class Planned:
+    world: World
+    route: tuple[str, ...]  # the RouteCable guides, in plan order
+    segments: list[Segment]
+    start: list[dict[str, g.Mat]]  # every arm's TCP at each segment's start
+    end: list[dict[str, g.Mat]]  # and at its end
+    state: CableState
+    home: CableState
+
+
+@cache
+def planned(name: str) -> Planned:
+    loaded = load_plan(CELLS / "cable_routing" / f"{name}.yaml")
+    world = loaded.world
+    home = CableState.at_home(world)
+    segments, state = plan_cable_steps(world, loaded.plan.steps, home)
+    start, end = replay(home, segments)
+    route = next(s for s in loaded.plan.steps if isinstance(s, RouteCable)).guides
+    return Planned(world, route, segments, start, end, state, home)
+
+
+def replay(
+    home: CableState, segments: list[Segment]
+) -> tuple[list[dict[str, g.Mat]], list[dict[str, g.Mat]]]:
+    tcp = dict(home.tcp)
+    start, end = [], []
+    for seg in segments:
+        start.append(dict(tcp))
+        for path in seg.paths:
+            tcp[path.arm] = path.poses[-1]
+        end.append(dict(tcp))
+    return start, end
+
+
+def poses_during(p: Planned, i: int, arm: str) -> np.ndarray:
+    """The arm's TCP poses over segment i: its path, or where it stands."""
+    for path in p.segments[i].paths:
+        if path.arm == arm:
+            return np.asarray(path.poses)
+    return np.asarray(p.start[i][arm])[None]
+
+
+def labels(p: Planned) -> list[str]:
+    return [s.label for s in p.segments]
+
+
+@pytest.fixture(params=PLANS)
+def plan(request: pytest.FixtureRequest) -> Planned:
+    return planned(request.param)
+
+
+# ---------------------------------------------------------------------- segments and events
+
+
+PICK = [
+    "pick configuration",
+    "approach and grasp",
+    "retract",
+    "turn along the cable",
+    "down",
+    "slide to the connector",
+    "up",
+]
+PLACE = ["align with the guide", "approach", "insert", "retract"]
+ROUTE = [
+    "approach sliding",
+    "slide R_cable",
+    "other arm to the cable",
+    "other arm grasps",
+    "pull to tension",
+    "lift",
+    "over the slot",
+    "insert",
+]
+
+
+def turns(p: Planned) -> set[str]:
+    """Guides where the route changes direction by more than 45 deg (the reference routes
+    turn by 90 deg or not at all)."""
+    out = set()
+    for prev, guide in zip(p.route, p.route[1:], strict=False):
+        a, b = (p.world.pose(r)[:3, 0] for r in (prev, guide))
+        if abs(float(a @ b)) < math.cos(math.radians(45.0)):
+            out.add(guide)
+    return out
+
+
+def test_segments_follow_the_published_sequence(plan: Planned) -> None:
+    """Algorithm 1: PICKCABLE, PLACECONNECTOR, ROUTECABLE per guide (the other hand lets go of
+    the previous guide first; the routing hand faces the guide when the route turns), then
+    release the cable and retract the arms."""
+    expected = [f"PickCable cable1: {s}" for s in PICK]
+    expected += [f"PlaceConnector {CONNECTOR_GUIDE}: {s}" for s in PLACE]
+    for k, guide in enumerate(plan.route):
+        extra = ["release the previous guide"] if k else []
+        extra += ["face the guide"] if guide in turns(plan) else []
+        expected += [f"RouteCable {guide}: {s}" for s in extra + ROUTE]
+    expected += ["cable1: release and retract"]
+    assert labels(plan) == expected
+    assert [s.step for s in plan.segments] == [0] * 7 + [1] * 4 + [2] * (len(expected) - 12) + [2]
+
+
+def test_gripper_events_follow_the_method(plan: Planned) -> None:
+    """Open, grasp both ends, the far hand slides then grasps; the connector hand lets go
+    once the connector is in; per guide the other hand lets go, the routing hand slides,
+    grasps, and the other hand grasps; finally both open. Every mode is in the tool's jaw
+    table, and a gripper holds the cable exactly when it slides or grasps."""
+    events = [
+        (s.label.split(": ")[1], "before" if e in s.before else "after", e.arm, e.mode)
+        for s in plan.segments
+        for e in (*s.before, *s.after)
+    ]
+    expected = [
+        ("pick configuration", "before", "right", "open"),
+        ("pick configuration", "before", "left", "open"),
+        ("approach and grasp", "after", "right", "grasp"),
+        ("approach and grasp", "after", "left", "grasp"),
+        ("slide to the connector", "before", "left", "slide"),
+        ("up", "before", "left", "grasp"),
+        ("insert", "after", "right", "open"),
+    ]
+    for k, guide in enumerate(plan.route):
+        if k:
+            expected.append(("release the previous guide", "before", "right", "open"))
+        first = "face the guide" if guide in turns(plan) else "approach sliding"
+        expected += [
+            (first, "before", "left", "slide"),
+            ("slide R_cable", "after", "left", "grasp"),
+            ("other arm grasps", "after", "right", "grasp"),
+        ]
+    expected += [("release and retract", "before", a, "open") for a in ("left", "right")]
+    assert events == expected
+    jaw = plan.world.cell.tools["cable_gripper"].jaw
+    for seg in plan.segments:
+        for e in (*seg.before, *seg.after):
+            assert e.mode in jaw
+            assert (e.holds == "cable1") == (e.mode in ("slide", "grasp"))
+
+
+def test_keep_distance_and_closed_chain_where_the_method_needs_them(plan: Planned) -> None:
+    coupled = {
+        s.label.split(": ")[1]: (s.keep_distance, s.closed_chain)
+        for s in plan.segments
+        if s.keep_distance or s.closed_chain
+    }
+    assert coupled == {
+        "retract": (None, ("right", "left")),  # both ends lifted out of the combs together
+        "down": (("right", "left"), None),
+        "up": (("right", "left"), None),
+        "align with the guide": (("right", "left"), ("right", "left")),
+        "approach": (("right", "left"), ("right", "left")),
+        "insert": (("left", "right"), None),  # the route's; PlaceConnector's below
+        "lift": (("left", "right"), None),
+        "over the slot": (("left", "right"), None),
+    }
+    place_insert = next(s for s in plan.segments if s.label.endswith(f"{CONNECTOR_GUIDE}: insert"))
+    assert place_insert.closed_chain == place_insert.keep_distance == ("right", "left")
+
+
+# ---------------------------------------------------------------------- what the output shows
+
+
+def test_every_routed_guide_holds_the_taut_cable_through_its_slot(plan: Planned) -> None:
+    """For every routed guide, in plan order, a segment ends with the routing gripper holding
+    the cable and the straight line between the two fingertips passing within the guide's
+    gap of its slot keypoint, aligned with the guide's cable axis within 15 deg. Checked on
+    the poses and the world, not on the facts' own numbers."""
+    inserts = [(i, s) for i, s in enumerate(plan.segments) if "slot" in s.facts]
+    assert [s.facts["guide"] for _, s in inserts] == [CONNECTOR_GUIDE, *plan.route]
+    state = plan.home
+    modes: dict[str, str | None] = dict(state.mode)
+    for i, seg in enumerate(plan.segments):
+        for e in seg.before:
+            modes[e.arm] = e.mode
+        if "routing_arm" in seg.facts:
+            guide = seg.facts["guide"]
+            r, o = seg.facts["routing_arm"], seg.facts["other_arm"]
+            assert modes[r] == "grasp" and modes[o] == "grasp"
+            p_r, p_o = plan.end[i][r][:3, 3], plan.end[i][o][:3, 3]
+            T_slot = plan.world.pose(guide)
+            gap = plan.world.dimensions(guide)["gap"]
+            assert cg.segment_distance(T_slot[:3, 3], p_o, p_r, np.zeros(3)) < gap / 2
+            along = abs(float(cg.unit(p_r - p_o) @ T_slot[:3, 0]))
+            assert math.degrees(math.acos(min(along, 1.0))) <= 15.0
+        for e in seg.after:
+            modes[e.arm] = e.mode
+
+
+def test_fingertip_distance_is_constant_while_the_cable_is_held_taut(plan: Planned) -> None:
+    """On every keep_distance segment (circular lifts, swings and inserts, the pick's circles,
+    the pair carrying the connector) the fingertips stay as far apart as at its start,
+    within 1 mm, at every pose."""
+    checked = 0
+    for i, seg in enumerate(plan.segments):
+        if seg.keep_distance is None:
+            continue
+        a, b = (poses_during(plan, i, arm)[:, :3, 3] for arm in seg.keep_distance)
+        d = np.linalg.norm(a - b, axis=1)
+        assert np.ptp(d) < 1 * MM, seg.label
+        checked += 1
+    assert checked == 5 + 3 * len(plan.route)
+
+
+def test_the_connector_fingertip_reaches_the_connector_guide_keypoint(plan: Planned) -> None:
+    i = labels(plan).index(f"PlaceConnector {CONNECTOR_GUIDE}: insert")
+    tcp = plan.end[i]["right"]
+    assert np.allclose(tcp[:3, 3], plan.world.pose(CONNECTOR_GUIDE)[:3, 3], atol=1e-9)
+    # the connector hand is the arm nearer the connector guide (right), the other routes
+    assert plan.segments[i].facts["connector_arm"] == "right"
+    assert {s.facts.get("routing_arm") for s in plan.segments} == {None, "left"}
+
+
+def test_fingertips_grasp_from_above_with_the_jaw_across_the_cable(plan: Planned) -> None:
+    """At every grasp and insert the tool's z is within the 15 deg tip of straight down and
+    the jaw axis (y) is normal to the cable there."""
+    down = np.array([0.0, 0.0, -1.0])
+    for i, seg in enumerate(plan.segments):
+        if "slot" in seg.facts:
+            axis = plan.world.pose(seg.facts["guide"])[:3, 0]
+            arms = [p.arm for p in seg.paths]
+            arms += [seg.facts["other_arm"]] if "other_arm" in seg.facts else []
+        elif seg.label.endswith(("approach and grasp", "other arm grasps")):
+            arms = [p.arm for p in seg.paths]
+            axis = None
+        else:
+            continue
+        for arm in arms:
+            T = plan.end[i][arm]
+            tilt = math.degrees(cg.angle_between(T[:3, 2], down))
+            assert tilt <= math.degrees(cg.LEAN) + 1e-6, (seg.label, arm)
+            if axis is not None:
+                # (the X3D keypoints' axes carry ~1e-7 of rotation round-off)
+                assert abs(float(T[:3, 1] @ axis)) < 1e-6, (seg.label, arm)
+
+
+def test_cartesian_steps_are_at_most_5_mm_and_2_deg(plan: Planned) -> None:
+    for seg in plan.segments:
+        for path in seg.paths:
+            if path.kind != "cartesian":
+                continue
+            P = path.poses
+            dp = np.linalg.norm(np.diff(P[:, :3, 3], axis=0), axis=1)
+            assert dp.max() <= ip.MAX_TRANSLATION + 1e-9, (seg.label, path.arm)
+            assert ip.rotation_angles(P).max() <= ip.MAX_ROTATION + 1e-9, (seg.label, path.arm)
+
+
+def test_segments_start_where_the_arm_is(plan: Planned) -> None:
+    for i, seg in enumerate(plan.segments):
+        for path in seg.paths:
+            if path.kind == "cartesian":
+                assert np.allclose(path.poses[0], plan.start[i][path.arm], atol=1e-9), seg.label
+
+
+# ---------------------------------------------------------------------- the published numbers
+
+
+def test_r_cable_and_theta_for_the_reference_guide() -> None:
+    """The reference U guide (routing/models.xml guide_u) and the cable gripper (cell.yaml):
+    L = 10, W_guide = 24, H = 60 mm; W_gripper = finger_width = 20 mm, finger_thickness 8 mm.
+    Hand half-length along the cable h = max(20, 8) / 2 = 10 mm (the motion layer's tool
+    box is finger_width square); A = 25 mm, so X_offset = A + h = 35 mm; Z_offset = 10 mm.
+      R_lift   = sqrt((L + X_offset)^2 + (H + Z_offset)^2) = sqrt(45^2 + 70^2)
+               = sqrt(2025 + 4900) = sqrt(6925) = 83.2166 mm
+      R_insert = L + 2 X_offset = 10 + 70 = 80 mm
+      R_cable  = max(83.2166, 80) = 83.2166 mm
+      theta_min = atan((W_gripper + W_guide) / (2 A)) = atan(44 / 50) = atan(0.88) = 41.3478 deg
+      theta     = theta_min + 5 deg margin = 46.3478 deg
+    """
+    p = planned("plan_straight")
+    slide_index = labels(p).index("RouteCable routing.guide1: slide R_cable")
+    facts = p.segments[slide_index].facts
+    assert facts["R_lift"] == pytest.approx(83.2166 * MM, abs=1e-7)
+    assert facts["R_insert"] == pytest.approx(80.0 * MM, abs=1e-12)
+    assert facts["R_cable"] == pytest.approx(83.2166 * MM, abs=1e-7)
+    assert math.degrees(facts["theta_min"]) == pytest.approx(41.3478, abs=1e-4)
+    assert math.degrees(facts["theta"]) == pytest.approx(46.3478, abs=1e-4)
+    assert facts["X_offset"] == pytest.approx(35 * MM) and facts["A"] == pytest.approx(25 * MM)
+    # The slide itself: R_cable long, at theta to the guide's axis (+y here).
+    P = poses_during(p, slide_index, "left")[:, :3, 3]
+    step = P[-1] - P[0]
+    assert np.linalg.norm(step) == pytest.approx(83.2166 * MM, abs=1e-7)
+    assert math.degrees(cg.angle_between(step, [0.0, 1.0, 0.0])) == pytest.approx(46.3478, abs=1e-4)
+    # It starts X_offset before the near face: slot y -60 mm, minus L / 2 + X_offset = 40 mm.
+    assert P[0] * 1000 == pytest.approx([430.0, -100.0, 65.0], abs=1e-3)
+    # Lift and insert are on the circle of R_cable + the pull (2 %) about the other hand.
+    insert = p.segments[labels(p).index("RouteCable routing.guide1: insert")]
+    assert insert.facts["radius"] == pytest.approx(83.2166 * 1.02 * MM, abs=1e-7)
+
+
+def test_pull_distance_and_route_after_placing() -> None:
+    """pull_distance after PlaceConnector: the cable from the seated connector's rear face to
+    the routing fingertips. The connector guide is 44 mm long, the connector 35 mm: the guide
+    reaches (44 - 35) / 2 = 4.5 mm beyond the connector, then X_offset = 35 mm: 39.5 mm."""
+    p = planned("plan_straight")
+    retract = p.segments[labels(p).index(f"PlaceConnector {CONNECTOR_GUIDE}: retract")]
+    assert retract.facts["pull_distance"] == pytest.approx(39.5 * MM, abs=1e-12)
+    # Between the hands while placing: connector centre to fingertips, 17.5 + 39.5 = 57 mm.
+    i = labels(p).index(f"PlaceConnector {CONNECTOR_GUIDE}: insert")
+    gap = np.linalg.norm(p.end[i]["left"][:3, 3] - p.end[i]["right"][:3, 3])
+    assert gap == pytest.approx(57.0 * MM, abs=1e-9)
+
+
+def test_the_state_after_the_plan(plan: Planned) -> None:
+    assert plan.state.held == {}
+    assert set(plan.state.mode.values()) == {"open"}
+    assert plan.state.cable is None
+    for arm, T in plan.state.tcp.items():
+        assert np.allclose(T, plan.end[-1][arm])
+
+
+def test_route_cable_state_counts_the_cable_it_lays() -> None:
+    """Chained by hand, the state after RouteCable knows the guides, the laid route and how
+    much cable the routing hand holds out past the last slot. Straight route, slots every
+    110 mm along +y: rear face y -152.5, then (approach point, slot) per guide, 40 mm apart,
+    so the route is 52.5 + 40 + 2 * (70 + 40) = 312.5 mm (the plan file's own figure). The
+    routing hand ends R_cable + pull - (L / 2 + X_offset) = 84.8809 - 40 = 44.8809 mm past it."""
+    loaded = load_plan(CELLS / "cable_routing" / "plan_straight.yaml")
+    world, steps = loaded.world, loaded.plan.steps
+    state = replace(CableState.at_home(world), connector_arm="right", place_guide=CONNECTOR_GUIDE)
+    for i, step in enumerate(steps):
+        assert isinstance(step, PickCable | PlaceConnector | RouteCable)
+        _, state = step.plan(world, replace(state, step=i))
+    assert state.guides == (CONNECTOR_GUIDE, "routing.guide1", "routing.guide2", "routing.guide3")
+    assert state.route_length() == pytest.approx(312.5 * MM, abs=1e-9)
+    assert state.pull_distance == pytest.approx((83.2166 * 1.02 - 40.0) * MM, abs=1e-7)
+    assert state.held["left"].s == pytest.approx(state.route_length() + state.pull_distance)
+    assert state.held["right"].s == pytest.approx((312.5 - 40.0) * MM, abs=1e-9)
+
+
+# ---------------------------------------------------------------------- feasibility
+
+
+def _world(
+    name: str = "plan_straight",
+) -> tuple[World, tuple[PickCable | PlaceConnector | RouteCable, ...]]:
+    loaded = load_plan(CELLS / "cable_routing" / f"{name}.yaml")
+    return loaded.world, loaded.plan.steps  # type: ignore[return-value]
+
+
+def _with_element(world: World, ref: str, xyz: list[float] | None = None, **dims: float) -> World:
+    """The world with one element moved (its cell position) or its dimensions changed."""
+    pname, ename = ref.split(".")
+    platform = world.platforms[pname]
+    element = platform.elements[ename]
+    if xyz is not None:
+        T = platform.T_cell_platform @ element.T_platform_element
+        T[:3, 3] = xyz
+        element = replace(element, T_platform_element=g.inverse(platform.T_cell_platform) @ T)
+    if dims:
+        element = replace(element, dimensions=MappingProxyType({**element.dimensions, **dims}))
+    platform = replace(platform, elements=MappingProxyType({**platform.elements, ename: element}))
+    return replace(world, platforms=MappingProxyType({**world.platforms, pname: platform}))
+
+
+def _fails(world: World, steps: tuple[object, ...]) -> str:
+    with pytest.raises(InputError) as err:
+        plan_cable_steps(world, steps)  # type: ignore[arg-type]
+    (problem,) = err.value.problems
+    return problem.message
+
+
+def test_a_route_longer_than_the_cable_fails_naming_the_guide() -> None:
+    """A 300 mm cable on the straight route. At guide3: laid from the rear face to its
+    approach point 52.5 + 40 + 70 + 40 + 70 = 272.5 mm, R_cable 83.2 mm, pull 2 % of it
+    1.7 mm, 15 mm beyond the fingertips (h 10 + clearance 5): 372.4 mm > 300 mm. (guide2
+    needs 162.5 + 84.9 + 15 = 262.4 mm and passes.)"""
+    world, steps = _world()
+    cable = world.cable("cable1").model_copy(update={"length": 0.3})
+    world = replace(world, objects=world.objects.model_copy(update={"cables": {"cable1": cable}}))
+    assert _fails(world, steps) == (
+        "steps[2] RouteCable routing.guide3: cable 'cable1' is too short for the route: this "
+        "guide needs 372.4 mm (272.5 mm laid from the connector's rear face to the approach "
+        "point, R_cable 83.2 mm slid past it, 1.7 mm pulled to tension, 15.0 mm for the "
+        "fingers to hold) but the cable is 300.0 mm long"
+    )
+
+
+def test_a_guide_out_of_reach_fails_naming_the_guide_and_the_arm() -> None:
+    """guide3 moved to y = 1500 mm: 1.2 m from the routing (left) arm's base, past a UR5e's
+    reach. Its approach point is 40 mm before the slot, at y = 1460 mm."""
+    world, steps = _world()
+    world = _with_element(world, "routing.guide3", xyz=[0.43, 1.5, 0.01])
+    assert _fails(world, steps) == (
+        "steps[2] RouteCable routing.guide3: out of reach of arm 'left': the approach pose at "
+        "(430.0, 1460.0, 65.0) mm has no inverse kinematics solution within its joint limits"
+    )
+
+
+def test_a_guide_no_sliding_angle_clears_fails_naming_the_guide() -> None:
+    """guide1 200 mm wide: theta_min = atan((20 + 200) / 50) = atan(4.4) = 77.2 deg, plus
+    the 5 deg margin is past the 80 deg limit."""
+    world, steps = _world()
+    world = _with_element(world, "routing.guide1", width=0.2)
+    assert _fails(world, steps) == (
+        "steps[2] RouteCable routing.guide1: no sliding angle clears the guide: theta must "
+        "exceed atan((W_gripper + W_guide) / (2 A)) = atan((20.0 + 200.0) / (2 * 25.0)) = 77.2 "
+        "deg, plus 5 deg margin, but beyond 80 deg the slide hardly moves along the guide"
+    )
+
+
+def test_a_slide_blocked_on_both_sides_fails_naming_what_blocks_it() -> None:
+    """guide2 and guide4 set 60 mm either side of where guide1's slide would end."""
+    world, steps = _world()
+    world = _with_element(world, "routing.guide2", xyz=[0.49, -0.05, 0.01])
+    world = _with_element(world, "routing.guide4", xyz=[0.37, -0.05, 0.01])
+    message = _fails(world, steps)
+    assert message.startswith(
+        "steps[2] RouteCable routing.guide1: no sliding angle clears the guide: sliding at "
+        "theta = 46.3 deg is blocked on the left by routing."
+    )
+    assert re.search(r"and on the right by routing\.guide[24]$", message)
+
+
+def test_route_cable_needs_a_placed_connector() -> None:
+    world, steps = _world()
+    state = CableState.at_home(world)
+    with pytest.raises(InputError) as err:
+        steps[2].plan(world, replace(state, step=2))
+    assert err.value.problems[0].message == (
+        "steps[2] RouteCable: cable 'cable1' has no placed connector (plan PlaceConnector first)"
+    )
+
+
+def test_place_connector_arm_both_is_refused() -> None:
+    world, steps = _world()
+    place = steps[1].model_copy(update={"arm": "both"})
+    assert isinstance(place, PlaceConnector)
+    with pytest.raises(InputError) as err:
+        place.connector_arm(world)
+    assert err.value.problems[0].message == (
+        "PlaceConnector routing.connector: arm must be one robot or 'auto', not 'both'; "
+        "known: left, right"
+    )
+
+
+def test_the_connector_goes_to_the_placing_arm_the_plan_names() -> None:
+    """PlaceConnector arm: left. The look-ahead gives the left hand the connector end at the
+    pick; the right hand then routes (the guides being in reach of both arms)."""
+    world, steps = _world()
+    place = steps[1].model_copy(update={"arm": "left"})
+    segments, _ = plan_cable_steps(world, (steps[0], place, steps[2]))
+    pick = segments[1].facts["grasps"]
+    assert pick["left"]["end"] == "connector end" and pick["right"]["end"] == "free end"
+    inserts = [s for s in segments if "routing_arm" in s.facts]
+    assert {s.facts["routing_arm"] for s in inserts} == {"right"}
+
+
+def test_each_check_names_its_step_when_planned_alone() -> None:
+    """A skill's plan() checks before it returns any segment: planning RouteCable on a state
+    after PlaceConnector with an unreachable last guide yields nothing but the error."""
+    world, steps = _world()
+    state = replace(CableState.at_home(world), connector_arm="right", place_guide=CONNECTOR_GUIDE)
+    for i in (0, 1):
+        _, state = steps[i].plan(world, replace(state, step=i))
+    far = _with_element(world, "routing.guide3", xyz=[0.43, 1.5, 0.01])
+    with pytest.raises(InputError, match=r"^.*steps\[7\] RouteCable routing.guide3: out of reach"):
+        steps[2].plan(far, replace(state, step=7))
+
+
+def _facts(segments: list[Segment], key: str) -> list[Mapping[str, object]]:
+    return [s.facts for s in segments if key in s.facts]
+
+
+def test_planning_is_deterministic() -> None:
+    world, steps = _world("plan_two_turns")
+    a, _ = plan_cable_steps(world, steps)
+    b, _ = plan_cable_steps(world, steps)
+    assert [s.label for s in a] == [s.label for s in b]
+    for sa, sb in zip(a, b, strict=True):
+        for pa, pb in zip(sa.paths, sb.paths, strict=True):
+            assert np.array_equal(pa.poses, pb.poses)
+    assert _facts(a, "slot") == _facts(b, "slot")
+
+
+def test_two_cables_in_one_plan_release_the_first_before_picking_the_second() -> None:
+    """A second PickCable (the same cable again, as a stand-in) releases the first cable and
+    retracts before it picks."""
+    world, steps = _world()
+    segments, state = plan_cable_steps(world, (*steps, *steps))
+    names = [s.label for s in segments]
+    first_release = names.index("cable1: release and retract")
+    assert names[first_release + 1] == "PickCable cable1: pick configuration"
+    assert names.count("cable1: release and retract") == 2
+    assert state.held == {}
+
+
+def test_paths_are_read_only_and_in_the_cell_frame() -> None:
+    p = planned("plan_straight")
+    path = p.segments[1].paths[0]
+    assert not path.poses.flags.writeable
+    # the pick grasps are at the combs' slot height (65 mm) beside the combs (x 200 mm)
+    for pa in p.segments[1].paths:
+        assert pa.poses[-1][2, 3] * 1000 == pytest.approx(65.0, abs=1e-3)
+
+
+def test_at_home_is_forward_kinematics_of_each_home() -> None:
+    """CableState.at_home puts every arm's TCP where forward kinematics of its home puts it."""
+    from cellengine.motion.robot import build_cell_model
+
+    world, _ = _world()
+    home = CableState.at_home(world)
+    model = build_cell_model(world)
+    for name, arm in model.arms.items():
+        assert arm.home is not None
+        assert np.allclose(home.tcp[name], arm.fk(arm.home))
+        assert home.mode[name] is None
