@@ -1,0 +1,91 @@
+"""The executor on the cable skills' segments: the first two steps of the straight reference
+plan (PickCable, PlaceConnector), then the whole four-guide plan."""
+
+from __future__ import annotations
+
+from functools import cache
+
+import numpy as np
+import pytest
+
+from cellengine.execute import STRATEGIES, Compiler, home_configuration, program_trajectory
+from cellengine.execute.checks import KEEP_DISTANCE_TOLERANCE, tcp_distances
+from cellengine.info.load import load_plan
+from cellengine.motion.collision import CollisionChecker
+from cellengine.motion.gate import check_cell_trajectory
+from cellengine.motion.robot import CellModel, build_cell_model
+from cellengine.motion.scene import build_scene
+from cellengine.program import Program, Segment
+from skills.cable import plan_cable_steps
+from tests.conftest import CELLS
+from tests.execute.scenes import states, tcp
+
+PLANS = CELLS / "cable_routing"
+
+
+@cache
+def models() -> tuple[CellModel, CollisionChecker]:
+    world = load_plan(PLANS / "plan_straight.yaml").world
+    cell = build_cell_model(world)
+    return cell, CollisionChecker(build_scene(cell, world))
+
+
+def segments(plan: str, steps: int | None = None) -> tuple[list[Segment], object]:
+    loaded = load_plan(PLANS / plan)
+    chosen = loaded.plan.steps if steps is None else loaded.plan.steps[:steps]
+    return plan_cable_steps(loaded.world, chosen)[0], loaded
+
+
+def compiled(plan: str, strategy: str, steps: int | None = None) -> Program:
+    segs, loaded = segments(plan, steps)
+    cell, checker = models()
+    c = Compiler(
+        loaded.world,  # type: ignore[attr-defined]
+        cell,
+        checker,
+        home_configuration(cell),
+        strategy,  # type: ignore[arg-type]
+        plan_file=PLANS / plan,
+    )
+    return c.add_all(segs)
+
+
+@pytest.mark.parametrize("strategy", STRATEGIES)
+def test_pick_and_place_of_the_straight_plan(strategy: str) -> None:
+    cell, checker = models()
+    program = compiled("plan_straight.yaml", strategy, steps=2)
+    assert {s.segment.step for s in program.segments} == {0, 1}
+    whole = program_trajectory(program)
+    assert check_cell_trajectory(whole, cell, checker).ok
+    for s in program.segments:
+        assert s.report["checks_passed"] is True
+        assert all(f == 1.0 for f in s.report["fraction"].values())
+        if s.segment.keep_distance is not None and len(s.trajectory) > 1:
+            d = tcp_distances(cell, states(s.trajectory, 0.002), s.segment.keep_distance)
+            assert np.ptp(d) <= KEEP_DISTANCE_TOLERANCE + 1e-9, s.segment.label
+    # the connector-side fingertip reaches the connector guide's keypoint (to 1 mm)
+    insert = next(s for s in program.segments if "guide" in s.segment.facts)
+    arm = insert.segment.facts["connector_arm"]
+    slot = load_plan(PLANS / "plan_straight.yaml").world.pose("routing.connector")[:3, 3]
+    fingertip = tcp(cell, arm, states(insert.trajectory, 0.005))[:, :3, 3]
+    assert np.linalg.norm(fingertip - slot, axis=1).min() < 1e-3
+
+
+def test_the_four_guide_plan_compiles_with_every_strategy() -> None:
+    cell, checker = models()
+    durations = {}
+    for strategy in STRATEGIES:
+        program = compiled("plan_two_turns.yaml", strategy)
+        assert {s.segment.step for s in program.segments} == {0, 1, 2}
+        assert check_cell_trajectory(program_trajectory(program), cell, checker).ok
+        durations[strategy] = program.duration
+    assert all(10.0 < d < 120.0 for d in durations.values())
+
+
+def test_the_plan_compiles_the_same_twice() -> None:
+    a = compiled("plan_straight.yaml", "split", steps=2)
+    b = compiled("plan_straight.yaml", "split", steps=2)
+    assert [s.segment.label for s in a.segments] == [s.segment.label for s in b.segments]
+    for x, y in zip(a.segments, b.segments, strict=True):
+        assert np.array_equal(x.trajectory.q, y.trajectory.q)
+        assert np.array_equal(x.trajectory.t, y.trajectory.t)
