@@ -144,7 +144,7 @@ class RouteCable(Skill):
             gp = _guide_plan(world, sim, self.cable, guide, r_arm, o_arm)
             _check_reach(world, r_arm, gp.reach_routing(), gp.where)
             _check_reach(world, o_arm, gp.reach_other(), gp.where)
-            _check_length(world, sim, self.cable, gp)
+            _check_length(world, self.cable, _hand(world, r_arm), gp)
             sim = gp.after(sim, r_arm, o_arm, self.cable)
             plans.append(gp)
         segments: list[Segment] = []
@@ -189,7 +189,7 @@ def release_and_retract(state: CableState) -> tuple[list[Segment], CableState]:
     b = _Builder(state)
     b.add(
         label,
-        # Back out along each hand's approach direction (up, for the top grasps here).
+        # Back out along each tool's axis (up, tipped by the hand's lean).
         [_up(state.tcp[a], a, -state.tcp[a][:3, 2], cg.RETRACT_HEIGHT) for a in holding],
         before=[GripperEvent(a, OPEN) for a in holding],
     )
@@ -289,6 +289,7 @@ class _PickGeometry:
     align: tuple[Poses, Poses] | None  # both hands: z along the routing platform's -z
     s: Mapping[str, float]  # where each hand holds the cable, at the grasp
     s_slid: float  # where the far hand holds it after the slide
+    spacing: float  # connector hand to far hand after the slide (what placing needs)
     connector_arm: str
     far_arm: str
 
@@ -360,8 +361,12 @@ def _pick_geometry(
         slide=slide,
         raise_=raise_,
         align=align,
+        # The holder is assumed to present the free end just long enough beyond the grasp for
+        # the fingers (end_margin): where along the cable the far hand starts is a guess;
+        # where it ends after the slide is not.
         s={c_arm: -conn_len / 2.0, f_arm: cable.length - hand_f.end_margin},
         s_slid=spacing - conn_len / 2.0,
+        spacing=spacing,
         connector_arm=c_arm,
         far_arm=f_arm,
     )
@@ -427,7 +432,7 @@ def _emit_pick(
         f"{label}: slide to the connector",
         [_cartesian(f_arm, geo.slide)],
         before=[GripperEvent(f_arm, SLIDE, name)],
-        facts={"spacing": float(np.linalg.norm(geo.slide[-1][:3, 3] - geo.lower[0][:3, 3]))},
+        facts={"spacing": geo.spacing},
     )
     b.state = b.state.hold(f_arm, name, geo.s_slid)
     b.add(
@@ -815,11 +820,11 @@ def _slide_side(
     return best[1]
 
 
-def _check_length(world: World, state: CableState, name: str, gp: GuidePlan) -> None:
+def _check_length(world: World, name: str, hand: cg.Hand, gp: GuidePlan) -> None:
     """The cable must reach the routing hand when it is farthest out (after the pull) and
     leave the fingers enough beyond it to hold."""
     cable = world.cable(name)
-    margin = _hand(world, state.routing_arm or "").end_margin
+    margin = hand.end_margin
     need = gp.laid + gp.radius + margin
     if need > cable.length + 1e-9:
         raise _error(
@@ -990,7 +995,8 @@ def _cell_model(world: World) -> CellModel:
     if hit is not None and hit[0]() is world:
         return hit[1]
     model = build_cell_model(world)
-    _MODELS[id(world)] = (weakref.ref(world, lambda _: _MODELS.pop(id(world), None)), model)
+    key = id(world)  # the callback must not hold the world, or it never goes
+    _MODELS[key] = (weakref.ref(world, lambda _: _MODELS.pop(key, None)), model)
     return model
 
 

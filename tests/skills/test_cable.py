@@ -331,6 +331,13 @@ def test_pull_distance_and_route_after_placing() -> None:
     p = planned("plan_straight")
     retract = p.segments[labels(p).index(f"PlaceConnector {CONNECTOR_GUIDE}: retract")]
     assert retract.facts["pull_distance"] == pytest.approx(39.5 * MM, abs=1e-12)
+    # PickCable's slide leaves the hands that far apart already.
+    slide = p.segments[labels(p).index("PickCable cable1: slide to the connector")]
+    assert slide.facts["spacing"] == pytest.approx(57.0 * MM, abs=1e-12)
+    up = p.segments[labels(p).index("PickCable cable1: up")]
+    (raised,) = [pa.poses[-1] for pa in up.paths]
+    i_up = labels(p).index("PickCable cable1: up")
+    assert np.linalg.norm(raised[:3, 3] - p.end[i_up]["right"][:3, 3]) == pytest.approx(57.0 * MM)
     # Between the hands while placing: connector centre to fingertips, 17.5 + 39.5 = 57 mm.
     i = labels(p).index(f"PlaceConnector {CONNECTOR_GUIDE}: insert")
     gap = np.linalg.norm(p.end[i]["left"][:3, 3] - p.end[i]["right"][:3, 3])
@@ -492,6 +499,18 @@ def test_each_check_names_its_step_when_planned_alone() -> None:
     far = _with_element(world, "routing.guide3", xyz=[0.43, 1.5, 0.01])
     with pytest.raises(InputError, match=r"^.*steps\[7\] RouteCable routing.guide3: out of reach"):
         steps[2].plan(far, replace(state, step=7))
+
+
+def test_the_robot_model_cache_lets_worlds_go() -> None:
+    import gc
+    import weakref
+
+    world, steps = _world()
+    plan_cable_steps(world, steps)
+    ref = weakref.ref(world)
+    del world, steps
+    gc.collect()
+    assert ref() is None
 
 
 def _facts(segments: list[Segment], key: str) -> list[Mapping[str, object]]:
