@@ -26,7 +26,7 @@ if TYPE_CHECKING:
     from cellengine.execute.compile import Compiler
 
 LOOKBACK = 12  # segments: how far back a failure may send the compiler
-BUDGET = 24  # retries (re-chosen transits) per plan
+BUDGET = 12  # retries (re-chosen transits) per plan: a few seconds at most on a plan that fails
 
 
 def add_all(
