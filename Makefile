@@ -16,11 +16,10 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 	$(BIN)/pip install -q -e '.[test]'
 	touch $@ $(VENV)/.installed
 
-# The main job. Until the motion layer lands: validate every reference cell and
-# print the keypoints of the cable-routing cell.
+# The main job: a reference cable-routing plan, compiled and run on the simulated cell.
+RUN_PLAN ?= cells/cable_routing/plan_straight.yaml
 run: $(VENV)/.installed
-	$(BIN)/cellengine validate cells/
-	$(BIN)/cellengine show cells/cable_routing/cell.yaml
+	$(BIN)/cellengine run $(RUN_PLAN) --out run
 
 test: $(VENV)/.installed-test
 	$(BIN)/python -m pytest
