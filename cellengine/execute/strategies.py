@@ -6,7 +6,8 @@
   from where the previous one left the arms.
 - ``sync``: both arms as one 12-DOF group, following both Cartesian paths together on one grid
   (:func:`~cellengine.motion.cartesian.dual_cartesian_path`).
-- ``async``: each arm planned on its own, the other standing at its start; the scheduler
+- ``async``: each arm planned on its own, the arms before it (in the segment's order)
+  standing where they end and those after it where they start; the scheduler
   (:mod:`cellengine.execute.schedule`) starts each as soon as it is safe.
 
 What every strategy shares: a transit of both arms is one 12-DOF query (one planner proves the
@@ -106,6 +107,15 @@ def solve_segment(
 
 
 def _by_arm(cell: CellModel, segment: Segment) -> dict[str, ArmPath]:
+    for what, pair in (
+        ("closed_chain", segment.closed_chain),
+        ("keep_distance", segment.keep_distance),
+    ):
+        for arm in pair or ():
+            if arm not in cell.arms:
+                raise Refused(
+                    f"{what} names an unknown arm '{arm}' (the cell has {', '.join(cell.arms)})"
+                )
     out: dict[str, ArmPath] = {}
     for p in segment.paths:
         if p.arm not in cell.arms:

@@ -242,3 +242,14 @@ def test_held_shapes() -> None:
     assert "routing.guide1" in piece.allowed and "table" not in piece.allowed
     other = held_object(world, checker.scene, "right", "something")
     assert np.allclose(other.shape.halfSide * 2, 0.01)
+
+
+def test_a_coupling_of_an_unknown_arm_is_refused() -> None:
+    world, cell, checker = cable_cell()
+    seg = Segment(0, "hands apart", keep_distance=("left", "middle"))
+    with pytest.raises(InputError) as e:
+        compile_segments(world, cell, checker, [seg], home(cell))
+    assert str(e.value) == (
+        "<input>: step 1 (hands apart): keep_distance names an unknown arm 'middle' "
+        "(the cell has left, right)"
+    )
