@@ -346,11 +346,12 @@ def _pick_geometry(
     # gravity when the hand then moves up the chord (paper, section III-B).
     centre = faced_c[-1][:3, 3]
     axis = np.cross(chord, up)
-    lower = cg.arc(faced_f[-1], centre, axis, -cg.SLIDE_DOWN_ANGLE, turn=True)
+    down = cg.slide_down_angle(float(np.linalg.norm(faced_f[-1][:3, 3] - centre)))
+    lower = cg.arc(faced_f[-1], centre, axis, -down, turn=True)
     spacing = _connector_spacing(world, state.place_guide, conn_len, hand_f)
     towards = cg.unit(lower[-1][:3, 3] - centre)
     slide = cg.line(lower[-1], cg.at(lower[-1], centre + spacing * towards))
-    raise_ = cg.arc(slide[-1], centre, axis, cg.SLIDE_DOWN_ANGLE, turn=True)
+    raise_ = cg.arc(slide[-1], centre, axis, down, turn=True)
     align = _align_z(world, state.place_guide, faced_c[-1], raise_[-1], up)
     return _PickGeometry(
         up=up,
@@ -794,11 +795,13 @@ def _slide_side(
     hand: cg.Hand,
 ) -> float:
     """The side to slide on: of the two slides at theta, one each side of the guide, the
-    one farther from every other element of the platforms (+1, left of the axis, on a tie);
-    an error if both come within the hand's and the element's radii plus CLEARANCE."""
+    one farther from every other element of the platforms that stands up to the hand's
+    height (a base plate does not count) (+1, left of the axis, on a tie); an error if both
+    come within the hand's and the element's radii plus CLEARANCE."""
     left = np.cross(up, axis)
     hand_radius = math.hypot(hand.width, 2.0 * hand.half_length) / 2.0
-    elements = cg.footprints(world, guide)
+    height = float(ap @ up) - cg.CLEARANCE
+    elements = [f for f in cg.footprints(world, guide, up) if f.top > height]
     best: tuple[float, float] | None = None
     blocked: list[str] = []
     for side in (1.0, -1.0):

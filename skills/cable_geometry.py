@@ -62,6 +62,7 @@ from cellengine import geometry as g
 from cellengine.errors import InputError, Problem
 from cellengine.geometry import Mat
 from cellengine.info.cell import Tool
+from cellengine.info.platform import Element
 from cellengine.motion import interpolate as ip
 from cellengine.world import World
 
@@ -78,7 +79,11 @@ RETRACT_HEIGHT = 0.100  # and leaves upwards this far (a comb's slot is 18 mm de
 STAND_BACK = 0.100  # the pivot hand, released, then backs off this far along the route
 THETA_MARGIN = math.radians(5.0)  # the sliding angle is this much over its published minimum
 THETA_MAX = math.radians(80.0)  # beyond this the slide hardly moves along the guide
-SLIDE_DOWN_ANGLE = math.radians(30.0)  # PickCable: how far the sliding hand first goes down
+# PickCable: the sliding hand first goes this far down on its circle about the other hand
+# (enough for the cable to hang back through its fingers), by at most SLIDE_DOWN_ANGLE: a fixed
+# angle would drop it 225 mm between the REMODEL sample's combs, 450 mm apart.
+SLIDE_DROP = 0.060
+SLIDE_DOWN_ANGLE = math.radians(30.0)
 # Each hand tips its tool by this much so that its flange moves away from the other hand: with
 # 200 mm tools straight down, two UR5e wrists and forearms collide when the fingertips are
 # closer than about 100 mm (measured with motion.collision on the cable_routing cell), and the
@@ -264,6 +269,12 @@ def theta_min(w_gripper: float, w_guide: float, a: float) -> float:
     return math.atan((w_gripper + w_guide) / (2.0 * a))
 
 
+def slide_down_angle(radius: float) -> float:
+    """The angle down the circle of ``radius`` that drops the hand SLIDE_DROP (at most
+    SLIDE_DOWN_ANGLE)."""
+    return min(SLIDE_DOWN_ANGLE, math.asin(min(1.0, SLIDE_DROP / radius)))
+
+
 def tension_pull(distance: float) -> float:
     return TENSION_STRAIN * distance
 
@@ -326,36 +337,63 @@ def keypoint_x(world: World, ref: str) -> Vec:
 
 @dataclass(frozen=True)
 class Footprint:
-    """An element as a disc on its platform, for clearance checks of sideways moves."""
+    """An element as a disc on its platform, with its top, for clearance checks of moves
+    beside guides: the disc holds the element's bounding box (cell frame) seen from above."""
 
     name: str
     centre: Vec
     radius: float
+    top: float  # highest point, along up
 
 
-def footprints(world: World, exclude: str) -> list[Footprint]:
-    """Every platform element but the one ``exclude`` (a reference) is on: its origin and
-    the radius of its footprint (from length and width, else its mesh, else 0)."""
+def footprints(world: World, exclude: str, up: Vec) -> list[Footprint]:
+    """Every platform element with geometry but the one ``exclude`` (a reference) is on.
+    Its bounds come from its mesh, else its collision boxes, else its length, width and
+    height (the native models' origin is the centre of the footprint on the plate)."""
     _, skip, _ = world.resolve(exclude)
     out: list[Footprint] = []
     for pname, platform in world.platforms.items():
         for element in platform.elements.values():
-            if element is skip:
+            corners = _corners(element)
+            if element is skip or corners is None:
                 continue
             T = platform.T_cell_platform @ element.T_platform_element
-            out.append(Footprint(f"{pname}.{element.name}", T[:3, 3], _radius(element)))
+            P = corners @ T[:3, :3].T + T[:3, 3]
+            heights = P @ up
+            flat = P - np.outer(heights, up)
+            lo, hi = flat.min(axis=0), flat.max(axis=0)
+            out.append(
+                Footprint(
+                    f"{pname}.{element.name}",
+                    (lo + hi) / 2.0,
+                    float(np.linalg.norm(hi - lo)) / 2.0,
+                    float(heights.max()),
+                )
+            )
     return out
 
 
-def _radius(element: object) -> float:
-    dims: Mapping[str, float] = getattr(element, "dimensions", {})
-    if "length" in dims and "width" in dims:
-        return math.hypot(dims["length"], dims["width"]) / 2.0
-    mesh = getattr(element, "mesh", None)
-    if mesh is not None:
-        lo, hi = np.asarray(mesh.bounds, dtype=float)
-        return float(np.hypot(*(hi - lo)[:2])) / 2.0
-    return 0.0
+def _corners(element: Element) -> Vec | None:
+    """The corners (k, 3) of the element's bounds in its own frame, or None if it has none."""
+    unit_box = np.array(
+        [[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)], dtype=float
+    )
+    if element.mesh is not None:
+        lo, hi = np.asarray(element.mesh.bounds, dtype=float)
+        out: Vec = (lo + hi) / 2.0 + unit_box * (hi - lo)
+        return out
+    if element.boxes:
+        parts = [
+            (unit_box * np.asarray(b.size)) @ b.T_element_box[:3, :3].T + b.T_element_box[:3, 3]
+            for b in element.boxes
+        ]
+        return np.concatenate(parts)
+    dims = element.dimensions
+    if all(k in dims for k in ("length", "width", "height")):
+        size = np.array([dims["length"], dims["width"], dims["height"]])
+        box: Vec = unit_box * size + np.array([0.0, 0.0, dims["height"] / 2.0])
+        return box
+    return None
 
 
 def segment_distance(p: Vec, a: Vec, b: Vec, up: Vec) -> float:

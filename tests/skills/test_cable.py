@@ -13,12 +13,14 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from functools import cache
+from pathlib import Path
 from types import MappingProxyType
 
 import numpy as np
 import pytest
 
 from cellengine import geometry as g
+from cellengine.cli import main
 from cellengine.errors import InputError
 from cellengine.info.load import load_plan
 from cellengine.motion import interpolate as ip
@@ -27,7 +29,7 @@ from cellengine.world import World
 from skills import cable_geometry as cg
 from skills.cable import PickCable, PlaceConnector, RouteCable, plan_cable_steps
 from skills.cable_state import CableState
-from tests.conftest import CELLS
+from tests.conftest import CELLS, REMODEL
 
 PLANS = ("plan_straight", "plan_one_turn", "plan_two_turns")
 CONNECTOR_GUIDE = "routing.connector"
@@ -47,7 +49,11 @@ class Planned:
 
 @cache
 def planned(name: str) -> Planned:
-    loaded = load_plan(CELLS / "cable_routing" / f"{name}.yaml")
+    return planned_file(CELLS / "cable_routing" / f"{name}.yaml")
+
+
+def planned_file(path: Path) -> Planned:
+    loaded = load_plan(path)
     world = loaded.world
     home = CableState.at_home(world)
     segments, state = plan_cable_steps(world, loaded.plan.steps, home)
@@ -202,10 +208,13 @@ def test_every_routed_guide_holds_the_taut_cable_through_its_slot(plan: Planned)
     the cable and the straight line between the two fingertips passing within the guide's
     gap of its slot keypoint, aligned with the guide's cable axis within 15 deg. Checked on
     the poses and the world, not on the facts' own numbers."""
-    inserts = [(i, s) for i, s in enumerate(plan.segments) if "slot" in s.facts]
-    assert [s.facts["guide"] for _, s in inserts] == [CONNECTOR_GUIDE, *plan.route]
-    state = plan.home
-    modes: dict[str, str | None] = dict(state.mode)
+    assert_inserted_through_every_slot(plan, CONNECTOR_GUIDE)
+
+
+def assert_inserted_through_every_slot(plan: Planned, connector_guide: str) -> None:
+    inserts = [s for s in plan.segments if "slot" in s.facts]
+    assert [s.facts["guide"] for s in inserts] == [connector_guide, *plan.route]
+    modes: dict[str, str | None] = dict(plan.home.mode)
     for i, seg in enumerate(plan.segments):
         for e in seg.before:
             modes[e.arm] = e.mode
@@ -227,6 +236,10 @@ def test_fingertip_distance_is_constant_while_the_cable_is_held_taut(plan: Plann
     """On every keep_distance segment (circular lifts, swings and inserts, the pick's circles,
     the pair carrying the connector) the fingertips stay as far apart as at its start,
     within 1 mm, at every pose."""
+    assert assert_keep_distance(plan) == 5 + 3 * len(plan.route)
+
+
+def assert_keep_distance(plan: Planned) -> int:
     checked = 0
     for i, seg in enumerate(plan.segments):
         if seg.keep_distance is None:
@@ -235,7 +248,7 @@ def test_fingertip_distance_is_constant_while_the_cable_is_held_taut(plan: Plann
         d = np.linalg.norm(a - b, axis=1)
         assert np.ptp(d) < 1 * MM, seg.label
         checked += 1
-    assert checked == 5 + 3 * len(plan.route)
+    return checked
 
 
 def test_the_connector_fingertip_reaches_the_connector_guide_keypoint(plan: Planned) -> None:
@@ -268,6 +281,14 @@ def test_fingertips_grasp_from_above_with_the_jaw_across_the_cable(plan: Planned
             if axis is not None:
                 # (the X3D keypoints' axes carry ~1e-7 of rotation round-off)
                 assert abs(float(T[:3, 1] @ axis)) < 1e-6, (seg.label, arm)
+
+
+def test_the_far_hand_goes_down_60_mm_before_sliding(plan: Planned) -> None:
+    """PickCable: down on the circle about the connector hand by SLIDE_DROP (the combs are
+    121 mm apart, so 29.7 deg < the 30 deg cap), then up the cable, then back up."""
+    i = labels(plan).index("PickCable cable1: down")
+    (path,) = plan.segments[i].paths
+    assert (path.poses[0][2, 3] - path.poses[-1][2, 3]) == pytest.approx(60.0 * MM, abs=1e-9)
 
 
 def test_cartesian_steps_are_at_most_5_mm_and_2_deg(plan: Planned) -> None:
@@ -560,3 +581,21 @@ def test_at_home_is_forward_kinematics_of_each_home() -> None:
         assert arm.home is not None
         assert np.allclose(home.tcp[name], arm.fk(arm.home))
         assert home.mode[name] is None
+
+
+def test_the_remodel_sample_plans_end_to_end(tmp_path: Path) -> None:
+    """The shared REMODEL sample imported with the reference robots (its default): pick from
+    combs C2.1 and C1.1, the connector into J8.1 by the left arm (the plan's 'J8.1.L'), then
+    J3.1, J4.1, J1.1, J2.1; the same checks as on the reference cell."""
+    dest = tmp_path / "cell"
+    assert main(["import", "remodel", str(REMODEL), str(dest)]) == 0
+    p = planned_file(dest / "plan.yaml")
+    assert p.route == ("platform.J3.1", "platform.J4.1", "platform.J1.1", "platform.J2.1")
+    assert_inserted_through_every_slot(p, "platform.J8.1")
+    assert assert_keep_distance(p) >= 3 * len(p.route)
+    i = labels(p).index("PlaceConnector platform.J8.1: insert")
+    assert p.segments[i].facts["connector_arm"] == "left"
+    # the combs are 450 mm apart: the far hand still goes down only 60 mm (7.7 deg)
+    (down,) = p.segments[labels(p).index("PickCable CA1: down")].paths
+    assert (down.poses[0][2, 3] - down.poses[-1][2, 3]) == pytest.approx(60.0 * MM, abs=1e-9)
+    assert np.allclose(p.end[i]["left"][:3, 3], p.world.pose("platform.J8.1")[:3, 3])
