@@ -19,8 +19,8 @@ TCP frame convention (every pose here is ``T_cell_tcp``, the fingertip centre of
   at the hand spacings the method uses.
 
 A keypoint whose x runs along the cable and whose z is up (a guide's ``slot``, a comb's
-``slot``) gives the top grasp there as ``T_cell_keypoint @ Rx(pi)`` when its x already points
-to increasing ``s``.
+``slot``) gives the top grasp there, before the tip, as ``T_cell_keypoint @ Rx(pi)`` when its x
+already points to increasing ``s``.
 
 The gripper as the method sees it (:class:`Hand`): ``W_gripper`` is the tool's
 ``finger_width``, its extent across the cable (DESIGN 3.1 names it so); along the cable the
