@@ -17,7 +17,7 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 	touch $@ $(VENV)/.installed
 
 # The main job: a reference cable-routing plan, compiled and run on the simulated cell.
-RUN_PLAN ?= cells/cable_routing/plan_straight.yaml
+RUN_PLAN ?= cells/cable_routing/plan_two_turns.yaml
 run: $(VENV)/.installed
 	$(BIN)/cellengine run $(RUN_PLAN) --out run
 

@@ -95,15 +95,15 @@ def compile_loaded(
         merge=merge,  # type: ignore[arg-type]
         plan_file=plan.file,
     )
-    for segment in segments:
-        if progress is not None and (not compiler.segments or segment.step != _last_step(compiler)):
+    shown: set[int] = set()
+
+    def before_each(segment: Segment) -> None:
+        if progress is not None and segment.step not in shown:
+            shown.add(segment.step)
             progress(segment.step, len(plan.steps), plan.steps[segment.step].skill)
-        compiler.add(segment)
-    return Compiled(loaded, cell, compiler.program(), chosen)
 
-
-def _last_step(compiler: Compiler) -> int:
-    return compiler.segments[-1].segment.step
+    # add_all looks ahead from each transit and comes back to it when a later segment fails
+    return Compiled(loaded, cell, compiler.add_all(segments, before_each), chosen)
 
 
 def _with_file(plan_file: Path, make: Callable[[], list[Segment]]) -> list[Segment]:
