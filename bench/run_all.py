@@ -15,7 +15,14 @@ import traceback
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-MODULES = ["bench_ik", "bench_timing", "bench_collision", "bench_cartesian", "bench_plan"]
+MODULES = [
+    "bench_ik",
+    "bench_timing",
+    "bench_collision",
+    "bench_cartesian",
+    "bench_plan",
+    "bench_execute",
+]
 
 
 def main() -> int:
