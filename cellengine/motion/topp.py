@@ -278,7 +278,7 @@ def _acceleration_mvc(c: FloatArray, d: FloatArray) -> FloatArray:
     # rows as contiguous (R, K) arrays: minima over axis 0 are fast, over short rows not
     ct, dt = np.ascontiguousarray(c.T), np.ascontiguousarray(d.T)
     out = np.full(c.shape[0], np.inf)
-    with np.errstate(divide="ignore"):
+    with np.errstate(divide="ignore", over="ignore"):  # inf is the right bound there
         for j in range(ct.shape[0] - 1):  # one row against the rest: small arrays
             bound = (dt[j] + dt[j + 1 :]) / np.abs(ct[j] - ct[j + 1 :])
             np.minimum(out, bound.min(axis=0), out=out)
