@@ -59,7 +59,7 @@ def _cases() -> list[object]:
 
 
 def _times(t0: float, t1: float) -> np.ndarray:
-    n = max(2, int(math.ceil((t1 - t0) / DT)) + 1)
+    n = max(2, math.ceil((t1 - t0) / DT) + 1)
     return np.linspace(t0, t1, n)
 
 
