@@ -6,10 +6,12 @@ import argparse
 import sys
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from cellengine.errors import EXIT_OK, UsageError, display_path
-from cellengine.pipeline import Compiled, Progress, compile_plan, write_plan_outputs
+
+if TYPE_CHECKING:  # the motion stack is imported when a command runs, not by `--help`
+    from cellengine.pipeline import Compiled, Progress
 
 EXECUTIONS = ("split", "sync", "async")
 
@@ -34,6 +36,8 @@ def add_common(p: argparse.ArgumentParser) -> None:
 
 
 def compile_from_args(args: argparse.Namespace) -> Compiled:
+    from cellengine.pipeline import compile_plan
+
     if not args.plan.is_file():
         raise UsageError.at("no such plan file", args.plan)
     progress = None if args.quiet else _progress()
@@ -50,6 +54,8 @@ def _progress() -> Progress:
 
 
 def run(args: argparse.Namespace) -> int:
+    from cellengine.pipeline import write_plan_outputs
+
     compiled = compile_from_args(args)
     paths = write_plan_outputs(compiled, args.out)
     if not args.quiet:

@@ -7,14 +7,14 @@ import argparse
 import json
 import os
 import time
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any
 
 from cellengine.commands.plan import add_common, compile_from_args
-from cellengine.drivers.base import Driver
-from cellengine.drivers.play import segment_events
-from cellengine.drivers.registry import make_driver
 from cellengine.errors import EXIT_OK, display_path
-from cellengine.pipeline import Compiled, write_plan_outputs
+
+if TYPE_CHECKING:  # the motion stack and drivers are imported when the command runs
+    from cellengine.drivers.base import Driver
+    from cellengine.pipeline import Compiled
 
 
 def add_parser(sub: Any, name: str) -> None:
@@ -31,6 +31,8 @@ def add_parser(sub: Any, name: str) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from cellengine.pipeline import write_plan_outputs
+
     compiled = compile_from_args(args)
     paths = write_plan_outputs(compiled, args.out)
     driver = _driver(compiled, args)
@@ -51,6 +53,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _driver(compiled: Compiled, args: argparse.Namespace) -> Driver:
+    from cellengine.drivers.registry import make_driver
+
     world, cell = compiled.world, compiled.cell
     joints = {name: arm.joint_names for name, arm in cell.arms.items()}
     options: dict[str, Any] = {}
@@ -60,6 +64,8 @@ def _driver(compiled: Compiled, args: argparse.Namespace) -> Driver:
 
 
 def _play(compiled: Compiled, driver: Driver, journal: IO[str], quiet: bool) -> None:
+    from cellengine.drivers.play import segment_events
+
     program = compiled.program
     for i, (segment, events) in enumerate(
         zip(program.segments, segment_events(program), strict=True)

@@ -13,8 +13,6 @@ from typing import Any
 from cellengine.errors import EXIT_INVALID, EXIT_OK, InputError, Problem, UsageError, display_path
 from cellengine.info.load import LoadedPlan, load_objects, load_plan, load_world
 from cellengine.info.yamlio import load_yaml
-from cellengine.motion.robot import build_cell_model
-from cellengine.pipeline import Models, cell_models, compile_loaded
 from cellengine.world import World
 
 KINDS = ("cell", "objects", "plan")
@@ -69,6 +67,8 @@ def validate_paths(paths: list[Path], compile_plans: bool = False) -> list[Resul
         key = cell.resolve()
         if key not in worlds:
             try:
+                from cellengine.motion.robot import build_cell_model  # pinocchio: when needed
+
                 built = load_world(cell)
                 build_cell_model(built)  # URDFs, meshes, tips: the robots must build
                 worlds[key] = built
@@ -79,15 +79,20 @@ def validate_paths(paths: list[Path], compile_plans: bool = False) -> list[Resul
             raise InputError(loaded.problems)
         return loaded
 
-    models: dict[Path, Models] = {}
+    models: dict[Path, Any] = {}
 
-    def models_of(world: World) -> Models:
+    def models_of(world: World) -> Any:
+        from cellengine.pipeline import cell_models
+
         key = world.cell_file.resolve()
         if key not in models:
             models[key] = cell_models(world)
         return models[key]
 
     def compile_one(loaded: LoadedPlan) -> None:
+        # imported here: the motion stack is only needed when plans are compiled
+        from cellengine.pipeline import compile_loaded
+
         compile_loaded(loaded, models=models_of)
 
     results = []
