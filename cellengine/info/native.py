@@ -47,14 +47,7 @@ def assemble(
 ) -> Platform:
     elements: dict[str, Element] = {}
     for row in rows:
-        node = scene.nodes.get(row.cad_name)
-        if node is None:
-            raise InputError.at(
-                f"unknown CAD name '{row.cad_name}' (no DEF of that name in "
-                f"{Path(scene.file).name}){known(scene.nodes)}",
-                map_file,
-                row.row,
-            )
+        node = scene.node(row.cad_name, map_file, row.row)
         model = models.get(row.model)
         if model is None:
             raise InputError.at(

@@ -24,7 +24,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Literal
 
-from cellengine.errors import CellError, InputError, known
+from cellengine.errors import CellError, InputError
 from cellengine.geometry import Mat, rot_x, rot_y, rot_z, transform
 from cellengine.info.files import read_capped
 from cellengine.info.models_xml import element_column, source_lines
@@ -90,14 +90,7 @@ def assemble(
 ) -> Platform:
     elements: dict[str, Element] = {}
     for row in rows:
-        node = scene.nodes.get(row.cad_name)
-        if node is None:
-            raise InputError.at(
-                f"unknown CAD name '{row.cad_name}' (no DEF of that name in "
-                f"{Path(scene.file).name}){known(scene.nodes)}",
-                ids,
-                row.row,
-            )
+        node = scene.node(row.cad_name, ids, row.row)
         model = models.get(row.model)
         if node.mesh_problem is not None and model is None:
             raise InputError(node.mesh_problem)  # nothing else describes its shape

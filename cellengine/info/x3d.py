@@ -25,7 +25,7 @@ import trimesh
 from lxml import etree
 from numpy.typing import NDArray
 
-from cellengine.errors import CellError, InputError, Problem, display_path
+from cellengine.errors import CellError, InputError, Problem, display_path, known
 from cellengine.geometry import Mat, axis_angle_to_matrix, inverse, rot_x
 from cellengine.info.files import read_capped, resolve_inside
 from cellengine.info.xmlsafe import parse_xml
@@ -96,6 +96,18 @@ class X3DScene:
     file: str
     nodes: Mapping[str, X3DNode]  # every DEF'd/id'd Transform or Group, document order
     mesh: trimesh.Trimesh | None = None  # geometry under no named node, in the platform frame
+
+    def node(self, name: str, file: Path, row: int) -> X3DNode:
+        """The node a mapping file names at ``row``; an InputError there if there is none."""
+        found = self.nodes.get(name)
+        if found is None:
+            raise InputError.at(
+                f"unknown CAD name '{name}' (no DEF of that name in "
+                f"{Path(self.file).name}){known(self.nodes)}",
+                file,
+                row,
+            )
+        return found
 
 
 def load_x3d(
