@@ -90,11 +90,15 @@ class PlaceConnector(Skill):
     cable: CableRef
     guide: GuideRef
 
-    def connector_arm(self, world: World, holder: str | None = None) -> str:
+    def connector_arm(
+        self, world: World, holder: str | None = None, step: int | None = None
+    ) -> str:
         """The arm that places the connector: ``arm`` if it names one; with ``auto``,
         ``holder`` (the arm holding the connector end) if given, else the arm whose base is
-        nearer the guide."""
+        nearer the guide. ``step``: this step's index, so an error names it."""
         where = f"PlaceConnector {self.guide}"
+        if step is not None:
+            where = f"steps[{step}] {where}"
         arms = _two_arms(world, where)
         if self.arm in arms:
             return self.arm
@@ -109,7 +113,7 @@ class PlaceConnector(Skill):
         hands as one rigid pair); approach, insert and retract keypoints; release and retract
         the connector gripper; then pull_distance."""
         where = f"steps[{state.step}] PlaceConnector {self.guide}"
-        c_arm = self.connector_arm(world, state.connector_arm)
+        c_arm = self.connector_arm(world, state.connector_arm, state.step)
         arms = _two_arms(world, where)
         f_arm = _other(arms, c_arm)
         _require_hold(state, c_arm, self.cable, where, "the connector end (plan PickCable first)")
@@ -1023,9 +1027,10 @@ def _look_ahead(
 ) -> CableState:
     """Before a PickCable: the arm and guide of the PlaceConnector that follows for the same
     cable (before the next PickCable), so the pick hands the connector end to that arm."""
-    for step in rest:
+    for k, step in enumerate(rest):
         if isinstance(step, PickCable):
             break
         if isinstance(step, PlaceConnector) and step.cable == pick.cable:
-            return replace(state, connector_arm=step.connector_arm(world), place_guide=step.guide)
+            arm = step.connector_arm(world, step=state.step + 1 + k)
+            return replace(state, connector_arm=arm, place_guide=step.guide)
     return replace(state, connector_arm=None, place_guide=None)

@@ -89,3 +89,26 @@ def test_a_step_without_motion_is_refused_at_its_line(tmp_path: Path) -> None:
 
 def test_no_such_plan_is_a_usage_error(tmp_path: Path) -> None:
     assert main(["plan", str(tmp_path / "nope.yaml")]) == 2
+
+
+def test_validate_compiles_plans_unless_told_not_to(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A PlaceConnector that names both arms passes the file checks but cannot be planned:
+    validate says so at the step's line; --no-compile checks the files only."""
+    import shutil
+
+    shutil.copytree(CELLS / "cable_routing", tmp_path / "cell")
+    plan = tmp_path / "cell" / "plan_straight.yaml"
+    text = plan.read_text().replace(
+        "guide: routing.connector", "guide: routing.connector\n    arm: both"
+    )
+    plan.write_text(text)
+    monkeypatch.chdir(tmp_path / "cell")
+    assert main(["validate", "--no-compile", "plan_straight.yaml"]) == 0
+    capsys.readouterr()
+    assert main(["validate", "plan_straight.yaml"]) == 1
+    assert capsys.readouterr().out == (
+        "plan_straight.yaml:12:5: steps[1] PlaceConnector routing.connector: arm must be one "
+        "robot or 'auto', not 'both'; known: left, right\n"
+    )
