@@ -583,6 +583,8 @@ def _emit_place(
     # The cable between the connector and the other hand is short and straight: both hands
     # carry it as one rigid piece, and its length between them stays what it is.
     for what, paths in (("align with the guide", geo.align), ("approach", geo.approach)):
+        if all(_same_pose(path[0], path[-1], 1e-9, cg.TINY_ANGLE) for path in paths):
+            continue  # aligned already (the pick left the pair along the guide)
         b.add(
             f"{label}: {what}",
             [_cartesian(c_arm, paths[0]), _cartesian(f_arm, paths[1])],
@@ -725,12 +727,12 @@ def _guide_plan(
         )
     ap = slot - (dims.length / 2.0 + x_off) * axis
     # The routing hand tips forward and towards its base, the other hand back and towards
-    # its base: see cg.LEAN.
+    # its base (the other hand by more): see cg.LEAN and cg.PIVOT_LEAN.
     tip_r = cg.unit(axis + _towards_base(world, r_arm, slot, up))
     tip_o = cg.unit(-axis + _towards_base(world, o_arm, slot, up))
     T_r0 = state.tcp[r_arm]
     T_ap = cg.nearer_turn(T_r0, cg.tcp_frame(ap, axis, up, tip_r, cg.LEAN))
-    T_pivot = cg.nearer_turn(state.tcp[o_arm], cg.tcp_frame(ap, axis, up, tip_o, cg.LEAN))
+    T_pivot = cg.nearer_turn(state.tcp[o_arm], cg.tcp_frame(ap, axis, up, tip_o, cg.PIVOT_LEAN))
     pull_r = cg.tension_pull(r_cable)
     side = _slide_side(world, guide, where, ap, axis, up, theta, r_cable + pull_r, hand)
     left = np.cross(up, axis)

@@ -94,6 +94,11 @@ SLIDE_DOWN_ANGLE = math.radians(30.0)
 # guide4). A hand holding the connector tips only along the cable and always the same way,
 # so the connector, grasped already tipped, stays level.
 LEAN = math.radians(15.0)
+# RouteCable's other hand, holding the pivot while the routing arm reaches past it, tips its
+# flange further towards its own base: after a turn the routing arm's forearm sweeps over the
+# pivot hand's wrist (plan_one_turn's guide4: 0.9 mm at 15 and 20 deg; free from 25 deg to at
+# least 40 deg on the three reference plans, measured with every execution strategy).
+PIVOT_LEAN = math.radians(30.0)
 # Pull that puts the cable in tension, per metre between the hands: the sag of a loosely held
 # span. The paper makes it "a function of the distance between grippers and the cable
 # properties"; objects.yaml gives no stiffness, so only the distance is used.

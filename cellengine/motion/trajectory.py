@@ -335,7 +335,8 @@ def concatenate(parts: Sequence[Trajectory]) -> Trajectory:
                 f"part {k} has joints {list(part.joint_names)}; part 0 has "
                 f"{list(first.joint_names)}"
             )
-        _check_junction(k, qs[-1][-1], qds[-1][-1], qdds[-1][-1], part)
+        prev = parts[k - 1]  # its last point is the last appended (a one-point part adds none)
+        _check_junction(k, prev.q[-1], prev.qd[-1], prev.qdd[-1], part)
         times.append(part.t[1:] - part.t[0] + end)
         qs.append(part.q[1:])
         qds.append(part.qd[1:])

@@ -1,5 +1,5 @@
-"""Issue 4, "What the output must show", on the compiled Program of each reference plan with
-each execution strategy: joint limits at 1 ms, every routed guide crossed by the cable between
+"""Issue 4, "What the output must show", on the compiled Program of each reference plan, and of
+the shared REMODEL sample imported with the reference robots, with each execution strategy: joint limits at 1 ms, every routed guide crossed by the cable between
 the fingertips, constant hand distance on the circular moves, the connector at its keypoint."""
 
 from __future__ import annotations
@@ -15,7 +15,10 @@ from cellengine.errors import InputError
 from cellengine.motion.trajectory import concatenate
 from cellengine.pipeline import Compiled, compile_plan
 from cellengine.program import Program
-from tests.conftest import CELLS
+from cellengine.cli import main
+from cellengine.drivers.play import play
+from cellengine.drivers.sim import SimDriver
+from tests.conftest import CELLS, REMODEL
 
 DT = 1e-3
 ROUTING = CELLS / "cable_routing"
@@ -24,19 +27,30 @@ PLANS = {
     "straight": ("routing.guide1", "routing.guide2", "routing.guide3"),
     "two_turns": ("routing.guide1", "routing.guide5", "routing.guide6", "routing.guide7"),
     "one_turn": ("routing.guide1", "routing.guide2", "routing.guide4"),
+    "remodel": ("platform.J3.1", "platform.J4.1", "platform.J1.1", "platform.J2.1"),
 }
-# plan_one_turn does not compile yet: over guide4 the left (routing) arm's forearm sweeps
-# over the right (pivot) hand's wrist (see the report of the session that added this file).
-FAILING = {"one_turn"}
+# The REMODEL route runs along the platform's -x and its connector goes in with the left arm
+# (the sequence's 'J8.1.L'): a yaw of 90 deg lays the route along the cell's -y, from the left
+# arm's side to the right's, and the shift puts it in front of both arms, as in cable_routing.
+REMODEL_POSE = "250 380 0 0 0 90"
 
 _CACHE: dict[tuple[str, str], Compiled | InputError] = {}
 
 
-def _compiled(plan: str, strategy: str) -> Compiled:
+@pytest.fixture(scope="module")
+def files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """The plan file of each case; the REMODEL sample imported into a temporary folder."""
+    dest = tmp_path_factory.mktemp("remodel") / "cell"
+    assert main(["import", "remodel", str(REMODEL), str(dest), f"--pose={REMODEL_POSE}"]) == 0
+    out = {plan: ROUTING / f"plan_{plan}.yaml" for plan in PLANS if plan != "remodel"}
+    return {**out, "remodel": dest / "plan.yaml"}
+
+
+def _compiled(files: dict[str, Path], plan: str, strategy: str) -> Compiled:
     key = (plan, strategy)
     if key not in _CACHE:
         try:
-            _CACHE[key] = compile_plan(ROUTING / f"plan_{plan}.yaml", strategy)
+            _CACHE[key] = compile_plan(files[plan], strategy)
         except InputError as e:
             _CACHE[key] = e
     hit = _CACHE[key]
@@ -46,16 +60,11 @@ def _compiled(plan: str, strategy: str) -> Compiled:
 
 
 def _cases() -> list[object]:
-    out: list[object] = []
-    for plan in PLANS:
-        for strategy in STRATEGIES:
-            marks = (
-                [pytest.mark.xfail(raises=InputError, strict=True, reason="guide4 collision")]
-                if plan in FAILING
-                else []
-            )
-            out.append(pytest.param(plan, strategy, marks=marks, id=f"{plan}-{strategy}"))
-    return out
+    return [
+        pytest.param(plan, strategy, id=f"{plan}-{strategy}")
+        for plan in PLANS
+        for strategy in STRATEGIES
+    ]
 
 
 def _times(t0: float, t1: float) -> np.ndarray:
@@ -84,8 +93,8 @@ def _point_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
 
 
 @pytest.mark.parametrize(("plan", "strategy"), _cases())
-def test_limits_at_1ms(plan: str, strategy: str) -> None:
-    c = _compiled(plan, strategy)
+def test_limits_at_1ms(files: dict[str, Path], plan: str, strategy: str) -> None:
+    c = _compiled(files, plan, strategy)
     traj = concatenate([s.trajectory for s in c.program.segments])
     assert tuple(traj.joint_names) == tuple(c.cell.joint_names)
     q, qd, _ = traj.sample(_times(traj.start_time, traj.end_time))
@@ -97,8 +106,8 @@ def test_limits_at_1ms(plan: str, strategy: str) -> None:
 
 
 @pytest.mark.parametrize(("plan", "strategy"), _cases())
-def test_every_guide_holds_the_cable(plan: str, strategy: str) -> None:
-    c = _compiled(plan, strategy)
+def test_every_guide_holds_the_cable(files: dict[str, Path], plan: str, strategy: str) -> None:
+    c = _compiled(files, plan, strategy)
     found: list[str] = []
     last = -math.inf
     for seg in c.program.segments:
@@ -130,8 +139,8 @@ def test_every_guide_holds_the_cable(plan: str, strategy: str) -> None:
 
 
 @pytest.mark.parametrize(("plan", "strategy"), _cases())
-def test_circular_moves_keep_the_distance(plan: str, strategy: str) -> None:
-    c = _compiled(plan, strategy)
+def test_circular_moves_keep_the_distance(files: dict[str, Path], plan: str, strategy: str) -> None:
+    c = _compiled(files, plan, strategy)
     n = 0
     for seg in c.program.segments:
         pair = seg.segment.keep_distance
@@ -146,8 +155,8 @@ def test_circular_moves_keep_the_distance(plan: str, strategy: str) -> None:
 
 
 @pytest.mark.parametrize(("plan", "strategy"), _cases())
-def test_connector_reaches_its_keypoint(plan: str, strategy: str) -> None:
-    c = _compiled(plan, strategy)
+def test_connector_reaches_its_keypoint(files: dict[str, Path], plan: str, strategy: str) -> None:
+    c = _compiled(files, plan, strategy)
     placed = [s for s in c.program.segments if "connector_arm" in s.segment.facts]
     assert placed
     seg = placed[0]
@@ -161,6 +170,33 @@ def test_connector_reaches_its_keypoint(plan: str, strategy: str) -> None:
     assert best <= 1e-3
 
 
-def test_reference_plans_exist() -> None:
-    for plan in PLANS:
-        assert Path(ROUTING / f"plan_{plan}.yaml").is_file()
+@pytest.mark.parametrize(("plan", "strategy"), _cases())
+def test_runs_on_the_simulated_cell(files: dict[str, Path], plan: str, strategy: str) -> None:
+    """Played on the simulated cell at its 2 ms servo period: every segment completes, the
+    arms end where the program ends, every gripper event is applied, both hands have held
+    the cable, and both let it go at the end (Algorithm 1's release and retract)."""
+    c = _compiled(files, plan, strategy)
+    joints = {name: arm.joint_names for name, arm in c.cell.arms.items()}
+    q0 = c.program.segments[0].trajectory.q[0]
+    with SimDriver(c.world.cell, joints, objects=c.world.objects, q0=q0) as driver:
+        driver.configure()
+        driver.activate()
+        played = play(driver, c.program)
+        assert len(played) == len(c.program.segments)
+        assert all(p.completed for p in played)
+        end = c.program.segments[-1].trajectory.q[-1]
+        assert np.allclose(driver.joint_state(), end, atol=1e-9)
+        applied = [e for p in played for e in p.events]
+        assert len(applied) == len(c.program.events)
+        assert all(e.done for e in applied)
+        (cable,) = c.world.objects.cables
+        for arm in c.cell.arms:
+            assert any(e.arm == arm and (e.mode, e.holds) == ("grasp", cable) for e in applied)
+            assert driver.gripper(arm) == ("open", None)
+        driver.deactivate()
+
+
+def test_every_plan_file_exists(files: dict[str, Path]) -> None:
+    assert sorted(files) == sorted(PLANS)
+    for path in files.values():
+        assert path.is_file()

@@ -146,6 +146,16 @@ def test_concatenate_shifts_times_and_merges_the_junction() -> None:
     np.testing.assert_allclose(c.sample(2.75)[0], b.sample(7.75)[0])
 
 
+def test_concatenate_takes_a_one_point_part_between_two_moves() -> None:
+    """A segment that does not move (a single point) adds no knot and no time."""
+    still = Trajectory(("a",), [4.0], [[1.0]], [[0.0]], [[0.0]])
+    c = concatenate([_rest_move(0.0, 1.0, 2.0), still, _rest_move(1.0, 3.0, 1.0)])
+    np.testing.assert_allclose(c.t, [0.0, 2.0, 3.0])
+    np.testing.assert_allclose(c.q[:, 0], [0.0, 1.0, 3.0])
+    with pytest.raises(ValueError, match="position of a jumps from 1 to 2"):
+        concatenate([_rest_move(0.0, 1.0, 1.0), still, _rest_move(2.0, 0.0, 1.0)])
+
+
 def test_concatenate_refuses_a_jump_or_other_joints() -> None:
     with pytest.raises(ValueError, match="position of a jumps from 1 to 2"):
         concatenate([_rest_move(0.0, 1.0, 1.0), _rest_move(2.0, 0.0, 1.0)])
