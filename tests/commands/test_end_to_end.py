@@ -1,6 +1,8 @@
 """Issue 4, "What the output must show", on the compiled Program of each reference plan, and of
-the shared REMODEL sample imported with the reference robots, with each execution strategy: joint limits at 1 ms, every routed guide crossed by the cable between
-the fingertips, constant hand distance on the circular moves, the connector at its keypoint."""
+the shared REMODEL sample imported with the reference robots, with each execution strategy:
+joint limits at 1 ms, every routed guide crossed by the cable between the fingertips, constant
+hand distance on the circular moves, the connector at its keypoint; and each program played on
+the simulated cell."""
 
 from __future__ import annotations
 
@@ -11,13 +13,13 @@ import numpy as np
 import pytest
 
 import skills.cable  # noqa: F401  (the real skills package registers the cable skills)
+from cellengine.cli import main
+from cellengine.drivers.play import play
+from cellengine.drivers.sim import SimDriver
 from cellengine.errors import InputError
 from cellengine.motion.trajectory import concatenate
 from cellengine.pipeline import Compiled, compile_plan
 from cellengine.program import Program
-from cellengine.cli import main
-from cellengine.drivers.play import play
-from cellengine.drivers.sim import SimDriver
 from tests.conftest import CELLS, REMODEL
 
 DT = 1e-3
