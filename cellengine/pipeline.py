@@ -124,12 +124,17 @@ def _with_file(plan_file: Path, make: Callable[[], list[Segment]]) -> list[Segme
         raise InputError(problems) from None
 
 
+# trajectory.json numbers to 1e-9 (rad, rad/s, rad/s^2, s): far below what any arm resolves
+# (and knots are >= 0.5 ms apart), and half the text and the writing time of full precision.
+TRAJECTORY_DECIMALS = 9
+
+
 def trajectory_json(program: Program) -> dict[str, Any]:
     """trajectory.json (DESIGN 3.5): one time axis for both arms, gripper events."""
     from cellengine.motion.trajectory import concatenate
 
     traj = concatenate([s.trajectory for s in program.segments])
-    out = traj.to_json()
+    out = traj.to_json(decimals=TRAJECTORY_DECIMALS)
     out["events"] = [
         {
             "time_from_start": e.time,

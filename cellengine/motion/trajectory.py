@@ -277,10 +277,15 @@ class Trajectory:
 
     # -- ROS JointTrajectory ----------------------------------------------------------
 
-    def to_json(self) -> dict[str, Any]:
+    def to_json(self, decimals: int | None = None) -> dict[str, Any]:
         """DESIGN 3.5's trajectory.json body (ROS JointTrajectory semantics): joint names and
-        one point per knot with positions, velocities, accelerations and time_from_start.
+        one point per knot with positions, velocities, accelerations and time_from_start,
+        rounded to ``decimals`` when given (shorter numbers: a file written and read faster).
         Events are not the trajectory's business; the writer adds them."""
+
+        def out(a: FloatArray) -> list[Any]:
+            return (a if decimals is None else np.round(a, decimals)).tolist()  # type: ignore[no-any-return]
+
         return {
             "joint_names": list(self.joint_names),
             "points": [
@@ -291,11 +296,7 @@ class Trajectory:
                     "time_from_start": t,
                 }
                 for t, q, qd, qdd in zip(
-                    self.t.tolist(),
-                    self.q.tolist(),
-                    self.qd.tolist(),
-                    self.qdd.tolist(),
-                    strict=True,
+                    out(self.t), out(self.q), out(self.qd), out(self.qdd), strict=True
                 )
             ],
         }

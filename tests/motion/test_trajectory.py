@@ -111,6 +111,16 @@ def test_resample_keeps_the_motion_and_the_end() -> None:
         traj.resample(0.0)
 
 
+def test_json_rounds_to_the_decimals_asked() -> None:
+    traj = _poly_traj(np.array([0.0, 0.123456789, 1.25]))
+    data = traj.to_json(decimals=4)
+    assert [p["time_from_start"] for p in data["points"]] == [0.0, 0.1235, 1.25]
+    back = Trajectory.from_json(data)
+    np.testing.assert_allclose(back.q, traj.q, atol=5e-5)
+    assert np.abs(back.q - traj.q).max() > 0.0  # rounded, not the full value
+    np.testing.assert_array_equal(back.q, np.round(traj.q, 4))
+
+
 def test_resample_exact_multiple_does_not_duplicate_the_end() -> None:
     traj = _poly_traj(np.array([0.0, 1.0]))
     res = traj.resample(0.25)
