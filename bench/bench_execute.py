@@ -10,7 +10,8 @@ Merges: every part where both arms move, under split and under sync; per part th
 the published merge are timed on the same rows. Ratios are sums of durations over sums of
 bounds: ``bound`` is the slower arm's time-optimal (TOPP-RA) duration alone, velocity and
 acceleration limits only; ``jerk_bound`` the slower arm's jerk-limited duration alone (jerk
-10x acceleration per second), what a jerk-limited merge is up against.
+retime.JERK_PER_ACCELERATION = 50x acceleration per second), what a jerk-limited merge is
+up against.
 """
 
 from __future__ import annotations
