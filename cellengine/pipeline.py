@@ -127,6 +127,7 @@ def _with_file(plan_file: Path, make: Callable[[], list[Segment]]) -> list[Segme
 # trajectory.json numbers to 1e-9 (rad, rad/s, rad/s^2, s): far below what any arm resolves
 # (and knots are >= 0.5 ms apart), and half the text and the writing time of full precision.
 TRAJECTORY_DECIMALS = 9
+TRAJECTORY_JSON = "trajectory.json"
 
 
 def trajectory_json(program: Program) -> dict[str, Any]:
@@ -158,14 +159,11 @@ def step_label(step: Skill) -> str:
 
 
 def write_plan_outputs(compiled: Compiled, out: Path) -> dict[str, Path]:
-    """trajectory.json, report.json and report.html into ``out``; written to temporary
-    names first and moved into place, so a failure leaves no half-written file."""
-    from cellengine.report.write import write_report
+    """trajectory.json, report.json and report.html into ``out``, all or none: each is
+    written to a temporary name and the three are moved into place together."""
+    from cellengine.outfiles import write_files
+    from cellengine.report.write import REPORT_HTML, REPORT_JSON, report_texts
 
-    out.mkdir(parents=True, exist_ok=True)
-    paths = {"trajectory": out / "trajectory.json"}
-    tmp = out / ".trajectory.json.tmp"
-    tmp.write_text(json.dumps(trajectory_json(compiled.program)) + "\n")
     plan = compiled.loaded.plan
     extra = {
         "plan": str(plan.file),
@@ -173,15 +171,20 @@ def write_plan_outputs(compiled: Compiled, out: Path) -> dict[str, Path]:
         "duration": compiled.program.duration,
     }
     labels = {i: step_label(step) for i, step in enumerate(plan.steps)}
-    report_json, report_html = write_report(
-        out,
-        compiled.program,
-        compiled.world,
-        compiled.cell,
-        extra,
-        step_labels=labels,
-        title=plan.file.name,
-    )
-    tmp.replace(paths["trajectory"])
-    paths.update({"report": report_json, "html": report_html})
-    return paths
+    texts = {
+        TRAJECTORY_JSON: json.dumps(trajectory_json(compiled.program)) + "\n",
+        **report_texts(
+            compiled.program,
+            compiled.world,
+            compiled.cell,
+            extra,
+            step_labels=labels,
+            title=plan.file.name,
+        ),
+    }
+    paths = write_files(out, texts)
+    return {
+        "trajectory": paths[TRAJECTORY_JSON],
+        "report": paths[REPORT_JSON],
+        "html": paths[REPORT_HTML],
+    }
