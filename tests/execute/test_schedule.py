@@ -62,9 +62,15 @@ def test_async_delays_the_right_arm_until_it_is_safe(swept: tuple[Compiler, np.n
     _, qd, _ = seg.trajectory.sample(np.array([start + 0.5 * delays["right"]]))
     assert np.allclose(qd[0, cell.slices["right"]], 0.0)
     assert not np.allclose(qd[0, cell.slices["left"]], 0.0)
-    # and the segment lasts as long as the right arm's delayed motion
-    right_alone = seg.report["durations_s"]["joint"]  # both merges are timed without delay
-    assert seg.trajectory.duration > right_alone
+    # the right arm starts moving at its delay and the segment lasts until both arms stop
+    ts = np.linspace(start, seg.trajectory.end_time, 4001)
+    _, qd, _ = seg.trajectory.sample(ts)
+    moving = np.flatnonzero(np.abs(qd[:, cell.slices["right"]]).max(axis=1) > 1e-9)
+    step = ts[1] - ts[0]
+    assert abs(ts[moving[0]] - (start + delays["right"])) <= step
+    assert ts[moving[-1]] >= seg.trajectory.end_time - 2 * step or np.abs(
+        qd[-2, cell.slices["left"]]
+    ).max() > 1e-9
 
 
 def test_one_step_earlier_would_come_too_close(swept: tuple[Compiler, np.ndarray]) -> None:
