@@ -68,9 +68,10 @@ def test_async_delays_the_right_arm_until_it_is_safe(swept: tuple[Compiler, np.n
     moving = np.flatnonzero(np.abs(qd[:, cell.slices["right"]]).max(axis=1) > 1e-9)
     step = ts[1] - ts[0]
     assert abs(ts[moving[0]] - (start + delays["right"])) <= step
-    assert ts[moving[-1]] >= seg.trajectory.end_time - 2 * step or np.abs(
-        qd[-2, cell.slices["left"]]
-    ).max() > 1e-9
+    assert (
+        ts[moving[-1]] >= seg.trajectory.end_time - 2 * step
+        or np.abs(qd[-2, cell.slices["left"]]).max() > 1e-9
+    )
 
 
 def test_one_step_earlier_would_come_too_close(swept: tuple[Compiler, np.ndarray]) -> None:
