@@ -22,7 +22,8 @@ are read from it, first key found wins:
 Without a reported distance, and given the cell, the distance between the arms' links is
 measured every DISTANCE_DT s along the segment (``distance_source``: ``computed``).
 Per step: the same figures over its segments (planning times summed, the smallest distance,
-checks passed when all passed). ``totals``: ``cycle_time_s``, counts, ``planning_time_s``,
+checks passed when all passed). ``totals``: ``cycle_time_s``, ``cycle_time_by_merge_s`` (the cycle had
+every segment used each merge of its ``durations_s``), counts, ``planning_time_s``,
 ``min_arm_distance_m``, ``closest_pair``, ``checks_passed``.
 """
 
@@ -283,6 +284,7 @@ def _totals(
     start = program.segments[0].trajectory.start_time if program.segments else 0.0
     return {
         "cycle_time_s": program.duration - start,
+        "cycle_time_by_merge_s": _by_merge(program.duration - start, segments),
         "segments": len(segments),
         "steps": len(steps),
         "events": len(program.events),
@@ -291,6 +293,23 @@ def _totals(
         "closest_pair": pair,
         "checks_passed": _all(s.get("checks_passed") for s in segments),
     }
+
+
+def _by_merge(cycle: float, segments: Sequence[Mapping[str, Any]]) -> dict[str, float]:
+    """The cycle time had every segment been timed with each merge in its ``durations_s``:
+    the run's cycle with each segment's chosen merge swapped for the other (delays kept;
+    segments not merged, one arm or scheduled apart, unchanged). Empty when no segment
+    reports merges."""
+    names = sorted({m for s in segments for m in (s.get("durations_s") or {})})
+    out: dict[str, float] = {}
+    for name in names:
+        total = cycle
+        for s in segments:
+            durations = s.get("durations_s") or {}
+            if s.get("merge") in durations and name in durations:
+                total += float(durations[name]) - float(durations[s["merge"]])
+        out[name] = total
+    return out
 
 
 def _arms(program: Program, cell: CellModel | None) -> list[str]:

@@ -97,6 +97,7 @@ def sample_program(cell: CellModel, seconds: float = 1.0) -> Program:
             trajectory(cell, q0, q1, 0.0, d0),
             {
                 "merge": "joint",
+                "durations_s": {"joint": d0, "published": d0 + 1.5},
                 "fraction": {"left": 1.0, "right": 0.97},
                 "planning_time_s": 0.125,
                 "checks": {"gate": True, "gate_samples": 2001, "keep_distance": None},
@@ -123,6 +124,7 @@ def sample_program(cell: CellModel, seconds: float = 1.0) -> Program:
             trajectory(cell, q2, q3, d0 + d1, d2),
             {
                 "merge": "published",
+                "durations_s": {"joint": d2 - 0.5, "published": d2},
                 "cartesian_fraction": 0.5,
                 "min_arm_distance_m": 0.2345,
                 "closest_pair": ("left/tool", "right/tool"),

@@ -26,6 +26,12 @@ def data() -> dict:
 def test_totals(data: dict) -> None:
     t = data["totals"]
     assert t["cycle_time_s"] == pytest.approx(6.0)
+    # segment 0 ran the joint merge (published: 1.5 s longer), segment 2 the published one
+    # (joint: 0.5 s shorter); segment 1 is one arm's
+    assert t["cycle_time_by_merge_s"] == {
+        "joint": pytest.approx(5.5),
+        "published": pytest.approx(7.5),
+    }
     assert (t["segments"], t["steps"], t["events"]) == (3, 2, 3)
     assert t["planning_time_s"] == pytest.approx(0.175)
     assert t["checks_passed"] is False  # segment 2 reports a failed check
