@@ -22,9 +22,9 @@ are read from it, first key found wins:
 Without a reported distance, and given the cell, the distance between the arms' links is
 measured every DISTANCE_DT s along the segment (``distance_source``: ``computed``).
 Per step: the same figures over its segments (planning times summed, the smallest distance,
-checks passed when all passed). ``totals``: ``cycle_time_s``, ``cycle_time_by_merge_s`` (the cycle had
-every segment used each merge of its ``durations_s``), counts, ``planning_time_s``,
-``min_arm_distance_m``, ``closest_pair``, ``checks_passed``.
+checks passed when all passed). ``totals``: ``cycle_time_s``, ``cycle_time_by_merge_s``
+(the cycle had every segment used each merge of its ``durations_s``), counts,
+``planning_time_s``, ``min_arm_distance_m``, ``closest_pair``, ``checks_passed``.
 """
 
 from __future__ import annotations
