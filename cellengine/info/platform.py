@@ -11,9 +11,9 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 
 import numpy as np
-import trimesh
 
 from cellengine.geometry import Mat
+from cellengine.info.mesh import Mesh
 
 
 def frozen_array(a: Mat) -> Mat:
@@ -52,7 +52,7 @@ class Element:
     T_platform_element: Mat  # rigid
     dimensions: Mapping[str, float]
     keypoints: Mapping[str, Keypoint]  # ordered: the first is the element's default
-    mesh: trimesh.Trimesh | None = None  # geometry in the element frame
+    mesh: Mesh | None = None  # geometry in the element frame
     boxes: tuple[CollisionBox, ...] = ()
     source: Source | None = None
     note: str = ""  # why an element has no keypoints, when that is worth saying

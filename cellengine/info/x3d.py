@@ -21,13 +21,14 @@ from types import MappingProxyType
 from typing import Literal, NamedTuple, TypeAlias
 
 import numpy as np
-import trimesh
 from lxml import etree
 from numpy.typing import NDArray
 
 from cellengine.errors import CellError, InputError, Problem, display_path, known
 from cellengine.geometry import Mat, axis_angle_to_matrix, inverse, rot_x
+from cellengine.info import primitives
 from cellengine.info.files import read_capped, resolve_inside
+from cellengine.info.mesh import Mesh
 from cellengine.info.xmlsafe import parse_xml
 
 Ints: TypeAlias = NDArray[np.int64]
@@ -75,7 +76,7 @@ _EYE3.setflags(write=False)
 _ONE3 = np.ones(3)
 _NO_ROTATION = np.array([0.0, 0.0, 1.0, 0.0])
 _Y_UP = _affine(rot_x(np.pi / 2), _ZERO3)  # T_platform_scene: x3d y (up) -> z, z -> -y
-_Z_TO_Y = _affine(rot_x(-np.pi / 2), _ZERO3)  # trimesh builds round shapes along z, X3D on y
+_Z_TO_Y = _affine(rot_x(-np.pi / 2), _ZERO3)  # round primitives are built along z, X3D's on y
 _QUAD = np.array([[0, 1, 2], [0, 2, 3]])  # a quad's fan
 _SECTIONS = 32  # around cylinders and cones: a multiple of 4, so extents are exact
 
@@ -86,7 +87,7 @@ class X3DNode:
     file: str  # the file it was defined in (an Inline'd file for inlined nodes)
     line: int  # source line of its element
     T_scene_node: Mat  # 4x4 rigid transform, metres, in the z-up platform frame
-    mesh: trimesh.Trimesh | None  # this node's own geometry, in the node frame, metres
+    mesh: Mesh | None  # this node's own geometry, in the node frame, metres
     # with bad_geometry="skip": why this node's geometry was dropped (mesh is then None)
     mesh_problem: Problem | None = None
 
@@ -95,7 +96,7 @@ class X3DNode:
 class X3DScene:
     file: str
     nodes: Mapping[str, X3DNode]  # every DEF'd/id'd Transform or Group, document order
-    mesh: trimesh.Trimesh | None = None  # geometry under no named node, in the platform frame
+    mesh: Mesh | None = None  # geometry under no named node, in the platform frame
 
     def node(self, name: str, file: Path, row: int) -> X3DNode:
         """The node a mapping file names at ``row``; an InputError there if there is none."""
@@ -659,32 +660,32 @@ def _triangle_set(el: Element, f: _File, loader: _Loader) -> Geometry:
     return V, _oriented(el, np.arange(len(V), dtype=np.int64).reshape(-1, 3))
 
 
-def _primitive(mesh: trimesh.Trimesh, T: Mat | None = None) -> Geometry:
+def _primitive(mesh: Mesh, T: Mat | None = None) -> Geometry:
     if T is not None:
-        mesh.apply_transform(T)
-    return np.asarray(mesh.vertices, float), np.asarray(mesh.faces, np.int64)
+        mesh = mesh.transformed(T)
+    return mesh.vertices, mesh.faces
 
 
 def _box(el: Element, f: _File, _: _Loader) -> Geometry:
-    return _primitive(trimesh.creation.box(extents=_positive(el, "size", 3, 2.0, f)))
+    return _primitive(primitives.box(_positive(el, "size", 3, 2.0, f)))
 
 
 def _cylinder(el: Element, f: _File, _: _Loader) -> Geometry:
     r = _positive(el, "radius", 1, 1.0, f)[0]
     h = _positive(el, "height", 1, 2.0, f)[0]
-    return _primitive(trimesh.creation.cylinder(radius=r, height=h, sections=_SECTIONS), _Z_TO_Y)
+    return _primitive(primitives.cylinder(r, h, _SECTIONS), _Z_TO_Y)
 
 
 def _cone(el: Element, f: _File, _: _Loader) -> Geometry:
     r = _positive(el, "bottomRadius", 1, 1.0, f)[0]
     h = _positive(el, "height", 1, 2.0, f)[0]
-    cone = trimesh.creation.cone(radius=r, height=h, sections=_SECTIONS)  # base at z = 0
+    cone = primitives.cone(r, h, _SECTIONS)  # base at z = 0
     return _primitive(cone, _Z_TO_Y @ _affine(np.eye(3), np.array([0.0, 0.0, -h / 2])))
 
 
 def _sphere(el: Element, f: _File, _: _Loader) -> Geometry:
     r = _positive(el, "radius", 1, 1.0, f)[0]
-    return _primitive(trimesh.creation.icosphere(subdivisions=2, radius=r))
+    return _primitive(primitives.sphere(r))
 
 
 _BUILDERS: dict[str, Callable[[Element, _File, _Loader], Geometry]] = {
@@ -698,12 +699,12 @@ _BUILDERS: dict[str, Callable[[Element, _File, _Loader], Geometry]] = {
 }
 
 
-def _mesh(parts: list[Geometry]) -> trimesh.Trimesh | None:
+def _mesh(parts: list[Geometry]) -> Mesh | None:
     if not parts:
         return None
     if len(parts) == 1:
-        return trimesh.Trimesh(vertices=parts[0][0], faces=parts[0][1], process=False)
+        return Mesh(*parts[0])
     offsets = np.cumsum([0] + [len(V) for V, _ in parts[:-1]])
     V = np.concatenate([V for V, _ in parts])
     F = np.concatenate([F + off for (_, F), off in zip(parts, offsets, strict=True)])
-    return trimesh.Trimesh(vertices=V, faces=F, process=False)
+    return Mesh(V, F)

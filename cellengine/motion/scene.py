@@ -54,16 +54,16 @@ from typing import Any, Literal
 import coal
 import numpy as np
 import pinocchio as pin
-import trimesh
 from numpy.typing import NDArray
 
 from cellengine.errors import InputError
 from cellengine.geometry import Mat
 from cellengine.info.cell import Obstacle
 from cellengine.info.files import resolve_inside
+from cellengine.info.mesh import Mesh
 from cellengine.info.xmlsafe import parse_xml
+from cellengine.motion.hull import convex_hull
 from cellengine.motion.robot import TOOL_GEOMETRY, Arm, CellModel
-from cellengine.motion.urdf import coal_convex
 from cellengine.world import World
 
 Vec = NDArray[np.float64]
@@ -73,6 +73,9 @@ Kind = Literal["link", "static", "held"]
 ACM_SAMPLES = 10_000  # random configurations per arm for the self pairs (MoveIt's default)
 ACM_MARGIN = 0.002  # m: a sampled pair never closer than this is disabled
 ACM_SEED = 0
+# A closed mesh whose volume is its hull's to this fraction is convex. The cells' concave
+# parts miss by 7 % or more; rounding in CAD coordinates is far below.
+CONVEX_VOLUME = 1e-6
 STANDS_ON_TOLERANCE = 0.01  # m: a base frame this close to an obstacle's box stands on it
 
 
@@ -487,41 +490,35 @@ def _obstacle_shape(o: Obstacle) -> Any:
     return coal.Sphere(o.sphere.radius)
 
 
-def _mesh_shape(name: str, T_cell_element: Mat, mesh: trimesh.Trimesh) -> StaticShape:
+def _mesh_shape(name: str, T_cell_element: Mat, mesh: Mesh) -> StaticShape:
     hull = _convex(mesh)
-    if hull is not None and _is_convex(mesh):
+    if hull is not None and _is_convex(mesh, hull):
         return StaticShape(name, T_cell_element, hull, hull, True)
     bvh = _bvh(mesh)
     # A flat mesh has no hull: its BVH is its own (slow) distance bound.
     return StaticShape(name, T_cell_element, bvh, hull if hull is not None else bvh, hull is None)
 
 
-def _is_convex(mesh: trimesh.Trimesh) -> bool:
-    try:
-        return bool(mesh.is_convex) and bool(mesh.is_watertight)
-    except Exception:  # trimesh's checks fail on degenerate meshes: treat them as not convex
-        return False
+def _is_convex(mesh: Mesh, hull: Any) -> bool:
+    """Closed and enclosing its hull's volume: then the mesh is its hull (to rounding)."""
+    full = float(hull.computeVolume())
+    return mesh.is_watertight and abs(mesh.volume - full) <= CONVEX_VOLUME * full
 
 
-def _bvh(mesh: trimesh.Trimesh) -> Any:
-    vertices = np.asarray(mesh.vertices, dtype=float)
-    faces = np.asarray(mesh.faces, dtype=np.int64)
+def _bvh(mesh: Mesh) -> Any:
     bvh = coal.BVHModelOBBRSS()
-    bvh.beginModel(len(faces), len(vertices))
-    bvh.addVertices(vertices)
-    bvh.addTriangles(faces)
+    bvh.beginModel(len(mesh.faces), len(mesh.vertices))
+    bvh.addVertices(mesh.vertices)
+    bvh.addTriangles(mesh.faces)
     bvh.endModel()
     return bvh
 
 
-def _convex(mesh: trimesh.Trimesh) -> Any | None:
+def _convex(mesh: Mesh) -> Any | None:
     try:
-        hull = mesh.convex_hull
-    except Exception:  # qhull on flat or degenerate input
+        return convex_hull(mesh.vertices)  # None for a flat mesh
+    except Exception:  # qhull on degenerate input
         return None
-    if len(hull.faces) < 4:
-        return None
-    return coal_convex(hull)
 
 
 def _enclosure_notes(cell: CellModel, statics: Sequence[StaticShape]) -> list[str]:

@@ -12,10 +12,10 @@ resolved by our code inside the cell folder:
 - ``<cylinder>`` becomes ``coal.Capsule`` of the same radius and length: URDF has no capsule,
   capsules are the cheapest shape to check, and a capsule covers its cylinder (it adds a
   half-sphere of the radius at each end), so the substitution never misses a collision;
-- ``<mesh>`` becomes the ``coal.Convex`` hull of the mesh (read through trimesh, scaled).
-  ``package://pkg/path`` is looked up in the URDF's own folder and its parents up to the cell
-  folder (a folder named ``pkg``, or one holding ``pkg``); other paths are relative to the URDF.
-  Anything resolving outside the cell folder is refused.
+- ``<mesh>`` becomes the ``coal.Convex`` hull of the mesh (read through trimesh, scaled; the
+  hull by coal's qhull). ``package://pkg/path`` is looked up in the URDF's own folder and its
+  parents up to the cell folder (a folder named ``pkg``, or one holding ``pkg``); other paths
+  are relative to the URDF. Anything resolving outside the cell folder is refused.
 
 ``<visual>`` elements are ignored (never read). Joints: revolute, continuous, prismatic and
 fixed. A continuous joint becomes a revolute joint limited to +-2 pi, so that every joint has
@@ -39,7 +39,6 @@ from typing import Any
 import coal
 import numpy as np
 import pinocchio as pin
-import trimesh
 from lxml import etree
 from numpy.typing import NDArray
 
@@ -48,6 +47,7 @@ from cellengine.errors import InputError, known
 from cellengine.geometry import Mat
 from cellengine.info.files import read_capped, resolve_inside
 from cellengine.info.xmlsafe import parse_xml
+from cellengine.motion.hull import convex_hull
 
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed")
 MOVABLE = ("revolute", "continuous", "prismatic")
@@ -415,6 +415,8 @@ def _convex_hull(path: Path, ref: str, scale: Sequence[float], urdf: Path, line:
             line,
         )
     data = read_capped(path, "mesh", urdf, line)
+    import trimesh  # here: importing it costs half a second, and only mesh files need it
+
     try:  # from bytes, so trimesh can open no other file (textures, materials)
         mesh: Any = trimesh.load(io.BytesIO(data), file_type=ext, force="mesh")
         vertices = np.asarray(mesh.vertices, dtype=float) * np.asarray(scale, dtype=float)
@@ -422,32 +424,13 @@ def _convex_hull(path: Path, ref: str, scale: Sequence[float], urdf: Path, line:
         raise InputError.at(f"mesh '{ref}' cannot be read: {_one_line(e)}", urdf, line) from None
     if len(vertices) == 0 or len(mesh.faces) == 0:
         raise InputError.at(f"mesh '{ref}' has no triangles", urdf, line)
-    if _flat(vertices):  # qhull would fail with a page of its own diagnostics
-        raise InputError.at(f"mesh '{ref}' is flat: its convex hull has no volume", urdf, line)
     try:
-        hull = trimesh.Trimesh(vertices=vertices).convex_hull
+        hull = convex_hull(vertices)
     except Exception as e:  # qhull on degenerate input
         raise InputError.at(f"mesh '{ref}' cannot be used: {_one_line(e)}", urdf, line) from None
-    return coal_convex(hull)
-
-
-def coal_convex(hull: trimesh.Trimesh) -> Any:
-    """A coal.Convex of a convex trimesh (its vertices and triangles as they are)."""
-    points = coal.StdVec_Vec3s()
-    for v in np.asarray(hull.vertices, dtype=float):
-        points.append(v)
-    triangles = coal.StdVec_Triangle()
-    for a, b, c in np.asarray(hull.faces, dtype=int):
-        triangles.append(coal.Triangle(int(a), int(b), int(c)))
-    return coal.Convex(points, triangles)
-
-
-def _flat(points: Vec) -> bool:
-    """All points on one plane (or line, or point), to rounding."""
-    if len(points) < 4:
-        return True
-    sv = np.linalg.svd(points - points.mean(axis=0), compute_uv=False)
-    return bool(sv[-1] <= 1e-9 * max(float(sv[0]), 1e-300))
+    if hull is None:
+        raise InputError.at(f"mesh '{ref}' is flat: its convex hull has no volume", urdf, line)
+    return hull
 
 
 def _one_line(e: Exception) -> str:

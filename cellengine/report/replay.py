@@ -21,10 +21,11 @@ from typing import Any
 import coal
 import numpy as np
 import pinocchio as pin
-import trimesh
 from numpy.typing import NDArray
 
+from cellengine.info import primitives
 from cellengine.info.cell import Obstacle
+from cellengine.info.mesh import Mesh
 from cellengine.motion.robot import CellModel
 from cellengine.program import Program, TimedEvent
 from cellengine.report.data import event_entry, step_names
@@ -199,36 +200,26 @@ def static_meshes(world: World, max_triangles: int = MESH_TRIANGLES) -> list[dic
     return out
 
 
-def _element_mesh(
-    mesh: trimesh.Trimesh | None, boxes: Sequence[tuple[Sequence[float], Vec]]
-) -> trimesh.Trimesh | None:
+def _element_mesh(mesh: Mesh | None, boxes: Sequence[tuple[Sequence[float], Vec]]) -> Mesh | None:
     if mesh is not None and len(mesh.faces) > 0:
         return mesh
     if not boxes:
         return None
-    parts = [trimesh.creation.box(extents=size, transform=T) for size, T in boxes]
-    merged = trimesh.util.concatenate(parts)
-    assert isinstance(merged, trimesh.Trimesh)  # boxes concatenate to one mesh
-    return merged
+    return Mesh.concatenate([primitives.box(size).transformed(T) for size, T in boxes])
 
 
-def obstacle_mesh(o: Obstacle) -> trimesh.Trimesh:
+def obstacle_mesh(o: Obstacle) -> Mesh:
     """An obstacle's shape in its own frame (a cylinder along z, as coal's)."""
-    mesh: trimesh.Trimesh
     if o.box is not None:
-        mesh = trimesh.creation.box(extents=o.box)
-    elif o.cylinder is not None:
-        c = o.cylinder
-        mesh = trimesh.creation.cylinder(c.radius, c.length, sections=CYLINDER_SECTIONS)
-    else:
-        assert o.sphere is not None  # the model validator guarantees exactly one shape
-        mesh = trimesh.creation.icosphere(subdivisions=2, radius=o.sphere.radius)
-    return mesh
+        return primitives.box(o.box)
+    if o.cylinder is not None:
+        return primitives.cylinder(o.cylinder.radius, o.cylinder.length, CYLINDER_SECTIONS)
+    assert o.sphere is not None  # the model validator guarantees exactly one shape
+    return primitives.sphere(o.sphere.radius)
 
 
-def _placed(mesh: trimesh.Trimesh, T: Vec) -> tuple[Vec, Faces]:
-    v = np.asarray(mesh.vertices, dtype=float)
-    return v @ T[:3, :3].T + T[:3, 3], np.asarray(mesh.faces, dtype=np.int64)
+def _placed(mesh: Mesh, T: Vec) -> tuple[Vec, Faces]:
+    return mesh.vertices @ T[:3, :3].T + T[:3, 3], mesh.faces
 
 
 def decimate(vertices: Vec, faces: Faces, max_faces: int) -> tuple[Vec, Faces]:

@@ -17,13 +17,16 @@ import pytest
 
 from cellengine import geometry as g
 from cellengine.errors import InputError
+from cellengine.info import primitives
 from cellengine.info.cell import Obstacle
 from cellengine.info.load import load_world
+from cellengine.info.mesh import Mesh
 from cellengine.info.platform import CollisionBox, Platform
 from cellengine.motion.collision import CollisionChecker, Contact
 from cellengine.motion.robot import CellModel, build_cell_model
 from cellengine.motion.scene import (
     CollisionScene,
+    _mesh_shape,
     attach,
     build_scene,
     detach,
@@ -445,6 +448,28 @@ def test_platform_boxes_obstacle_shapes_and_notes(cell: CellModel, world: World)
     i = routing.index("routing.guide1")
     assert isinstance(routing.geometry.geometryObjects[i].geometry, coal.BVHModelOBBRSS)
     assert isinstance(routing.bounds.geometryObjects[i].geometry, coal.Convex)
+
+
+def test_mesh_shapes_by_convexity() -> None:
+    """A convex mesh is its hull, exactly; a concave one a BVH bounded by its hull; a flat one
+    a BVH bounding itself. Wherever the mesh lies in its element's frame."""
+    T = np.eye(4)
+    box = primitives.box((0.1, 0.2, 0.3)).transformed(g.pose([5.0, 0, 0]))
+    s = _mesh_shape("box", T, box)
+    assert isinstance(s.shape, coal.Convex) and s.bound is s.shape and s.exact
+    assert s.shape.computeVolume() == pytest.approx(0.006)
+    assert isinstance(_mesh_shape("ball", T, primitives.sphere(0.1)).shape, coal.Convex)
+    apart = Mesh.concatenate(
+        [box, primitives.box((0.1, 0.2, 0.3)).transformed(g.pose([5.2, 0, 0]))]
+    )
+    s = _mesh_shape("two boxes", T, apart)  # closed, but with a gap between its parts
+    assert isinstance(s.shape, coal.BVHModelOBBRSS) and isinstance(s.bound, coal.Convex)
+    assert not s.exact
+    open_box = Mesh(box.vertices, box.faces[:-1])  # a missing triangle: not a solid
+    assert isinstance(_mesh_shape("open", T, open_box).shape, coal.BVHModelOBBRSS)
+    flat = Mesh([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
+    s = _mesh_shape("flat", T, flat)
+    assert isinstance(s.shape, coal.BVHModelOBBRSS) and s.bound is s.shape and s.exact
 
 
 # ---------------------------------------------------------------------------------- SRDF

@@ -7,8 +7,8 @@ import coal
 import numpy as np
 import pinocchio as pin
 import pytest
-import trimesh
 
+from cellengine.info import primitives
 from cellengine.info.cell import Obstacle
 from cellengine.motion.trajectory import Trajectory
 from cellengine.program import CompiledSegment, GripperEvent, Program, Segment, TimedEvent
@@ -210,13 +210,13 @@ def test_sampling_rate_is_capped_and_gaps_hold() -> None:
 
 
 def test_decimate_keeps_the_shape() -> None:
-    sphere = trimesh.creation.icosphere(subdivisions=5, radius=0.1)
-    v, f = decimate(np.asarray(sphere.vertices), np.asarray(sphere.faces), 2000)
+    sphere = primitives.sphere(0.1, subdivisions=5)
+    v, f = decimate(sphere.vertices, sphere.faces, 2000)
     assert 200 < len(f) <= 2000
     assert f.min() >= 0 and f.max() < len(v)
     assert np.linalg.norm(v, axis=1) == pytest.approx(0.1, abs=0.005)
-    small = trimesh.creation.box(extents=(1, 2, 3))
-    v2, f2 = decimate(np.asarray(small.vertices), np.asarray(small.faces), 2000)
+    small = primitives.box((1, 2, 3))
+    v2, f2 = decimate(small.vertices, small.faces, 2000)
     assert len(f2) == 12 and v2 is not None
 
 
@@ -225,6 +225,9 @@ def test_obstacle_meshes() -> None:
     assert cyl.bounds == pytest.approx(np.array([[-0.1, -0.1, -0.2], [0.1, 0.1, 0.2]]), abs=1e-9)
     ball = obstacle_mesh(Obstacle.model_validate({"sphere": {"radius": 0.05}}))
     assert np.linalg.norm(ball.vertices, axis=1) == pytest.approx(0.05)
+    box = obstacle_mesh(Obstacle.model_validate({"box": [0.1, 0.2, 0.3]}))
+    assert len(box.vertices) == 8 and len(box.faces) == 12
+    assert box.is_watertight and box.volume == pytest.approx(0.006)
 
 
 def test_program_joint_order_does_not_matter(replay: dict) -> None:
