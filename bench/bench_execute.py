@@ -4,8 +4,9 @@ Run: .venv/bin/python bench/bench_execute.py
 Plans: the four-guide reference plan (cells/cable_routing/plan_two_turns.yaml, segments from
 skills/cable.py), and the hand-made segments of tests/execute/scenes.py (a transit of both
 arms, a Cartesian line, a dual Cartesian move, a closed chain, a kept-distance arc).
-Times: compile only (models and segments ready), and a fresh process doing what `cellengine
-plan` does before writing files (imports, loading, models, skills, compile).
+Times: compile only (models and segments ready), a fresh process doing what `cellengine
+plan` does before writing files (imports, loading, models, skills, compile), and the whole
+`cellengine plan` command (median of 5, files written).
 Merges: every part where both arms move, under split and under sync; per part the joint and
 the published merge are timed on the same rows. Ratios are sums of durations over sums of
 bounds: ``bound`` is the slower arm's time-optimal (TOPP-RA) duration alone, velocity and
@@ -17,8 +18,10 @@ up against.
 from __future__ import annotations
 
 import json
+import statistics
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 from typing import Any
@@ -84,6 +87,7 @@ def _four_guides() -> dict[str, float]:
         ).stdout.split()[-1]
     )
     process = time.perf_counter() - t0
+    command = _plan_command()
     parts = []
     for strategy in ("split", "sync"):
         c = Compiler(world, cell, checker, q0, strategy)
@@ -95,9 +99,22 @@ def _four_guides() -> dict[str, float]:
         "execute_four_guide_compile_cold_s": times[0],
         "execute_four_guide_process_s": process,
         "execute_four_guide_process_after_start_s": inner,
+        "execute_four_guide_plan_command_s": command,
         "execute_four_guide_cycle_s": program.duration,
         **{f"execute_four_guide_{k}": v for k, v in ratios.items()},
     }
+
+
+def _plan_command(runs: int = 5) -> float:
+    """Median wall time of the whole `cellengine plan` command (start-up, compile, files)."""
+    times = []
+    with tempfile.TemporaryDirectory() as out:
+        argv = [sys.executable, "-m", "cellengine.cli", "plan", str(FOUR_GUIDES), "-q"]
+        for _ in range(runs):
+            t0 = time.perf_counter()
+            subprocess.run([*argv, "--out", out], check=True, cwd=ROOT)
+            times.append(time.perf_counter() - t0)
+    return statistics.median(times)
 
 
 def _hand_made() -> dict[str, float]:
