@@ -35,4 +35,6 @@ def make_driver(
     cls = DRIVERS.get(name)
     if cls is None:
         raise Refused(name, f"no driver '{name}' is available" + known(DRIVERS))
+    if name == "sim" and cell.driver.kind == "sim":
+        options = {"mass_noise": cell.driver.mass_noise, **options}
     return cls(cell, joints, objects=objects, **options)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from ipaddress import IPv4Address
 from typing import Annotated, Literal
 
@@ -45,6 +46,10 @@ class Tool(Frozen):
     finger_thickness: Length | None = Field(None, gt=0)
     jaw: dict[Name, Annotated[Length, Field(ge=0)]] = {}
     mass: Mass | None = Field(None, ge=0)
+    # How the fingers meet an upright object: from above (the tool's z down) or from the
+    # side (the tool's z horizontal). Lab skills choose grasps by it.
+    grasp: Literal["top", "side"] = "top"
+    load_cell: bool = False  # the tool weighs what it holds (gives the Weigh skill)
 
 
 class PlatformSpec(Frozen):
@@ -94,8 +99,31 @@ class Obstacle(Frozen):
         return self
 
 
+class Zone(Frozen):
+    """A box of the cell frame where only ``robots`` may work: one robot's private zone, or
+    a zone shared by several, which one robot at a time enters unless they cooperate."""
+
+    min: Vec3Length
+    max: Vec3Length
+    robots: tuple[Name, ...] = Field(min_length=1)
+
+    @model_validator(mode="after")
+    def _ordered(self) -> Zone:
+        if not all(lo < hi for lo, hi in zip(self.min, self.max, strict=True)):
+            raise ValueError("each of min's x, y, z must be below max's")
+        if len(set(self.robots)) != len(self.robots):
+            raise ValueError("robots: a robot is named twice")
+        return self
+
+    def contains(self, p: Sequence[float] | geometry.Mat) -> bool:
+        """Whether the point ``p`` (cell frame, m) is inside, faces included."""
+        return all(lo <= float(v) <= hi for lo, v, hi in zip(self.min, p, self.max, strict=True))
+
+
 class SimDriver(Frozen):
     kind: Literal["sim"]
+    # the simulated load cell's standard deviation (the cell's stated noise)
+    mass_noise: Mass = Field(0.0, ge=0)
 
 
 class UrRtdeDriver(Frozen):
@@ -113,4 +141,5 @@ class Cell(Frozen):
     tools: dict[Name, Tool] = {}
     platforms: dict[Name, PlatformSpec] = {}
     obstacles: dict[Name, Obstacle] = {}
+    zones: dict[Name, Zone] = {}
     driver: Driver = SimDriver(kind="sim")

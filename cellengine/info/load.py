@@ -90,6 +90,16 @@ def _check_cell(cell: Cell, doc: YamlDoc) -> list[Problem]:
                 name,
                 "home",
             )
+    for zname, zone in cell.zones.items():
+        for i, robot_name in enumerate(zone.robots):
+            if robot_name not in cell.robots:
+                err(
+                    f"zones.{zname}.robots[{i}]: unknown robot '{robot_name}'" + known(cell.robots),
+                    "zones",
+                    zname,
+                    "robots",
+                    i,
+                )
     driver = cell.driver
     if driver.kind == "ur_rtde":
         for arm in driver.arms:
@@ -131,9 +141,26 @@ def load_platform(name: str, spec: PlatformSpec, doc: YamlDoc) -> Platform:
 
 
 def load_objects(path: Path) -> Objects:
+    return _load_objects(path)[0]
+
+
+def _load_objects(path: Path) -> tuple[Objects, YamlDoc]:
     doc = load_yaml(path)
     _require_mapping(doc, "objects")
-    return validate(Objects, doc, _units(doc).context())
+    return validate(Objects, doc, _units(doc).context()), doc
+
+
+def _check_objects(world: World, doc: YamlDoc) -> list[Problem]:
+    """Where each container stands must be a keypoint of the cell."""
+    out: list[Problem] = []
+    for name, c in world.objects.containers.items():
+        if c.at is None:
+            continue
+        try:
+            world.resolve(c.at)
+        except RefError as e:
+            out.extend(doc.error(f"containers.{name}.at: {e}", ("containers", name, "at")).problems)
+    return out
 
 
 def load_world(cell_path: Path, objects_path: Path | None = None) -> World:
@@ -145,15 +172,18 @@ def load_world(cell_path: Path, objects_path: Path | None = None) -> World:
             platforms[name] = load_platform(name, spec, doc)
         except InputError as e:
             problems.extend(e.problems)
-    objects = Objects()
+    objects, objects_doc = Objects(), None
     if objects_path is not None:
         try:
-            objects = load_objects(objects_path)
+            objects, objects_doc = _load_objects(objects_path)
         except InputError as e:
             problems.extend(e.problems)
+    world = World(cell, cell_path, platforms, objects)
+    if objects_doc is not None and not problems:
+        problems.extend(_check_objects(world, objects_doc))
     if problems:
         raise InputError(problems)
-    return World(cell, cell_path, platforms, objects)
+    return world
 
 
 @dataclass(frozen=True)

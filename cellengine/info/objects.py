@@ -38,6 +38,9 @@ class Container(Frozen):
     height: Length | None = Field(None, gt=0)
     mass: Mass | None = Field(None, ge=0)
     cap: Cap | None = None
+    # where it stands at the start: a keypoint (platform.element[.keypoint]) at the centre
+    # of its base, z up
+    at: str | None = None
 
 
 class Objects(Frozen):
