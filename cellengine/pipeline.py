@@ -60,9 +60,11 @@ def compile_plan(
     strategy: str | None = None,
     merge: str = "joint",
     progress: Progress | None = None,
+    cell: Path | None = None,
 ) -> Compiled:
-    """Load, check and compile ``path``; InputError (in plan terms) when it cannot run."""
-    return compile_loaded(load_plan(path), strategy, merge, progress)
+    """Load, check and compile ``path`` (in ``cell`` instead of the plan's cell when
+    given); InputError (in plan terms) when it cannot run."""
+    return compile_loaded(load_plan(path, cell=cell), strategy, merge, progress)
 
 
 Models = tuple[CellModel, CollisionChecker]

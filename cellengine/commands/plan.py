@@ -32,6 +32,9 @@ def add_common(p: argparse.ArgumentParser) -> None:
     p.add_argument("plan", type=Path, metavar="PLAN")
     p.add_argument("--out", type=Path, default=Path("run"), help="run directory (default: run)")
     p.add_argument("--execution", choices=EXECUTIONS, help="override the plan's execution")
+    p.add_argument(
+        "--cell", type=Path, metavar="CELL", help="run the plan in this cell file instead"
+    )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
 
 
@@ -40,8 +43,10 @@ def compile_from_args(args: argparse.Namespace) -> Compiled:
 
     if not args.plan.is_file():
         raise UsageError.at("no such plan file", args.plan)
+    if args.cell is not None and not args.cell.is_file():
+        raise UsageError.at("no such cell file", args.cell)
     progress = None if args.quiet else _progress()
-    return compile_plan(args.plan, args.execution, progress=progress)
+    return compile_plan(args.plan, args.execution, progress=progress, cell=args.cell)
 
 
 def _progress() -> Progress:

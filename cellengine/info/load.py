@@ -192,14 +192,19 @@ class LoadedPlan:
     world: World
 
 
-def load_plan(path: Path, load_cell_world: Callable[[Path], World] | None = None) -> LoadedPlan:
+def load_plan(
+    path: Path,
+    load_cell_world: Callable[[Path], World] | None = None,
+    cell: Path | None = None,
+) -> LoadedPlan:
     """Load a plan, its cell and objects. ``load_cell_world`` lets a caller reuse worlds
-    already loaded (validating a folder loads each cell once)."""
+    already loaded (validating a folder loads each cell once). ``cell``: run the plan in
+    this cell file instead of the one it names (the same plan on other hardware)."""
     doc = load_yaml(path)
     _require_mapping(doc, "plan")
     plan = parse_plan(doc)
     root = path.parent
-    cell_path = resolve_inside(root, plan.cell, path, *_at(doc, ("cell",)))
+    cell_path = cell or resolve_inside(root, plan.cell, path, *_at(doc, ("cell",)))
     objects_path = None
     if plan.objects is not None:
         objects_path = resolve_inside(root, plan.objects, path, *_at(doc, ("objects",)))
@@ -210,10 +215,13 @@ def load_plan(path: Path, load_cell_world: Callable[[Path], World] | None = None
         raise
     if objects_path is not None:
         try:
-            world = replace(world, objects=load_objects(objects_path))
+            objects, objects_doc = _load_objects(objects_path)
         except InputError:
             _expect_kind(objects_path, "objects", doc)
             raise
+        world = replace(world, objects=objects)
+        if problems := _check_objects(world, objects_doc):
+            raise InputError(problems)
     problems = check_plan(plan, world, doc)
     if problems:
         raise InputError(problems)

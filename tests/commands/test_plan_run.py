@@ -91,6 +91,28 @@ def test_no_such_plan_is_a_usage_error(tmp_path: Path) -> None:
     assert main(["plan", str(tmp_path / "nope.yaml")]) == 2
 
 
+def test_cell_runs_the_plan_in_another_cell_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """--cell swaps the cell the plan names: here the same cell with the right arm moved
+    out of reach of the combs, which the plan then cannot do; a missing file is a usage
+    error."""
+    import shutil
+
+    folder = tmp_path / "cell"
+    shutil.copytree(CELLS / "cable_routing", folder)
+    other = folder / "far.yaml"
+    text = (folder / "cell.yaml").read_text()
+    other.write_text(text.replace("xyz: [0, -350, 0]", "xyz: [-900, -350, 0]"))
+    plan = folder / "plan_straight.yaml"
+    assert main(["plan", str(plan), "--cell", str(other), "-q", "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith(f"{plan}:"), err
+    assert "right" in err
+    assert main(["plan", str(plan), "--cell", str(folder / "nope.yaml")]) == 2
+    assert "no such cell file" in capsys.readouterr().err
+
+
 def test_validate_compiles_plans_unless_told_not_to(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:

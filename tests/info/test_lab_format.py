@@ -10,7 +10,7 @@ import pytest
 
 from cellengine.drivers.registry import make_driver
 from cellengine.errors import InputError
-from cellengine.info.load import load_cell, load_world
+from cellengine.info.load import load_cell, load_plan, load_world
 from tests.conftest import CELLS
 
 ZONES = """\
@@ -107,3 +107,14 @@ def test_the_simulated_load_cell_takes_the_cells_noise(tmp_path: Path) -> None:
     joints = {"left": [f"l{i}" for i in range(6)], "right": [f"r{i}" for i in range(6)]}
     driver = make_driver(cell, joints)
     assert driver.mass_noise == pytest.approx(0.0005)  # type: ignore[attr-defined]
+
+
+def test_a_plan_checks_where_its_objects_stand(tmp_path: Path) -> None:
+    cell = _cell(tmp_path, "")
+    objects = _objects(cell.parent, "holder.comb_z")
+    plan = cell.parent / "plan_straight.yaml"
+    with pytest.raises(InputError) as e:
+        load_plan(plan)
+    (problem,) = e.value.problems
+    assert problem.file == str(objects)
+    assert "containers.vial1.at: unknown element 'holder.comb_z'" in problem.message
