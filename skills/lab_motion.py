@@ -1,0 +1,320 @@
+"""The lab skills' motion primitives: pick, place, weigh, unscrew, pour, as segments.
+
+Each primitive takes the :class:`LabState` the previous one left and returns its segments
+and the state after them; the arms it uses are given (the allocator chose them). Moves
+through free space are transits (the executor plans them); moves next to a container are
+Cartesian lines and turns (the executor follows them exactly). Every key pose is checked
+for an inverse kinematics solution first, so an impossible grasp is reported in plan terms
+before any planning.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+from cellengine import geometry as g
+from cellengine.errors import InputError, Problem
+from cellengine.geometry import Mat
+from cellengine.motion import interpolate as ip
+from cellengine.program import ArmPath, GripperEvent, Segment
+from cellengine.world import World
+from skills import lab_geometry as lg
+from skills.lab_state import LabState
+
+OPEN, GRASP = "open", "grasp"
+# Unscrewing turns the cap in strokes of at most this much: a wrist with a limited range
+# lets go, turns back and grasps again between strokes.
+STROKE = math.radians(180.0)
+POUR_CLEARANCE = 0.03  # m: the container's mouth above the target's rim while pouring
+
+Solver = Callable[[str, Mat], bool]  # (arm, T_cell_tcp) -> the arm can reach it
+
+
+class Builder:
+    """Appends segments for one step and keeps the state in step with them."""
+
+    def __init__(self, state: LabState) -> None:
+        self.state = state
+        self.segments: list[Segment] = []
+
+    def add(
+        self,
+        label: str,
+        paths: Iterable[ArmPath],
+        *,
+        before: Iterable[GripperEvent] = (),
+        after: Iterable[GripperEvent] = (),
+        closed_chain: tuple[str, str] | None = None,
+        facts: Mapping[str, Any] | None = None,
+    ) -> None:
+        seg = Segment(
+            step=self.state.step,
+            label=label,
+            paths=tuple(paths),
+            before=tuple(before),
+            after=tuple(after),
+            closed_chain=closed_chain,
+            facts=MappingProxyType(dict(facts or {})),
+        )
+        for path in seg.paths:
+            self.state = self.state.moved(path.arm, path.poses[-1])
+        self.segments.append(seg)
+
+
+def error(message: str) -> InputError:
+    return InputError(Problem(message))
+
+
+def _mm(p: Sequence[float] | Mat) -> str:
+    return "(" + ", ".join(f"{1000.0 * float(v):.1f}" for v in p) + ") mm"
+
+
+def transit(arm: str, T: Mat) -> ArmPath:
+    return ArmPath(arm, "transit", np.asarray(T, dtype=float)[None])
+
+
+def line(arm: str, T0: Mat, T1: Mat) -> ArmPath:
+    return ArmPath(arm, "cartesian", ip.line(T0, T1))
+
+
+# ------------------------------------------------------------------------- pick and place
+
+
+def choose_grasp(reach: Solver, arm: str, candidates: Sequence[Mat], where: str, what: str) -> Mat:
+    """The first candidate whose grasp, approach and lifted poses the arm reaches."""
+    for T in candidates:
+        if all(reach(arm, P) for P in (T, lg.approach_of(T), lg.lifted(T))):
+            return T
+    raise error(
+        f"{where}: arm '{arm}' cannot grasp {what}: none of {len(candidates)} grasps round "
+        f"{_mm(candidates[0][:3, 3])} has an inverse kinematics solution (with its approach "
+        "and lift) within the joint limits"
+    )
+
+
+def pick(
+    b: Builder, reach: Solver, world: World, arm: str, name: str, grasp: lg.Grasp, where: str
+) -> None:
+    """``arm`` comes in, closes on container ``name`` where it stands, and lifts it."""
+    state = b.state
+    if name not in state.where:
+        holder = state.holder(name)
+        raise error(f"{where}: '{name}' is held by arm '{holder}', not standing anywhere")
+    base = world.cell.robots[arm].base.matrix()[:3, 3]
+    body = lg.Body.of(world.container(name))
+    T = choose_grasp(
+        reach,
+        arm,
+        lg.grasp_candidates(grasp, state.where[name], body, base),
+        where,
+        f"'{name}'",
+    )
+    b.add(
+        f"{where}: to {name}", [transit(arm, lg.approach_of(T))], before=[GripperEvent(arm, OPEN)]
+    )
+    b.add(
+        f"{where}: grasp {name}",
+        [line(arm, lg.approach_of(T), T)],
+        after=[GripperEvent(arm, GRASP, name)],
+    )
+    b.state = b.state.grasped(arm, name)
+    b.add(f"{where}: lift {name}", [line(arm, T, lg.lifted(T))])
+
+
+def place(
+    b: Builder, reach: Solver, arm: str, T_cell_base: Mat, where: str, label: str = "put down"
+) -> None:
+    """``arm`` puts what it holds down standing at ``T_cell_base`` (turned about z as the
+    hand is), opens and backs off along its approach."""
+    held = b.state.held.get(arm)
+    if held is None:
+        raise error(f"{where}: arm '{arm}' holds nothing to put down")
+    # keep the hand's orientation: the container's base goes to the target's position
+    T_now_base = b.state.tcp[arm] @ g.inverse(held.T_base_tcp)
+    T_base = np.array(T_now_base, dtype=float)
+    T_base[:3, 3] = np.asarray(T_cell_base)[:3, 3]
+    T = T_base @ held.T_base_tcp
+    for what, P in (("place", T), ("place approach", lg.lifted(T)), ("retreat", lg.approach_of(T))):
+        if not reach(arm, P):
+            raise error(
+                f"{where}: out of reach of arm '{arm}': the {what} pose at {_mm(P[:3, 3])} has "
+                "no inverse kinematics solution within its joint limits"
+            )
+    b.add(f"{where}: carry {held.name}", [transit(arm, lg.lifted(T))])
+    b.add(
+        f"{where}: {label} {held.name}",
+        [line(arm, lg.lifted(T), T)],
+        after=[GripperEvent(arm, OPEN)],
+    )
+    b.state = b.state.released(arm)
+    b.add(f"{where}: back off", [line(arm, T, lg.approach_of(T))])
+
+
+def weigh(b: Builder, arm: str, name: str, where: str) -> None:
+    """Read the held container's mass: the segment's facts tell the runner to read the
+    arm's load cell once the arm stands still after it."""
+    held = b.state.held.get(arm)
+    if held is None or held.name != name:
+        raise error(f"{where}: arm '{arm}' must hold '{name}' to weigh it")
+    T = b.state.tcp[arm]
+    b.add(
+        f"{where}: weigh {name}",
+        [line(arm, T, lg.lifted(T, 0.01))],
+        facts={"measure": "mass", "object": name, "arm": arm},
+    )
+
+
+# ------------------------------------------------------------------------------- unscrew
+
+
+def unscrew_strokes(turns: float, stroke: float = STROKE) -> list[float]:
+    """The turn (rad) of each stroke: as many full strokes as fit, then the rest."""
+    total = 2.0 * math.pi * turns
+    n = max(1, math.ceil(total / stroke - 1e-9))
+    return [total / n] * n
+
+
+def unscrew(
+    b: Builder,
+    reach: Solver,
+    world: World,
+    turner: str,
+    name: str,
+    T_cell_cap_place: Mat,
+    where: str,
+) -> None:
+    """``turner`` grips the cap of container ``name`` (held still by the other arm) from
+    above and turns it off counter-clockwise, rising by the pitch per turn, in strokes it
+    releases and re-grasps between; then lifts the cap away and puts it down at
+    ``T_cell_cap_place``."""
+    c = world.container(name)
+    if c.cap is None or name not in b.state.capped:
+        raise error(f"{where}: '{name}' has no cap on to unscrew")
+    body = lg.Body.of(c)
+    T_base = b.state.base_of(name)
+    p = T_base[:3, 3] + (body.height - body.cap_height / 2.0) * lg.UP
+    base = world.cell.robots[turner].base.matrix()[:3, 3]
+    heading = math.atan2(float((p - base)[1]), float((p - base)[0])) + math.pi / 2.0
+    candidates = [lg.top_grasp(p, heading + k * math.pi / 8) for k in range(8)]
+    T0 = choose_grasp(reach, turner, candidates, where, f"the cap of '{name}'")
+    b.add(
+        f"{where}: to the cap",
+        [transit(turner, lg.approach_of(T0))],
+        before=[GripperEvent(turner, OPEN)],
+    )
+    b.add(f"{where}: grip the cap", [line(turner, lg.approach_of(T0), T0)])
+    rise_per_rad = c.cap.pitch / (2.0 * math.pi)
+    cap = f"{name}.cap"
+    strokes = unscrew_strokes(c.cap.turns)
+    T = T0
+    for k, angle in enumerate(strokes):
+        last = k == len(strokes) - 1
+        # counter-clockwise seen from above (a right-hand thread comes off): +z of the cell
+        turned = _turned(T, angle, rise_per_rad * angle)
+        if not reach(turner, turned):
+            raise error(
+                f"{where}: arm '{turner}' cannot turn the cap of '{name}' by "
+                f"{math.degrees(angle):.0f} deg"
+            )
+        b.add(
+            f"{where}: turn the cap ({k + 1}/{len(strokes)})",
+            [ArmPath(turner, "cartesian", _screw_path(T, angle, rise_per_rad * angle))],
+            # the last stroke frees the cap: from then on the hand holds it
+            before=[GripperEvent(turner, GRASP, cap if last else None)],
+            after=[] if last else [GripperEvent(turner, OPEN)],
+        )
+        T = turned
+        if not last:
+            b.add(
+                f"{where}: turn back ({k + 1}/{len(strokes)})",
+                [ArmPath(turner, "cartesian", _screw_path(T, -angle, 0.0))],
+            )
+            T = _turned(T, -angle, 0.0)
+    T_up = lg.lifted(T)
+    b.add(f"{where}: lift the cap away", [line(turner, T, T_up)])
+    T_put = np.array(T_up, dtype=float)
+    T_put[:3, 3] = np.asarray(T_cell_cap_place)[:3, 3] + body.cap_height / 2.0 * lg.UP
+    if not reach(turner, T_put):
+        raise error(f"{where}: arm '{turner}' cannot put the cap down at {_mm(T_put[:3, 3])}")
+    b.add(f"{where}: carry the cap", [transit(turner, lg.lifted(T_put))])
+    b.add(
+        f"{where}: put the cap down",
+        [line(turner, lg.lifted(T_put), T_put)],
+        after=[GripperEvent(turner, OPEN)],
+    )
+    b.add(f"{where}: back off", [line(turner, T_put, lg.lifted(T_put))])
+    b.state = b.state.uncapped(name, T_put)
+
+
+def _turned(T: Mat, angle: float, rise: float) -> Mat:
+    out = np.array(T, dtype=float)
+    out[:3, :3] = g.rot_z(angle)[:3, :3] @ T[:3, :3]
+    out[:3, 3] += rise * lg.UP
+    return out
+
+
+def _screw_path(T: Mat, angle: float, rise: float, step: float = math.radians(5.0)) -> Any:
+    n = max(2, math.ceil(abs(angle) / step) + 1)
+    return np.stack([_turned(T, angle * s, rise * s) for s in np.linspace(0.0, 1.0, n)])
+
+
+# ---------------------------------------------------------------------------------- pour
+
+
+def pour(
+    b: Builder,
+    reach: Solver,
+    world: World,
+    arm: str,
+    name: str,
+    into: str,
+    angle: float,
+    where: str,
+) -> None:
+    """The arm holding open container ``name`` brings its mouth over ``into``, tilts it by
+    ``angle`` about a horizontal axis through the fingertips and turns it back."""
+    held = b.state.held.get(arm)
+    if held is None or held.name != name:
+        raise error(f"{where}: arm '{arm}' must hold '{name}' to pour it")
+    if name in b.state.capped:
+        raise error(f"{where}: '{name}' is capped: unscrew it before pouring")
+    body = lg.Body.of(world.container(name))
+    target = lg.Body.of(world.container(into))
+    T_target = b.state.base_of(into)
+    rim = T_target[:3, 3] + (target.height + POUR_CLEARANCE) * lg.UP
+    T_hand = b.state.tcp[arm]
+    # the mouth (top centre) of the held container, relative to the hand, stays put in the
+    # hand: put it over the rim
+    T_cell_base = T_hand @ g.inverse(held.T_base_tcp)
+    mouth = T_cell_base[:3, 3] + body.height * lg.UP
+    T_over = np.array(T_hand, dtype=float)
+    T_over[:3, 3] += rim - mouth
+    # tilt about the horizontal axis across the approach: the tool's x for a top grasp
+    # (x is horizontal), the tool's z for a side grasp (z is horizontal)
+    axis = T_hand[:3, 2] if abs(float(T_hand[:3, 2] @ lg.UP)) < 0.5 else T_hand[:3, 0]
+    tilt = [_tilted(T_over, axis, angle * s) for s in np.linspace(0.0, 1.0, 19)]
+    for P in (T_over, tilt[-1]):
+        if not reach(arm, P):
+            raise error(
+                f"{where}: arm '{arm}' cannot pour '{name}' over '{into}': the pose at "
+                f"{_mm(P[:3, 3])} has no inverse kinematics solution within its joint limits"
+            )
+    b.add(f"{where}: over {into}", [transit(arm, T_over)])
+    b.add(
+        f"{where}: pour {name}",
+        [ArmPath(arm, "cartesian", np.stack(tilt))],
+        facts={"pour": name, "into": into},
+    )
+    b.add(f"{where}: upright", [ArmPath(arm, "cartesian", np.stack(tilt[::-1]))])
+
+
+def _tilted(T: Mat, axis: Any, angle: float) -> Mat:
+    out = np.array(T, dtype=float)
+    R = g.axis_angle_to_matrix(list(np.asarray(axis, dtype=float)), angle)[:3, :3]
+    out[:3, :3] = R @ T[:3, :3]
+    return out

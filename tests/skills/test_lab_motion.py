@@ -1,0 +1,173 @@
+"""The lab motion primitives on the reference cable cell's two UR5e, with vials standing at
+keypoints both arms reach: grasps, state hand-over, unscrew strokes, pour, weigh facts."""
+
+from __future__ import annotations
+
+import math
+import shutil
+
+import numpy as np
+import pytest
+
+from cellengine.errors import InputError
+from cellengine.info.load import load_world
+from cellengine.motion.ik import arm_ik
+from cellengine.motion.robot import build_cell_model
+from cellengine.world import World
+from skills import lab_geometry as lg
+from skills import lab_motion as lm
+from skills.lab_state import LabState
+from tests.conftest import CELLS
+
+OBJECTS = """
+containers:
+  vial1: {kind: vial, diameter: 28, height: 60, mass: 30, at: holder.comb_b.slot,
+          cap: {kind: screw, pitch: 2, turns: 2.5}}
+  beaker: {kind: beaker, diameter: 60, height: 80, at: routing.guide2.slot}
+"""
+
+
+@pytest.fixture(scope="module")
+def world(tmp_path_factory: pytest.TempPathFactory) -> World:
+    folder = tmp_path_factory.mktemp("lab") / "cell"
+    shutil.copytree(CELLS / "cable_routing", folder)
+    objects = folder / "objects.yaml"
+    objects.write_text(objects.read_text() + OBJECTS)
+    return load_world(folder / "cell.yaml", objects)
+
+
+@pytest.fixture(scope="module")
+def reach(world: World) -> lm.Solver:
+    model = build_cell_model(world)
+    iks = {name: arm_ik(arm) for name, arm in model.arms.items()}
+    return lambda arm, T: iks[arm].solve(T) is not None
+
+
+def _start(world: World) -> LabState:
+    model = build_cell_model(world)
+    tcp = {name: arm.fk(arm.home) for name, arm in model.arms.items() if arm.home is not None}
+    return LabState.start(world, tcp)
+
+
+def test_top_pick_grasps_the_cap_from_above_and_lifts(world: World, reach: lm.Solver) -> None:
+    b = lm.Builder(_start(world))
+    lm.pick(b, reach, world, "right", "vial1", "top", "steps[0] Pick vial1")
+    labels = [s.label for s in b.segments]
+    assert labels == [
+        "steps[0] Pick vial1: to vial1",
+        "steps[0] Pick vial1: grasp vial1",
+        "steps[0] Pick vial1: lift vial1",
+    ]
+    grasp = b.segments[1].paths[0].poses[-1]
+    base = world.pose("holder.comb_b.slot")[:3, 3]
+    # on the axis, round the cap (15 mm high: its middle 7.5 mm below the 60 mm top)
+    assert np.allclose(grasp[:3, 3], base + np.array([0, 0, 0.0525]), atol=1e-12)
+    assert np.allclose(grasp[:3, 2], [0, 0, -1])
+    assert reach("right", grasp)
+    assert b.segments[1].after[0].holds == "vial1"
+    assert b.state.holder("vial1") == "right" and "vial1" not in b.state.where
+    lifted = b.segments[2].paths[0].poses[-1]
+    assert lifted[2, 3] - grasp[2, 3] == pytest.approx(lg.LIFT)
+
+
+def test_place_puts_the_container_where_asked_and_lets_go(world: World, reach: lm.Solver) -> None:
+    b = lm.Builder(_start(world))
+    lm.pick(b, reach, world, "right", "vial1", "top", "w")
+    target = world.pose("holder.comb_a.slot")
+    lm.place(b, reach, "right", target, "w")
+    assert "right" not in b.state.held
+    assert np.allclose(b.state.where["vial1"][:3, 3], target[:3, 3], atol=1e-12)
+    put = next(s for s in b.segments if s.label == "w: put down vial1")
+    assert put.after[0].mode == "open" and put.after[0].holds is None
+
+
+def test_side_grasps_come_in_horizontally_away_from_the_base_first(world: World) -> None:
+    body = lg.Body.of(world.container("vial1"))
+    T_at = world.pose("holder.comb_b.slot")
+    base = np.array([0.0, -0.35, 0.0])
+    first, *rest = lg.grasp_candidates("side", T_at, body, base)
+    away = lg.horizontal(T_at[:3, 3] - base)
+    assert np.allclose(first[:3, 2], away)
+    assert abs(first[2, 2]) < 1e-12 and abs(first[2, 1]) < 1e-12  # z and jaw horizontal
+    assert first[2, 3] == pytest.approx(T_at[2, 3] + (0.06 - 0.015) / 2)  # body middle
+    assert len(rest) == len(lg.SIDE_TURNS_DEG) - 1
+
+
+def test_unscrew_turns_two_and_a_half_turns_in_half_turn_strokes(
+    world: World, reach: lm.Solver
+) -> None:
+    assert lm.unscrew_strokes(2.5) == pytest.approx([math.pi] * 5)
+    b = lm.Builder(_start(world))
+    cap_place = world.pose("holder.comb_a.slot")
+    lm.unscrew(b, reach, world, "right", "vial1", cap_place, "steps[2] Unscrew vial1")
+    turns = [s for s in b.segments if "turn the cap" in s.label]
+    assert len(turns) == 5
+    first = turns[0].paths[0].poses
+    # rises by the pitch per turn: half a turn, 1 mm
+    assert first[-1][2, 3] - first[0][2, 3] == pytest.approx(0.001)
+    # turned +180 deg about the vertical (counter-clockwise from above)
+    R = first[-1][:3, :3] @ first[0][:3, :3].T
+    assert math.atan2(R[1, 0], R[0, 0]) == pytest.approx(math.pi, abs=1e-9)
+    assert turns[-1].before[0].holds == "vial1.cap" and not turns[-1].after
+    assert all(t.after[0].mode == "open" for t in turns[:-1])
+    assert "vial1" not in b.state.capped and "vial1" in b.state.caps
+    with pytest.raises(InputError, match="'vial1' has no cap on to unscrew"):
+        lm.unscrew(b, reach, world, "right", "vial1", cap_place, "again")
+
+
+def test_pour_is_refused_while_capped_then_tilts_over_the_target(
+    world: World, reach: lm.Solver
+) -> None:
+    b = lm.Builder(_start(world))
+    lm.pick(b, reach, world, "right", "vial1", "top", "p")
+    with pytest.raises(InputError) as e:
+        lm.pour(b, reach, world, "right", "vial1", "beaker", math.radians(100), "steps[3] Pour")
+    assert e.value.problems[0].message == (
+        "steps[3] Pour: 'vial1' is capped: unscrew it before pouring"
+    )
+    b.state = b.state.uncapped("vial1", world.pose("holder.comb_a.slot"))
+    lm.pour(b, reach, world, "right", "vial1", "beaker", math.radians(100), "steps[3] Pour")
+    over, tilt, back = b.segments[-3:]
+    assert over.paths[0].kind == "transit"
+    T0, T1 = tilt.paths[0].poses[0], tilt.paths[0].poses[-1]
+    angle = math.acos((np.trace(T1[:3, :3] @ T0[:3, :3].T) - 1) / 2)
+    assert angle == pytest.approx(math.radians(100))
+    # before tilting, the vial's mouth is over the beaker's rim plus the clearance
+    held = b.state.held["right"]
+    mouth = (T0 @ np.linalg.inv(held.T_base_tcp))[:3, 3] + np.array([0, 0, 0.06])
+    beaker = world.pose("routing.guide2.slot")[:3, 3]
+    assert np.allclose(mouth, beaker + np.array([0, 0, 0.08 + lm.POUR_CLEARANCE]), atol=1e-9)
+    assert np.allclose(back.paths[0].poses[-1], T0)
+
+
+def test_weigh_tells_the_runner_what_to_read(world: World, reach: lm.Solver) -> None:
+    b = lm.Builder(_start(world))
+    with pytest.raises(InputError, match="arm 'left' must hold 'vial1' to weigh it"):
+        lm.weigh(b, "left", "vial1", "w")
+    lm.pick(b, reach, world, "right", "vial1", "top", "w")
+    lm.weigh(b, "right", "vial1", "w")
+    assert dict(b.segments[-1].facts) == {"measure": "mass", "object": "vial1", "arm": "right"}
+
+
+def test_an_unreachable_grasp_is_refused_in_plan_terms(world: World) -> None:
+    b = lm.Builder(_start(world))
+    with pytest.raises(InputError) as e:
+        lm.pick(b, lambda arm, T: False, world, "left", "vial1", "top", "steps[1] Pick vial1")
+    assert e.value.problems[0].message == (
+        "steps[1] Pick vial1: arm 'left' cannot grasp 'vial1': none of 8 grasps round "
+        "(200.0, -20.0, 117.5) mm has an inverse kinematics solution (with its approach and "
+        "lift) within the joint limits"
+    )
+
+
+def test_paths_are_finite_and_start_where_the_arm_is(world: World, reach: lm.Solver) -> None:
+    b = lm.Builder(_start(world))
+    lm.pick(b, reach, world, "right", "vial1", "top", "w")
+    lm.place(b, reach, "right", world.pose("holder.comb_a.slot"), "w")
+    tcp = _start(world).tcp["right"]
+    for seg in b.segments:
+        for path in seg.paths:
+            assert np.isfinite(path.poses).all()
+            if path.kind == "cartesian":
+                assert np.allclose(path.poses[0][:3, 3], tcp[:3, 3], atol=1e-9)
+            tcp = path.poses[-1]
