@@ -73,6 +73,9 @@ class Segment:
     after: tuple[GripperEvent, ...] = ()
     closed_chain: tuple[str, str] | None = None
     keep_distance: tuple[str, str] | None = None
+    # (arm, object): contacts this segment makes on purpose (a gripper closing on or letting
+    # go of a container): that arm's tool is not checked against that object meanwhile
+    contacts: tuple[tuple[str, str], ...] = ()
     # what the step promises at the end of this segment, for reports and tests, e.g.
     # {"guide": "routing.guide2", "slot": [x, y, z]}
     facts: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))

@@ -50,6 +50,7 @@ class Builder:
         before: Iterable[GripperEvent] = (),
         after: Iterable[GripperEvent] = (),
         closed_chain: tuple[str, str] | None = None,
+        contacts: Iterable[tuple[str, str]] = (),
         facts: Mapping[str, Any] | None = None,
     ) -> None:
         seg = Segment(
@@ -59,6 +60,7 @@ class Builder:
             before=tuple(before),
             after=tuple(after),
             closed_chain=closed_chain,
+            contacts=tuple(contacts),
             facts=MappingProxyType(dict(facts or {})),
         )
         for path in seg.paths:
@@ -121,6 +123,7 @@ def pick(
         f"{where}: grasp {name}",
         [line(arm, lg.approach_of(T), T)],
         after=[GripperEvent(arm, GRASP, name)],
+        contacts=[(arm, name)],
     )
     b.state = b.state.grasped(arm, name)
     b.add(f"{where}: lift {name}", [line(arm, T, lg.lifted(T))])
@@ -151,8 +154,9 @@ def place(
         [line(arm, lg.lifted(T), T)],
         after=[GripperEvent(arm, OPEN)],
     )
+    name = held.name
     b.state = b.state.released(arm)
-    b.add(f"{where}: back off", [line(arm, T, lg.approach_of(T))])
+    b.add(f"{where}: back off", [line(arm, T, lg.approach_of(T))], contacts=[(arm, name)])
 
 
 def weigh(b: Builder, arm: str, name: str, where: str) -> None:
@@ -207,7 +211,8 @@ def unscrew(
         [transit(turner, lg.approach_of(T0))],
         before=[GripperEvent(turner, OPEN)],
     )
-    b.add(f"{where}: grip the cap", [line(turner, lg.approach_of(T0), T0)])
+    touch = [(turner, name)]
+    b.add(f"{where}: grip the cap", [line(turner, lg.approach_of(T0), T0)], contacts=touch)
     rise_per_rad = c.cap.pitch / (2.0 * math.pi)
     cap = f"{name}.cap"
     strokes = unscrew_strokes(c.cap.turns)
@@ -227,16 +232,18 @@ def unscrew(
             # the last stroke frees the cap: from then on the hand holds it
             before=[GripperEvent(turner, GRASP, cap if last else None)],
             after=[] if last else [GripperEvent(turner, OPEN)],
+            contacts=touch,
         )
         T = turned
         if not last:
             b.add(
                 f"{where}: turn back ({k + 1}/{len(strokes)})",
                 [ArmPath(turner, "cartesian", _screw_path(T, -angle, 0.0))],
+                contacts=touch,
             )
             T = _turned(T, -angle, 0.0)
     T_up = lg.lifted(T)
-    b.add(f"{where}: lift the cap away", [line(turner, T, T_up)])
+    b.add(f"{where}: lift the cap away", [line(turner, T, T_up)], contacts=touch)
     T_put = np.array(T_up, dtype=float)
     T_put[:3, 3] = np.asarray(T_cell_cap_place)[:3, 3] + body.cap_height / 2.0 * lg.UP
     if not reach(turner, T_put):

@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from cellengine.errors import InputError
 from cellengine.execute.checks import gate, kept_distance
-from cellengine.execute.held import Holding
+from cellengine.execute.held import Held, Holding
 from cellengine.execute.merge import MERGES, Merge, Merged, merge_rows, on_one_axis
 from cellengine.execute.preview import preview
 from cellengine.execute.refused import Refused, in_plan_terms
@@ -56,7 +56,7 @@ class Mark:
     t: float
     segments: int
     events: int
-    held: dict[str, str]
+    held: Held
     checker: CollisionChecker
 
 
@@ -131,7 +131,7 @@ class Compiler:
             self.t,
             len(self.segments),
             len(self.events),
-            self.holding.by_arm,
+            self.holding.state,
             self.holding.checker,
         )
 
@@ -139,7 +139,7 @@ class Compiler:
         self.q, self.t = mark.q, mark.t
         del self.segments[mark.segments :]
         del self.events[mark.events :]
-        self.holding.by_arm, self.holding.checker = mark.held, mark.checker
+        self.holding.restore(mark.held, mark.checker)
 
     @property
     def checker(self) -> CollisionChecker:
@@ -156,7 +156,8 @@ class Compiler:
     ) -> CompiledSegment:
         started = time.perf_counter()
         t0 = self.t
-        self._events(segment.before, t0)
+        self._events(segment.before, t0, self.q)
+        self.holding.touch(segment.contacts)
         has_transit = any(p.kind == "transit" for p in segment.paths)
         accept = preview(self.cell, self.checker, following) if has_transit else None
         parts = solve_segment(
@@ -183,7 +184,8 @@ class Compiler:
         kept = None
         if segment.keep_distance is not None:
             kept = kept_distance(trajectory, self.cell, segment.keep_distance)
-        self._events(segment.after, trajectory.end_time)
+        self._events(segment.after, trajectory.end_time, np.asarray(trajectory.q[-1]))
+        self.holding.touch(())
         summary = _report(
             segment, self.strategy, _merge_name(parts, merge, self.strategy), figures, kept
         )
@@ -200,10 +202,12 @@ class Compiler:
             return "joint"
         return self.merge
 
-    def _events(self, events: Iterable[Any], t: float) -> None:
+    def _events(self, events: Iterable[Any], t: float, q: Vec) -> None:
         for e in events:
+            arm = self.cell.arms[e.arm]
+            T_cell_tcp = arm.fk(self.cell.split(q)[e.arm])
             try:
-                self.holding.set(e.arm, e.holds)
+                self.holding.set(e.arm, e.holds, T_cell_tcp)
             except (ValueError, KeyError) as err:
                 raise Refused(f"the {e.arm} gripper cannot hold '{e.holds}': {err}") from None
             self.events.append(TimedEvent(t, e))

@@ -16,12 +16,26 @@ guides are made with. The arms themselves are still checked against every elemen
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, replace
 from weakref import WeakKeyDictionary
 
 import numpy as np
 
+from cellengine.geometry import Mat
 from cellengine.motion.collision import CollisionChecker
-from cellengine.motion.scene import CollisionScene, HeldObject, attach, held_box, held_from_world
+from cellengine.motion.robot import TOOL_GEOMETRY
+from cellengine.motion.scene import (
+    CollisionScene,
+    HeldObject,
+    Pair,
+    attach,
+    held_box,
+    held_from_world,
+    pair_key,
+    rearranged,
+    standing_container,
+)
 from cellengine.world import RefError, World
 
 DEFAULT_SIZE = 0.01  # m: the cube for an object the world gives no size for
@@ -51,41 +65,152 @@ def _platform_elements(world: World, scene: CollisionScene) -> frozenset[str]:
     return frozenset(s.name for s in scene.statics if s.name.split(".", 1)[0] in world.platforms)
 
 
-# Scenes with held objects, per base scene and per set of held objects: a grasp-release cycle
-# comes back to the same sets, and assembling a scene costs far more than a checker on it.
-_SCENES: WeakKeyDictionary[CollisionScene, dict[tuple[tuple[str, str], ...], CollisionScene]] = (
+@dataclass(frozen=True)
+class Held:
+    """What the grippers hold and where the containers stand, at one moment of a program.
+
+    ``by_arm``: arm -> the object it holds. ``grips``: arm -> T_tcp_object of a held
+    container (its centre in the fingertip frame, where it was grasped). ``standing``:
+    container -> T_cell_base of each container standing somewhere. ``contacts``: (arm,
+    object) pairs whose contact the current segment expects (a gripper closing on, or
+    letting go of, a container): that arm's tool is not checked against that object."""
+
+    by_arm: Mapping[str, str]
+    grips: Mapping[str, tuple[tuple[float, ...], ...]]
+    standing: Mapping[str, tuple[tuple[float, ...], ...]]
+    contacts: frozenset[tuple[str, str]] = frozenset()
+
+    def key(self) -> tuple[object, ...]:
+        return (
+            tuple(sorted(self.by_arm.items())),
+            tuple(sorted(self.grips.items())),
+            tuple(sorted(self.standing.items())),
+            tuple(sorted(self.contacts)),
+        )
+
+
+def _rows(T: Mat) -> tuple[tuple[float, ...], ...]:
+    return tuple(tuple(round(float(v), 12) for v in row) for row in np.asarray(T))
+
+
+def _mat(rows: tuple[tuple[float, ...], ...]) -> Mat:
+    return np.array(rows, dtype=float)
+
+
+# Scenes per base scene and per held state: a grasp-release cycle comes back to the same
+# states, and assembling a scene costs far more than a checker on it.
+_SCENES: WeakKeyDictionary[CollisionScene, dict[tuple[object, ...], CollisionScene]] = (
     WeakKeyDictionary()
 )
 
 
 class Holding:
-    """Each arm's held object, and a checker whose scene holds them (``checker``: a new one
-    whenever what is held changes; the base scene is never changed)."""
+    """What the grippers hold and where containers stand (:class:`Held`), and a checker whose
+    scene has them (``checker``: a new one whenever that changes; the base scene is never
+    changed). Containers start where objects.yaml stands them (the base scene has them
+    there); one grasped rides on the gripper, one let go stands where the hand put it."""
 
     def __init__(self, world: World, scene: CollisionScene) -> None:
         self.world = world
         self.base = scene
-        self.by_arm: dict[str, str] = {}
+        containers = world.objects.containers
+        self.state = Held(
+            {},
+            {},
+            {n: _rows(world.pose(c.at)) for n, c in containers.items() if c.at is not None},
+        )
         self.checker = CollisionChecker(scene)
 
-    def set(self, arm: str, obj: str | None) -> None:
-        """``arm`` holds ``obj`` from now on (None: nothing). ValueError when the object
-        cannot ride on the gripper (it intersects the wrist)."""
-        if self.by_arm.get(arm) == obj:
+    @property
+    def by_arm(self) -> Mapping[str, str]:
+        return self.state.by_arm
+
+    def restore(self, state: Held, checker: CollisionChecker) -> None:
+        self.state, self.checker = state, checker
+
+    def set(self, arm: str, obj: str | None, T_cell_tcp: Mat | None = None) -> None:
+        """``arm`` holds ``obj`` from now on (None: nothing), its fingertips at
+        ``T_cell_tcp`` (needed when a container is grasped or let go). ValueError when the
+        object cannot ride on the gripper (it intersects the wrist)."""
+        s = self.state
+        if s.by_arm.get(arm) == obj:
             return
-        held = dict(self.by_arm)
-        held.pop(arm, None)
+        by_arm, grips, standing = dict(s.by_arm), dict(s.grips), dict(s.standing)
+        was = by_arm.pop(arm, None)
+        if was is not None and arm in grips:
+            # a container let go stands where the hand put it
+            grip = _mat(grips.pop(arm))
+            T_centre = _need(T_cell_tcp, arm, was) @ grip
+            standing[was] = _rows(T_centre @ _half_height(self.world, was, -1.0))
         if obj is not None:
-            held[arm] = obj
-        key = tuple(sorted(held.items()))
+            by_arm[arm] = obj
+            if obj in standing:
+                T_centre = _mat(standing.pop(obj)) @ _half_height(self.world, obj, 1.0)
+                grips[arm] = _rows(np.linalg.inv(_need(T_cell_tcp, arm, obj)) @ T_centre)
+        self._use(Held(by_arm, grips, standing, s.contacts))
+
+    def touch(self, contacts: Iterable[tuple[str, str]]) -> None:
+        """The contacts the next segment expects (see :class:`Held`)."""
+        s = self.state
+        self._use(Held(s.by_arm, s.grips, s.standing, frozenset(contacts)))
+
+    def _use(self, state: Held) -> None:
+        key = state.key()
         scenes = _SCENES.setdefault(self.base, {})
         if key not in scenes:
-            scenes[key] = self._scene(key)
-        self.by_arm = held
+            scenes[key] = self._scene(state)
+        self.state = state
         self.checker = CollisionChecker(scenes[key])
 
-    def _scene(self, key: tuple[tuple[str, str], ...]) -> CollisionScene:
-        scene = self.base
-        for arm, obj in key:
-            scene = attach(scene, held_object(self.world, scene, arm, obj))
-        return scene
+    def _scene(self, state: Held) -> CollisionScene:
+        if not state.grips and not state.contacts and self._standing_as_built(state):
+            scene = self.base
+            for arm, obj in sorted(state.by_arm.items()):
+                scene = attach(scene, held_object(self.world, scene, arm, obj))
+            return scene
+        containers = self.world.objects.containers
+        statics = [s for s in self.base.statics if s.name not in containers]
+        statics += [
+            standing_container(self.world, n, _mat(T)) for n, T in sorted(state.standing.items())
+        ]
+        held: dict[str, HeldObject] = {}
+        for arm, obj in sorted(state.by_arm.items()):
+            h = held_object(self.world, self.base, arm, obj)
+            if arm in state.grips:
+                h = replace(h, T_tcp_object=_mat(state.grips[arm]))
+            held[h.name] = h
+        allowed: dict[Pair, str] = {}
+        for arm, obj in state.contacts:
+            # the arm's tool, and what it holds (a cap coming off), against the object
+            # standing or in either hand
+            mine = [f"{arm}/{TOOL_GEOMETRY}"]
+            if arm in state.by_arm:
+                mine.append(held_name(arm, state.by_arm[arm]))
+            for name in (obj, *(held_name(a, obj) for a in state.by_arm)):
+                for m in mine:
+                    if m != name:
+                        allowed[pair_key(m, name)] = "contact"
+        return rearranged(self.base, statics, held, allowed)
+
+    def _standing_as_built(self, state: Held) -> bool:
+        containers = self.world.objects.containers
+        built = {
+            s.name: _rows(s.T_cell_shape @ _half_height(self.world, s.name, -1.0))
+            for s in self.base.statics
+            if s.name in containers
+        }
+        return built == dict(state.standing)
+
+
+def _half_height(world: World, name: str, sign: float) -> Mat:
+    c = world.container(name)
+    h = float(c.height or (c.size[2] if c.size else 0.0))
+    T = np.eye(4)
+    T[2, 3] = sign * h / 2.0
+    return T
+
+
+def _need(T: Mat | None, arm: str, obj: str) -> Mat:
+    if T is None:
+        raise ValueError(f"where the {arm} gripper is must be known to grasp or let go '{obj}'")
+    return T

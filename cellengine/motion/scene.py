@@ -56,6 +56,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
+from cellengine import geometry as g
 from cellengine.errors import InputError
 from cellengine.geometry import Mat
 from cellengine.info.cell import Obstacle
@@ -478,7 +479,37 @@ def environment(world: World) -> tuple[list[StaticShape], list[str]]:
     for oname, obstacle in world.cell.obstacles.items():
         shape = _obstacle_shape(obstacle)
         out.append(StaticShape(oname, obstacle.pose.matrix(), shape, shape, True))
+    for cname, c in world.objects.containers.items():
+        if c.at is not None:
+            out.append(standing_container(world, cname, world.pose(c.at)))
     return out, notes
+
+
+def standing_container(world: World, name: str, T_cell_base: Mat) -> StaticShape:
+    """Container ``name`` standing with its base at ``T_cell_base``: its cylinder (or box),
+    named as the container, centred half its height above the base."""
+    c = world.container(name)
+    if c.height is None or (c.diameter is None and c.size is None):
+        raise ValueError(f"container '{name}' needs a height and a diameter or a size")
+    T = np.array(T_cell_base, dtype=float) @ g.transform(np.eye(3), (0.0, 0.0, c.height / 2))
+    if c.size is not None:
+        shape: Any = coal.Box(*map(float, c.size))
+    else:
+        assert c.diameter is not None
+        shape = coal.Cylinder(c.diameter / 2, c.height)
+    return StaticShape(name, T, shape, shape, True)
+
+
+def rearranged(
+    scene: CollisionScene,
+    statics: Sequence[StaticShape],
+    held: Mapping[str, HeldObject],
+    allowed: Mapping[Pair, str],
+) -> CollisionScene:
+    """``scene`` with other environment objects (containers put elsewhere), held objects
+    and more pairs never checked (``allowed``: pair -> reason); its sampled pairs kept."""
+    fixed = {**scene.fixed_reasons, **allowed}
+    return assemble(scene.cell, statics, held, fixed, scene.notes)
 
 
 def _obstacle_shape(o: Obstacle) -> Any:

@@ -171,3 +171,56 @@ def test_paths_are_finite_and_start_where_the_arm_is(world: World, reach: lm.Sol
             if path.kind == "cartesian":
                 assert np.allclose(path.poses[0][:3, 3], tcp[:3, 3], atol=1e-9)
             tcp = path.poses[-1]
+
+
+def test_pick_and_place_compile_with_the_vial_in_the_scene(world: World, reach: lm.Solver) -> None:
+    """Through the real executor: the standing vial is a collision object (the tool may touch
+    it only while grasping it or backing off it), it rides on the gripper at the grasp's
+    offset, and stands where it was put down afterwards."""
+    from cellengine.execute import Compiler
+    from cellengine.motion.collision import CollisionChecker
+    from cellengine.motion.scene import build_scene
+
+    model = build_cell_model(world)
+    checker = CollisionChecker(build_scene(model, world))
+    assert "vial1" in checker.scene.names and "beaker" in checker.scene.names
+    state = _start(world)
+    b = lm.Builder(state)
+    lm.pick(b, reach, world, "right", "vial1", "top", "w")
+    target = world.pose("holder.comb_a.slot")
+    lm.place(b, reach, "right", target, "w")
+    q0 = np.concatenate([a.home for a in model.arms.values() if a.home is not None])
+    c = Compiler(world, model, checker, q0, "split")
+    program = c.add_all(b.segments)
+    assert len(program.segments) == len(b.segments)
+    held = c.holding.state
+    assert not held.by_arm and not held.grips
+    stood = np.array(held.standing["vial1"])
+    assert np.allclose(stood[:3, 3], target[:3, 3], atol=1e-6)
+    # the checker has it there now: its cylinder's centre half its height above the place
+    (shape,) = [s for s in c.checker.scene.statics if s.name == "vial1"]
+    assert np.allclose(shape.T_cell_shape[:3, 3], target[:3, 3] + np.array([0, 0, 0.03]))
+
+
+def test_the_vial_blocks_a_tool_that_does_not_grasp_it(world: World, reach: lm.Solver) -> None:
+    """At the grasp the tool reaches into the vial's cylinder: allowed only as a contact."""
+    from cellengine.execute import Compiler
+    from cellengine.execute.held import Holding
+    from cellengine.motion.collision import CollisionChecker
+    from cellengine.motion.scene import build_scene
+
+    model = build_cell_model(world)
+    scene = build_scene(model, world)
+    b = lm.Builder(_start(world))
+    lm.pick(b, reach, world, "right", "vial1", "top", "w")
+    q0 = np.concatenate([a.home for a in model.arms.values() if a.home is not None])
+    c = Compiler(world, model, CollisionChecker(scene), q0, "split")
+    program = c.add_all(b.segments[:2])  # up to the grasp
+    q = np.asarray(program.segments[-1].trajectory.q[-1])
+    holding = Holding(world, scene)
+    contact = holding.checker.check(q)
+    assert contact is not None and {"right/tool", "vial1"} == set(contact.pair)
+    holding.touch([("right", "vial1")])
+    assert holding.checker.check(q) is None
+    holding.touch(())
+    assert holding.checker.check(q) is not None
