@@ -106,6 +106,11 @@ class Zone(Frozen):
     min: Vec3Length
     max: Vec3Length
     robots: tuple[Name, ...] = Field(min_length=1)
+    # keypoints (platform.element[.keypoint]) of a shared zone: where one robot puts an
+    # object down for another (handover, cooperation mode 1), and where two robots meet to
+    # work on one object together (cooperation mode 2)
+    handovers: tuple[str, ...] = ()
+    cooperation: tuple[str, ...] = ()
 
     @model_validator(mode="after")
     def _ordered(self) -> Zone:

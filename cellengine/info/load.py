@@ -150,6 +150,20 @@ def _load_objects(path: Path) -> tuple[Objects, YamlDoc]:
     return validate(Objects, doc, _units(doc).context()), doc
 
 
+def _check_zone_keypoints(world: World, doc: YamlDoc) -> list[Problem]:
+    """A zone's handover and cooperation places must be keypoints of the cell."""
+    out: list[Problem] = []
+    for name, zone in world.cell.zones.items():
+        for key in ("handovers", "cooperation"):
+            for i, ref in enumerate(getattr(zone, key)):
+                try:
+                    world.resolve(ref)
+                except RefError as e:
+                    loc = ("zones", name, key, i)
+                    out.extend(doc.error(f"zones.{name}.{key}[{i}]: {e}", loc).problems)
+    return out
+
+
 def _check_objects(world: World, doc: YamlDoc) -> list[Problem]:
     """Where each container stands must be a keypoint of the cell."""
     out: list[Problem] = []
@@ -179,6 +193,8 @@ def load_world(cell_path: Path, objects_path: Path | None = None) -> World:
         except InputError as e:
             problems.extend(e.problems)
     world = World(cell, cell_path, platforms, objects)
+    if not problems:
+        problems.extend(_check_zone_keypoints(world, doc))
     if objects_doc is not None and not problems:
         problems.extend(_check_objects(world, objects_doc))
     if problems:

@@ -118,3 +118,27 @@ def test_a_plan_checks_where_its_objects_stand(tmp_path: Path) -> None:
     (problem,) = e.value.problems
     assert problem.file == str(objects)
     assert "containers.vial1.at: unknown element 'holder.comb_z'" in problem.message
+
+
+def test_zone_places_must_be_keypoints(tmp_path: Path) -> None:
+    extra = """\
+zones:
+  shared:
+    min: [0, -100, 0]
+    max: [600, 100, 400]
+    robots: [left, right]
+    handovers: [holder.comb_a.slot]
+    cooperation: [holder.comb_q]
+"""
+    path = _cell(tmp_path, extra)
+    line = path.read_text().splitlines().index("    cooperation: [holder.comb_q]") + 1
+    with pytest.raises(InputError) as e:
+        load_world(path)
+    (problem,) = e.value.problems
+    assert str(problem).split("cell.yaml", 1)[1] == (
+        f":{line}:19: zones.shared.cooperation[0]: unknown element 'holder.comb_q'; known: "
+        "comb_a, comb_b"
+    )
+    path.write_text(path.read_text().replace("holder.comb_q", "holder.comb_b"))
+    zone = load_world(path).cell.zones["shared"]
+    assert (zone.handovers, zone.cooperation) == (("holder.comb_a.slot",), ("holder.comb_b",))
