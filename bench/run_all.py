@@ -22,6 +22,7 @@ MODULES = [
     "bench_cartesian",
     "bench_plan",
     "bench_execute",
+    "bench_allocate",
 ]
 
 
