@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import replace
 from types import MappingProxyType
 from typing import Any
 
@@ -132,31 +133,44 @@ def pick(
 def place(
     b: Builder, reach: Solver, arm: str, T_cell_base: Mat, where: str, label: str = "put down"
 ) -> None:
-    """``arm`` puts what it holds down standing at ``T_cell_base`` (turned about z as the
-    hand is), opens and backs off along its approach."""
+    """``arm`` puts what it holds down standing at ``T_cell_base``, opens and backs off along
+    its approach."""
+    name, T = set_down(b, reach, arm, T_cell_base, where, label)
+    b.segments[-1] = replace(b.segments[-1], after=(GripperEvent(arm, OPEN),))
+    b.state = b.state.released(arm)
+    b.add(f"{where}: back off", [line(arm, T, lg.approach_of(T))], contacts=[(arm, name)])
+
+
+def hold(b: Builder, reach: Solver, arm: str, T_cell_base: Mat, where: str) -> None:
+    """``arm`` sets what it holds down at ``T_cell_base`` and keeps holding it (for another
+    arm to work on it)."""
+    set_down(b, reach, arm, T_cell_base, where, "hold")
+
+
+def set_down(
+    b: Builder, reach: Solver, arm: str, T_cell_base: Mat, where: str, label: str
+) -> tuple[str, Mat]:
+    """Carry what ``arm`` holds over ``T_cell_base`` and lower it there: the container turned
+    about its axis as little as lets the arm reach (it is round); the object's name and the
+    hand's pose at the end."""
     held = b.state.held.get(arm)
     if held is None:
         raise error(f"{where}: arm '{arm}' holds nothing to put down")
-    # keep the hand's orientation: the container's base goes to the target's position
     T_now_base = b.state.tcp[arm] @ g.inverse(held.T_base_tcp)
-    T_base = np.array(T_now_base, dtype=float)
-    T_base[:3, 3] = np.asarray(T_cell_base)[:3, 3]
-    T = T_base @ held.T_base_tcp
-    for what, P in (("place", T), ("place approach", lg.lifted(T)), ("retreat", lg.approach_of(T))):
-        if not reach(arm, P):
-            raise error(
-                f"{where}: out of reach of arm '{arm}': the {what} pose at {_mm(P[:3, 3])} has "
-                "no inverse kinematics solution within its joint limits"
-            )
+    target = np.asarray(T_cell_base)[:3, 3]
+    for deg in lg.SIDE_TURNS_DEG:
+        R = g.rot_z(math.radians(deg)) @ T_now_base[:3, :3]
+        T = g.transform(R, target) @ held.T_base_tcp
+        if all(reach(arm, P) for P in (T, lg.lifted(T), lg.approach_of(T))):
+            break
+    else:
+        raise error(
+            f"{where}: out of reach of arm '{arm}': it cannot set '{held.name}' down at "
+            f"{_mm(target)} (no inverse kinematics solution free of collisions for any turn)"
+        )
     b.add(f"{where}: carry {held.name}", [transit(arm, lg.lifted(T))])
-    b.add(
-        f"{where}: {label} {held.name}",
-        [line(arm, lg.lifted(T), T)],
-        after=[GripperEvent(arm, OPEN)],
-    )
-    name = held.name
-    b.state = b.state.released(arm)
-    b.add(f"{where}: back off", [line(arm, T, lg.approach_of(T))], contacts=[(arm, name)])
+    b.add(f"{where}: {label} {held.name}", [line(arm, lg.lifted(T), T)])
+    return held.name, T
 
 
 def weigh(b: Builder, arm: str, name: str, where: str) -> None:
@@ -189,13 +203,12 @@ def unscrew(
     world: World,
     turner: str,
     name: str,
-    T_cell_cap_place: Mat,
     where: str,
 ) -> None:
     """``turner`` grips the cap of container ``name`` (held still by the other arm) from
     above and turns it off counter-clockwise, rising by the pitch per turn, in strokes it
-    releases and re-grasps between; then lifts the cap away and puts it down at
-    ``T_cell_cap_place``."""
+    releases and re-grasps between; then lifts the cap away, holding it (put it down with
+    :func:`put_cap_down` once the other arm has gone)."""
     c = world.container(name)
     if c.cap is None or name not in b.state.capped:
         raise error(f"{where}: '{name}' has no cap on to unscrew")
@@ -244,9 +257,18 @@ def unscrew(
             T = _turned(T, -angle, 0.0)
     T_up = lg.lifted(T)
     b.add(f"{where}: lift the cap away", [line(turner, T, T_up)], contacts=touch)
-    T_put = np.array(T_up, dtype=float)
-    T_put[:3, 3] = np.asarray(T_cell_cap_place)[:3, 3] + body.cap_height / 2.0 * lg.UP
-    if not reach(turner, T_put):
+    b.state = b.state.uncapped(name, T_up)  # in the turner's hand: see put_cap_down
+
+
+def put_cap_down(
+    b: Builder, reach: Solver, world: World, turner: str, name: str, T_place: Mat, where: str
+) -> None:
+    """The turner puts the cap of ``name`` it holds (after :func:`unscrew`) down at
+    ``T_place`` (the cap's base there) and backs off upwards."""
+    body = lg.Body.of(world.container(name))
+    T_put = np.array(b.state.tcp[turner], dtype=float)
+    T_put[:3, 3] = np.asarray(T_place)[:3, 3] + body.cap_height / 2.0 * lg.UP
+    if not (reach(turner, T_put) and reach(turner, lg.lifted(T_put))):
         raise error(f"{where}: arm '{turner}' cannot put the cap down at {_mm(T_put[:3, 3])}")
     b.add(f"{where}: carry the cap", [transit(turner, lg.lifted(T_put))])
     b.add(
@@ -283,8 +305,10 @@ def pour(
     angle: float,
     where: str,
 ) -> None:
-    """The arm holding open container ``name`` brings its mouth over ``into``, tilts it by
-    ``angle`` about a horizontal axis through the fingertips and turns it back."""
+    """The arm holding open container ``name`` brings it beside and above ``into``, tilts it
+    by ``angle`` about a horizontal axis through the fingertips, so that its mouth swings
+    over the target's axis, and turns it back. Held that high, no part of it goes below
+    the target's rim plus :data:`POUR_CLEARANCE` at any tilt."""
     held = b.state.held.get(arm)
     if held is None or held.name != name:
         raise error(f"{where}: arm '{arm}' must hold '{name}' to pour it")
@@ -293,17 +317,19 @@ def pour(
     body = lg.Body.of(world.container(name))
     target = lg.Body.of(world.container(into))
     T_target = b.state.base_of(into)
-    rim = T_target[:3, 3] + (target.height + POUR_CLEARANCE) * lg.UP
     T_hand = b.state.tcp[arm]
-    # the mouth (top centre) of the held container, relative to the hand, stays put in the
-    # hand: put it over the rim
-    T_cell_base = T_hand @ g.inverse(held.T_base_tcp)
-    mouth = T_cell_base[:3, 3] + body.height * lg.UP
-    T_over = np.array(T_hand, dtype=float)
-    T_over[:3, 3] += rim - mouth
     # tilt about the horizontal axis across the approach: the tool's x for a top grasp
     # (x is horizontal), the tool's z for a side grasp (z is horizontal)
     axis = T_hand[:3, 2] if abs(float(T_hand[:3, 2] @ lg.UP)) < 0.5 else T_hand[:3, 0]
+    axis = lg.horizontal(axis)
+    # the fingertips are on the container's axis, `grip` above its base
+    grip = float(held.T_base_tcp[2, 3])
+    above = body.height - grip  # from the fingertips to the mouth
+    # tilting by +angle about `axis` swings the mouth along axis x up, by above * sin(angle)
+    swing = np.cross(axis, lg.UP) * above * math.sin(angle)
+    reach_down = max(grip, above) + body.diameter / 2.0  # the farthest point from the pivot
+    T_over = np.array(T_hand, dtype=float)
+    T_over[:3, 3] = T_target[:3, 3] - swing + (target.height + POUR_CLEARANCE + reach_down) * lg.UP
     tilt = [_tilted(T_over, axis, angle * s) for s in np.linspace(0.0, 1.0, 19)]
     for P in (T_over, tilt[-1]):
         if not reach(arm, P):

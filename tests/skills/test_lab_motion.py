@@ -9,6 +9,7 @@ import shutil
 import numpy as np
 import pytest
 
+from cellengine import geometry as g
 from cellengine.errors import InputError
 from cellengine.info.load import load_world
 from cellengine.motion.ik import arm_ik
@@ -99,7 +100,8 @@ def test_unscrew_turns_two_and_a_half_turns_in_half_turn_strokes(
     assert lm.unscrew_strokes(2.5) == pytest.approx([math.pi] * 5)
     b = lm.Builder(_start(world))
     cap_place = world.pose("holder.comb_a.slot")
-    lm.unscrew(b, reach, world, "right", "vial1", cap_place, "steps[2] Unscrew vial1")
+    lm.unscrew(b, reach, world, "right", "vial1", "steps[2] Unscrew vial1")
+    lm.put_cap_down(b, reach, world, "right", "vial1", cap_place, "steps[2] Unscrew vial1")
     turns = [s for s in b.segments if "turn the cap" in s.label]
     assert len(turns) == 5
     first = turns[0].paths[0].poses
@@ -112,7 +114,7 @@ def test_unscrew_turns_two_and_a_half_turns_in_half_turn_strokes(
     assert all(t.after[0].mode == "open" for t in turns[:-1])
     assert "vial1" not in b.state.capped and "vial1" in b.state.caps
     with pytest.raises(InputError, match="'vial1' has no cap on to unscrew"):
-        lm.unscrew(b, reach, world, "right", "vial1", cap_place, "again")
+        lm.unscrew(b, reach, world, "right", "vial1", "again")
 
 
 def test_pour_is_refused_while_capped_then_tilts_over_the_target(
@@ -129,14 +131,21 @@ def test_pour_is_refused_while_capped_then_tilts_over_the_target(
     lm.pour(b, reach, world, "right", "vial1", "beaker", math.radians(100), "steps[3] Pour")
     over, tilt, back = b.segments[-3:]
     assert over.paths[0].kind == "transit"
-    T0, T1 = tilt.paths[0].poses[0], tilt.paths[0].poses[-1]
+    poses = tilt.paths[0].poses
+    T0, T1 = poses[0], poses[-1]
     angle = math.acos((np.trace(T1[:3, :3] @ T0[:3, :3].T) - 1) / 2)
     assert angle == pytest.approx(math.radians(100))
-    # before tilting, the vial's mouth is over the beaker's rim plus the clearance
     held = b.state.held["right"]
-    mouth = (T0 @ np.linalg.inv(held.T_base_tcp))[:3, 3] + np.array([0, 0, 0.06])
     beaker = world.pose("routing.guide2.slot")[:3, 3]
-    assert np.allclose(mouth, beaker + np.array([0, 0, 0.08 + lm.POUR_CLEARANCE]), atol=1e-9)
+    rim = beaker[2] + 0.08 + lm.POUR_CLEARANCE
+    # tilted, the vial's mouth is over the beaker's axis
+    mouth = (T1 @ np.linalg.inv(held.T_base_tcp) @ g.transform(None, [0, 0, 0.06]))[:3, 3]
+    assert np.allclose(mouth[:2], beaker[:2], atol=1e-9)
+    # and at no tilt does any point of the vial's axis come below the rim
+    for T in poses:
+        T_base = T @ np.linalg.inv(held.T_base_tcp)
+        for z in np.linspace(0.0, 0.06, 7):
+            assert (T_base @ g.transform(None, [0, 0, z]))[2, 3] > rim
     assert np.allclose(back.paths[0].poses[-1], T0)
 
 

@@ -1,0 +1,352 @@
+"""A lab plan to segments: the steps as allocation tasks, the allocator's mission, and each
+robot's actions turned into motion primitives in the mission's order.
+
+Each step is a sub-task on one object, made of motion primitives with the skill each needs
+(skills/lab_robots.py) and where it starts and ends:
+
+- ``Place``: pick where the object stands, place at ``to``;
+- ``Pick``: pick where it stands (the robot keeps it);
+- ``Handover``: pick where it stands, put it down at ``at`` (a handover place);
+- ``Weigh``: pick, weigh (a load cell), put it back;
+- ``Unscrew``: pick, hold at a cooperation place, turn the cap off (another robot, at the
+  same time: cooperation mode 2), put it back;
+- ``Pour``: pick, pour over ``into``, put it back.
+
+Steps on the same object keep their order in the file (each comes after the previous one on
+that object), besides the ``after`` the plan gives. An object chosen at run time
+(``heavier_of``) is planned at every candidate's place for the allocation; its motion uses
+the masses known (measured, or objects.yaml's until then).
+
+The program runs the mission's actions one robot at a time in the mission's planned order,
+so no two robots are ever in the shared zone together except when they cooperate.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from cellengine.allocate import AnyOf, Mission, Primitive, Problem, Robot, Task, Zone, allocate
+from cellengine.allocation.options import Action
+from cellengine.errors import InputError
+from cellengine.errors import Problem as Complaint
+from cellengine.execute import home_configuration
+from cellengine.geometry import Mat
+from cellengine.info.objects import Objects
+from cellengine.motion.collision import CollisionChecker
+from cellengine.motion.ik import arm_ik
+from cellengine.motion.robot import CellModel
+from cellengine.motion.scene import build_scene
+from cellengine.program import Segment
+from cellengine.skill import HeavierOf, LighterOf, ObjectRef, Skill
+from cellengine.world import World
+from skills import lab_geometry as lg
+from skills import lab_motion as lm
+from skills.lab import Handover, Pick, Place, Pour, Unscrew, Weigh
+from skills.lab_robots import robot_skills
+from skills.lab_state import LabState
+
+LabSkill = Pick | Place | Handover | Unscrew | Weigh | Pour
+Point = tuple[float, float, float]
+# Rough durations (s) of each primitive for the mission's schedule; the executor times the
+# real motion.
+DURATION = {"pick": 3.0, "place": 3.0, "weigh": 1.0, "hold": 3.0, "turn_cap": 8.0, "pour": 4.0}
+
+
+@dataclass(frozen=True)
+class LabPlan:
+    problem: Problem
+    mission: Mission
+    segments: list[Segment]
+    state: LabState
+
+
+def plan_lab_steps(
+    world: World,
+    cell: CellModel,
+    steps: Sequence[Skill],
+    masses: Mapping[str, float] | None = None,
+) -> LabPlan:
+    """The mission and its segments (see the module notes). ``masses``: measured masses
+    (kg) by object; objects.yaml's for the others."""
+    known = {n: float(c.mass) for n, c in world.objects.containers.items() if c.mass is not None}
+    known.update(masses or {})
+    reach = _reach(world, cell)
+    problem = build_problem(world, cell, steps, reach)
+    try:
+        mission = allocate(problem)
+    except ValueError as e:
+        raise InputError(Complaint(str(e))) from None
+    tcp = {
+        name: arm.fk(arm.home if arm.home is not None else np.zeros(arm.nq))
+        for name, arm in cell.arms.items()
+    }
+    b = lm.Builder(LabState.start(world, tcp))
+    by_id = {_id(s, i): (i, s) for i, s in enumerate(steps)}
+    for task in mission.order:
+        i, step = by_id[task]
+        assert isinstance(step, LabSkill)  # _tasks refused any other
+        b.state = replace(b.state, step=i)
+        where = f"steps[{i}] {step.skill}"
+        actions = _actions(mission, task)
+        for action in actions:
+            _do(b, world, cell, reach, step, action, known, where)
+        # as the published platform does: each robot retracts after its work, so the next
+        # task finds the shared zone clear; a turner first puts the cap down, once the
+        # holder has gone
+        turners = [a.robot for a in actions if a.kind == "turn_cap"]
+        for arm in dict.fromkeys(a.robot for a in actions if a.robot not in turners):
+            b.add(f"{where}: {arm} back to its rest", [lm.transit(arm, tcp[arm])])
+        for arm in turners:
+            name = _resolve(step.object, known)
+            T = _cap_place(world, b, reach, arm)
+            lm.put_cap_down(b, reach, world, arm, name, T, where)
+            b.add(f"{where}: {arm} back to its rest", [lm.transit(arm, tcp[arm])])
+    return LabPlan(problem, mission, b.segments, b.state)
+
+
+# ------------------------------------------------------------------------------ the problem
+
+
+def build_problem(
+    world: World, cell: CellModel, steps: Sequence[Skill], reach: lm.Solver
+) -> Problem:
+    skills = robot_skills(world, cell)
+    robots = tuple(
+        Robot(
+            name,
+            skills[name],
+            _point(arm.fk(arm.home if arm.home is not None else np.zeros(arm.nq))[:3, 3]),
+            reach=_point_reach(world, name, reach),
+        )
+        for name, arm in cell.arms.items()
+    )
+    zones = tuple(Zone(n, z.min, z.max, frozenset(z.robots)) for n, z in world.cell.zones.items())
+    handovers = tuple(
+        _point(world.pose(ref)[:3, 3]) for z in world.cell.zones.values() for ref in z.handovers
+    )
+    return Problem(robots, tuple(_tasks(world, steps)), zones, handovers)
+
+
+def _tasks(world: World, steps: Sequence[Skill]) -> list[Task]:
+    last_on: dict[str, str] = {}  # object -> the id of the last step on it
+    where: dict[str, Point] = {
+        n: _point(world.pose(c.at)[:3, 3])
+        for n, c in world.objects.containers.items()
+        if c.at is not None
+    }
+    out = []
+    for i, step in enumerate(steps):
+        if not isinstance(step, LabSkill):
+            raise InputError(Complaint(f"steps[{i}]: {step.skill} is not a lab skill"))
+        names = _candidates(step.object)
+        loc: Point | AnyOf = (
+            where[names[0]] if len(names) == 1 else AnyOf(tuple(where[n] for n in names))
+        )
+        prims = _primitives(world, step, loc, where)
+        after = set(step.after) | {last_on[n] for n in names if n in last_on}
+        arms = (
+            None
+            if step.arm == "auto"
+            else (tuple(world.cell.robots) if step.arm == "both" else (step.arm,))
+        )
+        tid = _id(step, i)
+        out.append(Task(tid, prims, tuple(sorted(after)), arms))
+        for n in names:
+            last_on[n] = tid
+        if isinstance(step, Place | Handover):
+            target = step.to if isinstance(step, Place) else step.at
+            if target is not None:
+                for n in names:
+                    where[n] = _point(world.pose(target)[:3, 3])
+    return out
+
+
+def _primitives(
+    world: World, step: LabSkill, loc: Point | AnyOf, where: Mapping[str, Point]
+) -> tuple[Primitive, ...]:
+    def p(kind: str, start: Point | AnyOf | None = None, **kw: bool) -> Primitive:
+        return Primitive(
+            kind, kind, start if start is not None else loc, None, DURATION[kind], **kw
+        )
+
+    if isinstance(step, Place):
+        return (p("pick"), p("place", _point(world.pose(step.to)[:3, 3]), releases=True))
+    if isinstance(step, Pick):
+        return (p("pick"),)
+    if isinstance(step, Handover):
+        if step.at is None:
+            return (p("pick"),)
+        return (p("pick"), p("place", _point(world.pose(step.at)[:3, 3]), releases=True))
+    if isinstance(step, Weigh):
+        return (p("pick"), p("weigh"), p("place", releases=True))
+    if isinstance(step, Unscrew):
+        meet = _cooperation(world)
+        return (
+            p("pick"),
+            p("hold", meet),
+            p("turn_cap", meet, with_previous=True),
+            p("place", releases=True),
+        )
+    assert isinstance(step, Pour)
+    targets = _candidates(step.into)
+    into: Point | AnyOf = (
+        where[targets[0]] if len(targets) == 1 else AnyOf(tuple(where[n] for n in targets))
+    )
+    return (p("pick"), p("pour", into), p("place", releases=True))
+
+
+# ------------------------------------------------------------------------------- the motion
+
+
+def _actions(mission: Mission, task: str) -> list[Action]:
+    return [a for seg in mission.options[task].segments for a in seg.actions]
+
+
+def _do(
+    b: lm.Builder,
+    world: World,
+    cell: CellModel,
+    reach: lm.Solver,
+    step: LabSkill,
+    a: Action,
+    masses: Mapping[str, float],
+    where: str,
+) -> None:
+    name = _resolve(step.object, masses)
+    names = _candidates(step.object)
+
+    def at(loc: tuple[Point, ...]) -> Mat:
+        # a location planned for every candidate object: the chosen one's
+        return _pose_at(world, loc[names.index(name)] if len(loc) == len(names) else loc[0])
+
+    arm = a.robot
+    grasp = _grasp(world, arm)
+    if a.kind in ("pick", "handover_pick"):
+        if b.state.holder(name) != arm:
+            lm.pick(b, reach, world, arm, name, grasp, where)
+    elif a.kind in ("place", "handover_place"):
+        lm.place(b, reach, arm, at(a.end), where)
+    elif a.kind == "weigh":
+        lm.weigh(b, arm, name, where)
+    elif a.kind == "hold":
+        lm.hold(b, reach, arm, at(a.start), where)
+    elif a.kind == "turn_cap":
+        lm.unscrew(b, reach, world, arm, name, where)
+    elif a.kind == "pour":
+        assert isinstance(step, Pour)
+        lm.pour(b, reach, world, arm, name, _resolve(step.into, masses), step.angle, where)
+    else:
+        raise InputError(Complaint(f"{where}: no motion for '{a.kind}'"))
+
+
+def _cap_place(world: World, b: lm.Builder, reach: lm.Solver, arm: str) -> Mat:
+    """Where the cap goes: the first handover place the arm reaches with nothing on it."""
+    taken = [T[:3, 3] for T in b.state.where.values()]
+    for z in world.cell.zones.values():
+        for ref in z.handovers:
+            T = world.pose(ref)
+            free = all(np.linalg.norm(T[:3, 3] - p) > 0.05 for p in taken)
+            if free and reach(arm, lg.top_grasp(T[:3, 3] + 0.05 * lg.UP, 0.0)):
+                return T
+    raise InputError(
+        Complaint(f"no free handover place within reach of arm '{arm}' to put a cap down")
+    )
+
+
+# ------------------------------------------------------------------------------- helpers
+
+
+def _reach(world: World, cell: CellModel) -> lm.Solver:
+    """Whether an arm reaches a pose in a configuration free of collisions with itself, the
+    platforms, the obstacles and the other arms at home (the containers left out: the
+    grasp touches them, and where they stand changes)."""
+    iks = {name: arm_ik(arm) for name, arm in cell.arms.items()}
+    bare = replace(world, objects=Objects())
+    checker = CollisionChecker(build_scene(cell, bare))
+    home = home_configuration(cell)
+
+    def test(arm: str, T: Mat) -> bool:
+        q = np.array(home, dtype=float)
+        for sol in iks[arm].solve_all(T):
+            q[cell.slices[arm]] = sol
+            if checker.check(q) is None:
+                return True
+        return False
+
+    return test
+
+
+def _point_reach(world: World, arm: str, reach: lm.Solver) -> Callable[[Point], bool]:
+    """Whether the arm can grasp something standing at a point (its tool's grasp, any
+    heading), cached per point."""
+    grasp = _grasp(world, arm)
+    base = world.cell.robots[arm].base.matrix()[:3, 3]
+    body = lg.Body(0.06, 0.028, 0.0)  # a typical vial: the reach test of a place
+    seen: dict[Point, bool] = {}
+
+    def test(p: Point) -> bool:
+        if p not in seen:
+            T_at = np.eye(4)
+            T_at[:3, 3] = p
+            seen[p] = any(
+                reach(arm, T) and reach(arm, lg.lifted(T))
+                for T in lg.grasp_candidates(grasp, T_at, body, base)
+            )
+        return seen[p]
+
+    return test
+
+
+def _grasp(world: World, arm: str) -> lg.Grasp:
+    tool = world.cell.robots[arm].tool
+    return world.cell.tools[tool].grasp if tool is not None else "top"
+
+
+def _cooperation(world: World) -> Point:
+    for z in world.cell.zones.values():
+        if z.cooperation:
+            return _point(world.pose(z.cooperation[0])[:3, 3])
+    raise InputError(
+        Complaint("Unscrew needs a cooperation place: give a shared zone 'cooperation: [keypoint]'")
+    )
+
+
+def _candidates(ref: ObjectRef) -> tuple[str, ...]:
+    if isinstance(ref, HeavierOf):
+        return ref.heavier_of
+    if isinstance(ref, LighterOf):
+        return ref.lighter_of
+    return (ref,)
+
+
+def _resolve(ref: ObjectRef, masses: Mapping[str, float]) -> str:
+    if isinstance(ref, str):
+        return ref
+    names = _candidates(ref)
+    missing = [n for n in names if n not in masses]
+    if missing:
+        raise InputError(
+            Complaint(
+                f"the mass of {', '.join(missing)} is not known: weigh it first or give it "
+                "in objects.yaml"
+            )
+        )
+    pick = max if isinstance(ref, HeavierOf) else min
+    return pick(names, key=lambda n: masses[n])
+
+
+def _pose_at(world: World, p: Point) -> Mat:
+    T = np.eye(4)
+    T[:3, 3] = p
+    return T
+
+
+def _point(v: Sequence[float] | np.ndarray) -> Point:
+    return (float(v[0]), float(v[1]), float(v[2]))
+
+
+def _id(step: Skill, i: int) -> str:
+    return step.id if step.id is not None else f"step{i + 1}"
