@@ -7,8 +7,9 @@ options (``expand``) is separate from searching them, so both can be inspected.
 The mission minimises the distance the robots travel, summed: between tasks (the paper's
 cost) and within them, where handovers and alliances make it differ. Up to
 ``exact_limit`` tasks (relocations included) an A* search proves the minimum; beyond, or if
-it would expand more than ``max_expansions`` states, greedy construction improved by
-re-inserting tasks gives a feasible mission (``optimal`` False). Same problem, same mission.
+it would expand more than ``max_expansions`` states, a heuristic (greedy construction,
+re-insertion of tasks, seeded shakes) gives a feasible mission (``optimal`` False). Same
+problem, same mission.
 """
 
 from __future__ import annotations

@@ -242,22 +242,26 @@ def brute_force(p: Problem) -> float:
     return best
 
 
-@pytest.mark.parametrize(("n", "seed"), [(5, 1), (5, 2), (6, 3), (6, 4), (7, 5)])
-def test_exact_equals_brute_force(n: int, seed: int) -> None:
-    p = random_problem(n, seed, p_after=0.35)
+@pytest.mark.parametrize(
+    ("n", "seed", "p_after"),
+    # up to 720 orders x 448 option choices (n = 6, few or no precedence edges)
+    [(5, 1, 0.35), (5, 11, 0.0), (6, 3, 0.35), (6, 3, 0.0), (6, 8, 0.1), (7, 5, 0.35), (7, 9, 0.2)],
+)
+def test_exact_equals_brute_force(n: int, seed: int, p_after: float) -> None:
+    p = random_problem(n, seed, p_after)
     m = allocate(p)
     check_valid(p, m)
     assert m.optimal
     assert m.cost == pytest.approx(brute_force(p))
 
 
-HEURISTIC_FACTOR = 1.25
+HEURISTIC_FACTOR = 1.10
 
 
 def test_heuristic_close_to_exact_and_valid() -> None:
-    """On 30 random 8-task problems the heuristic's travel is within 25 % of the minimum
-    (measured: at most 10.3 % over, 1.4 % on average, the minimum itself in half of them)
-    and its missions are valid."""
+    """On 30 random 8-task problems the heuristic's travel is within 10 % of the minimum
+    (measured: at most 5.7 % over, 0.2 % on average, the minimum itself in 28 of them;
+    greedy + re-insertion alone was up to 10.3 % over) and its missions are valid."""
     ratios = []
     for seed in range(30):
         p = random_problem(8, 100 + seed)

@@ -4,7 +4,8 @@ A solution is a global order of the tasks (a linear extension of ``after``) and 
 per task. Each robot's travel is its path through its actions in that order; the cost sums
 them. ``exact`` is an A* over (done tasks, each robot's location, spots taken) with an
 admissible bound, so the first complete state it takes is a minimum; ``heuristic`` is greedy
-construction then re-insertion of single tasks (order and option) until nothing improves.
+construction, re-insertion of single tasks (order and option) until nothing improves, and
+seeded shakes of the best followed by the same improvement (iterated local search).
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from __future__ import annotations
 import heapq
 import itertools
 import math
+import random
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -207,8 +209,35 @@ def _neighbours(
     return before, after
 
 
-def heuristic(c: Compiled) -> Solution:
-    return improve(c, greedy(c))
+def heuristic(c: Compiled, rounds: int = 30, seed: int = 0) -> Solution:
+    """Greedy, improved; then ``rounds`` times: shake the best (a few tasks moved to random
+    places and options), improve, keep it if cheaper. Seeded, so deterministic."""
+    rng = random.Random(seed)
+    best = improve(c, greedy(c))
+    for _ in range(rounds if len(c.ids) > 1 else 0):
+        shaken = _shake(c, best, rng)
+        if shaken is not None:
+            tried = improve(c, shaken)
+            if tried.cost < best.cost - EPS:
+                best = tried
+    return best
+
+
+def _shake(c: Compiled, s: Solution, rng: random.Random, moves: int = 3) -> Solution | None:
+    """Move a few tasks to random places their precedence allows, with random options; None
+    if two relocations end up on one spot."""
+    order, choice = list(s.order), list(s.choice)
+    for _ in range(moves):
+        t = rng.randrange(len(order))
+        order.remove(t)
+        lo = max((i + 1 for i, u in enumerate(order) if c.pred[t] >> u & 1), default=0)
+        hi = min((i for i, u in enumerate(order) if c.succ[t] >> u & 1), default=len(order))
+        order.insert(rng.randint(lo, hi), t)
+        choice[t] = rng.randrange(len(c.opts[t]))
+    spots = [c.opts[t][k].spot for t, k in enumerate(choice) if c.opts[t][k].spot >= 0]
+    if len(spots) != len(set(spots)):
+        return None
+    return Solution(tuple(order), tuple(choice), evaluate(c, tuple(order), tuple(choice)))
 
 
 # --- exact -----------------------------------------------------------------------------
