@@ -356,6 +356,19 @@ def test_two_blockers_never_share_a_spot() -> None:
     assert near in {m.options["clear:b1"].spot, m.options["clear:b2"].spot}
 
 
+def test_spots_left_for_every_blocker() -> None:
+    """b1 may go to either spot and its nearest is the only one b2 may use: the first
+    relocation must leave that spot to the other, whichever is planned first."""
+    only = (0.3, 0.3, 0.0)
+    b1 = Blocker("b1", (0.3, 0.35, 0.0), (only, (0.05, 0.85, 0.0)))
+    b2 = Blocker("b2", (0.5, 0.6, 0.0), (only,))
+    m = allocate(problem(Task("grab", (pick((0.3, 0.5, 0.0)),), blocked_by=(b1, b2)), robots=(R1,)))
+    assert m.options["clear:b2"].spot == only
+    assert m.options["clear:b1"].spot == (0.05, 0.85, 0.0)
+    p = problem(Task("grab", (pick((0.3, 0.5, 0.0)),), blocked_by=(replace(b1, spots=(only,)), b2)))
+    assert _error(p) == "relocations clear:b1, clear:b2 need a free spot each; too few"
+
+
 # --- other behaviour ----------------------------------------------------------------------
 
 

@@ -114,8 +114,12 @@ def _step(c: Compiled, o: Opt, pos: tuple[int, ...]) -> tuple[float, tuple[int, 
 
 
 def greedy(c: Compiled) -> Solution:
-    """Repeatedly the ready task and option that adds least travel (first on ties)."""
+    """Repeatedly the ready task and option that adds least travel (first on ties), never
+    taking a spot that another relocation left to do would then lack."""
     n = len(c.ids)
+    if not _spots_fit(c, 0, 0):
+        moves = [c.ids[t] for t in range(n) if any(o.spot >= 0 for o in c.opts[t])]
+        raise ValueError(f"relocations {', '.join(moves)} need a free spot each; too few")
     done = spots = 0
     pos = c.starts
     order: list[int] = []
@@ -129,10 +133,11 @@ def greedy(c: Compiled) -> Solution:
                 if o.spot >= 0 and spots >> o.spot & 1:
                     continue
                 cost, new = _step(c, o, pos)
-                if best is None or cost < best[0] - EPS:
+                if best is not None and cost >= best[0] - EPS:
+                    continue
+                if o.spot < 0 or _spots_fit(c, done | 1 << t, spots | 1 << o.spot):
                     best = (cost, t, k, new)
-        if best is None:
-            raise ValueError("the blockers need more free spots than the greedy order left")
+        assert best is not None  # some task is ready (no cycle) and spots still fit
         _, t, k, pos = best
         o = c.opts[t][k]
         spots |= (1 << o.spot) if o.spot >= 0 else 0
@@ -140,6 +145,25 @@ def greedy(c: Compiled) -> Solution:
         order.append(t)
         choice[t] = k
     return Solution(tuple(order), tuple(choice), evaluate(c, tuple(order), tuple(choice)))
+
+
+def _spots_fit(c: Compiled, done: int, taken: int) -> bool:
+    """Whether every relocation not done yet can still have a free spot of its own
+    (augmenting paths: a bipartite matching of relocations to spots)."""
+    owner: dict[int, int] = {}
+
+    def place(t: int, seen: set[int]) -> bool:
+        for o in c.opts[t]:
+            if o.spot < 0 or taken >> o.spot & 1 or o.spot in seen:
+                continue
+            seen.add(o.spot)
+            if o.spot not in owner or place(owner[o.spot], seen):
+                owner[o.spot] = t
+                return True
+        return False
+
+    todo = (t for t in range(len(c.ids)) if not done >> t & 1)
+    return all(place(t, set()) for t in todo if any(o.spot >= 0 for o in c.opts[t]))
 
 
 def improve(c: Compiled, s: Solution, max_passes: int = 100) -> Solution:
