@@ -390,6 +390,19 @@ def test_candidates_must_all_be_reachable() -> None:
     assert m.alliance("move") == ("r2",)
 
 
+def test_reach_predicate_without_zones() -> None:
+    """No zones: a robot's reach test decides; a point it fails needs the other robot."""
+    left, right = replace(R1, reach=lambda q: q[0] <= 0.8), replace(R2, reach=lambda q: q[0] >= 0.7)
+    far = (1.0, 0.45, 0.0)
+    p = Problem(
+        (left, right), (Task("move", (pick(far), place((0.5, 0.45, 0.0)))),), (), (HANDOVER,)
+    )
+    m = allocate(p)
+    assert m.alliance("move") == ("r1", "r2")
+    assert [a.kind for a in m.actions["r2"]] == ["pick", "handover_place"]
+    check_valid(p, m)
+
+
 def test_return_to_the_end_position_counts() -> None:
     home = (0.0, 0.0, 0.0)
     r1 = replace(R1, end=home)
