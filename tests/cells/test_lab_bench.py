@@ -187,21 +187,21 @@ def test_both_cells_share_platforms_zones_and_driver() -> None:
 def test_keypoints_are_where_the_layout_says() -> None:
     kp = {n: T for n, T in world(CARTESIAN).keypoints().items()}
     expected_mm = {
-        "bench.rack1.slot1": (400, 150, 6),
-        "bench.rack1.slot3": (400, 270, 6),
+        "bench.rack1.slot1": (300, 150, 6),
+        "bench.rack1.slot3": (300, 270, 6),
         "bench.rack_s1.slot1": (400, 450, 6),
         "bench.rack_s2.slot3": (400, 850, 6),
-        "bench.rack2.slot2": (400, 1090, 6),
+        "bench.rack2.slot2": (300, 1090, 6),
         "bench.free1.place": (550, 210, 2),
         "bench.free4.place": (950, 1090, 2),
-        "bench.free_s1.place": (600, 480, 2),
+        "bench.free_s1.place": (1000, 450, 2),
         "bench.beaker.place": (1100, 210, 2),
         "bench.handover.place": (750, 650, 6),
         "bench.unscrew.hold": (950, 650, 81),
         "bench.unscrew.cap": (950, 650, 108.5),
-        "bench.clutter1.target": (1150, 480, 2),
-        "bench.clutter1.blocker": (1114, 480, 2),
-        "bench.clutter2.blocker": (1114, 820, 2),
+        "bench.clutter1.target": (1150, 560, 2),
+        "bench.clutter1.blocker": (1114, 560, 2),
+        "bench.clutter2.blocker": (1114, 740, 2),
     }
     for name, xyz in expected_mm.items():
         # (Blender writes the root's axis as 0.707107: a few 1e-5 mm off)
@@ -306,6 +306,30 @@ def test_cartesian_links_never_meet_themselves() -> None:
     assert own == []
 
 
+@pytest.mark.parametrize("cell", [CARTESIAN, UR], ids=["cartesian", "ur"])
+def test_every_place_can_be_worked_at(cell: Path) -> None:
+    """Every place (all but the cluttered targets, blocked on purpose, and the unscrew
+    station's grasp points, tested with both arms below) can be grasped at by each robot that
+    may work in its zone without touching anything but what stands there: nothing stands in
+    the way of robot1's side gripper, which comes in along +x on the cartesian cell."""
+    w = world(cell)
+    full = scene(cell)
+    for ref in keypoints(cell):
+        name = ref.rsplit(".", 1)[-1]
+        if name in (*GRASP_POINTS, "target"):
+            continue
+        standing = [n for n, c in w.objects.containers.items() if c.at == ref]
+        statics = [s for s in full.statics if s.name not in standing]
+        checker = CollisionChecker(rearranged(full, statics, {}, {}))
+        for robot in w.cell.zones[zone_of(w, ref)].robots:
+            free = [
+                q
+                for q in grasps(cell, robot, ref)
+                if checker.check(with_homes(cell, **{robot: q})) is None
+            ]
+            assert free, f"{robot} cannot work at {ref}"
+
+
 # ---------------------------------------------------------------------------------- zones
 
 
@@ -399,6 +423,16 @@ def test_experiment_2_each_vial_is_nearer_a_different_robot(cell: Path) -> None:
         nearer.append(min(d, key=d.__getitem__))
         assert abs(d["robot1"] - d["robot2"]) > 0.05  # not a close call
     assert nearer == ["robot1", "robot2"]
+    # and with the robots' paths summed, one robot doing both costs more: from where it puts one
+    # vial down, the other vial is further than that vial's own robot is at home
+    for step, other, robot in ((steps[0], steps[1], "robot1"), (steps[1], steps[0], "robot2")):
+        assert isinstance(step, Place) and isinstance(other, Place)
+        at = w.objects.containers[str(step.object)].at
+        assert at is not None
+        p = w.pose(at)[:3, 3]
+        from_home = float(np.linalg.norm(home_tcp(cell, robot) - p))
+        from_other = float(np.linalg.norm(w.pose(other.to)[:3, 3] - p))
+        assert from_other > from_home + 0.05
 
 
 def test_experiment_3_precedence_and_the_heavier_vial() -> None:
