@@ -8,7 +8,7 @@ z up (objects.yaml).
 - **top** grasp (``grasp: top`` tools): ``z_tcp`` straight down, the fingertips round the top
   of the container (the cap, when it has one), the jaw axis horizontal at a chosen heading.
 - **side** grasp (``grasp: side`` tools): ``z_tcp`` horizontal towards the container's axis,
-  the jaw axis horizontal too (the fingers close across the body), at mid-height of the body
+  the jaw axis horizontal too (the fingers close across the body), two thirds up the body
   below the cap.
 
 Either way the fingertip centre is on the container's axis, and the hand comes in along
@@ -37,9 +37,11 @@ LIFT = 0.08  # m: and lifts the container this high before carrying it
 # this share of its height, at most CAP_HEIGHT.
 CAP_HEIGHT = 0.015
 CAP_SHARE = 0.25
-# Side headings tried, in order of preference: the one pointing away from the arm's base
-# first, then turned by these (deg) either way.
-SIDE_TURNS_DEG = (0.0, 45.0, -45.0, 90.0, -90.0, 135.0, -135.0, 180.0)
+SIDE_GRASP_SHARE = 2.0 / 3.0
+# Side grasps come in from these headings (deg from the cell's x, every 15), tried nearest
+# first to the heading away from the arm's base: a robot whose tool cannot turn about the
+# vertical (the published robot 1 comes in along +x only) finds its one heading among them.
+SIDE_HEADINGS_DEG = tuple(range(0, 360, 15))
 UP = np.array([0.0, 0.0, 1.0])
 
 
@@ -70,7 +72,9 @@ class Body:
         if grasp == "top":
             # round the cap, or the top quarter of an open container
             return self.height - (self.cap_height / 2.0 if self.cap_height else CAP_HEIGHT)
-        return (self.height - self.cap_height) / 2.0
+        # two thirds up the body below the cap: the fingers clear of the bench and of a
+        # rack's walls, and below the cap that the other hand may turn
+        return (self.height - self.cap_height) * SIDE_GRASP_SHARE
 
 
 def horizontal(v: Vec) -> Vec:
@@ -120,15 +124,12 @@ def grasp_candidates(grasp: Grasp, T_at: Mat, body: Body, base: Vec, n_top: int 
     if grasp == "top":
         start = math.atan2(float(away[1]), float(away[0])) + math.pi / 2.0
         return [top_grasp(p, start + k * math.pi / n_top) for k in range(n_top)]
-    out = []
-    for deg in SIDE_TURNS_DEG:
-        a = math.radians(deg)
-        d = np.array(
-            [
-                math.cos(a) * away[0] - math.sin(a) * away[1],
-                math.sin(a) * away[0] + math.cos(a) * away[1],
-                0.0,
-            ]
-        )
-        out.append(side_grasp(p, d))
-    return out
+    heading = math.atan2(float(away[1]), float(away[0]))
+
+    def off(deg: float) -> float:
+        return abs(math.remainder(math.radians(deg) - heading, 2.0 * math.pi))
+
+    return [
+        side_grasp(p, np.array([math.cos(math.radians(d)), math.sin(math.radians(d)), 0.0]))
+        for d in sorted(SIDE_HEADINGS_DEG, key=off)
+    ]

@@ -31,6 +31,10 @@ OPEN, GRASP = "open", "grasp"
 # Unscrewing turns the cap in strokes of at most this much: a wrist with a limited range
 # lets go, turns back and grasps again between strokes.
 STROKE = math.radians(180.0)
+# A container set down is turned about its axis by the first of these (deg) that the arm
+# reaches: the hand's own heading first.
+SET_DOWN_TURNS_DEG = (0, *(s * d for d in range(15, 181, 15) for s in (1, -1)))
+CAP_DROP = 0.01  # m: a cap may be let go of this high over where it lands
 POUR_CLEARANCE = 0.03  # m: the container's mouth above the target's rim while pouring
 
 Solver = Callable[[str, Mat], bool]  # (arm, T_cell_tcp) -> the arm can reach it
@@ -158,7 +162,7 @@ def set_down(
         raise error(f"{where}: arm '{arm}' holds nothing to put down")
     T_now_base = b.state.tcp[arm] @ g.inverse(held.T_base_tcp)
     target = np.asarray(T_cell_base)[:3, 3]
-    for deg in lg.SIDE_TURNS_DEG:
+    for deg in SET_DOWN_TURNS_DEG:
         R = g.rot_z(math.radians(deg)) @ T_now_base[:3, :3]
         T = g.transform(R, target) @ held.T_base_tcp
         if all(reach(arm, P) for P in (T, lg.lifted(T), lg.approach_of(T))):
@@ -267,8 +271,12 @@ def put_cap_down(
     ``T_place`` (the cap's base there) and backs off upwards."""
     body = lg.Body.of(world.container(name))
     T_put = np.array(b.state.tcp[turner], dtype=float)
-    T_put[:3, 3] = np.asarray(T_place)[:3, 3] + body.cap_height / 2.0 * lg.UP
-    if not (reach(turner, T_put) and reach(turner, lg.lifted(T_put))):
+    # on the surface, or let go of it up to CAP_DROP above where the arm reaches no lower
+    for drop in np.linspace(0.0, CAP_DROP, 5):
+        T_put[:3, 3] = np.asarray(T_place)[:3, 3] + (body.cap_height / 2.0 + drop) * lg.UP
+        if reach(turner, T_put) and reach(turner, lg.lifted(T_put)):
+            break
+    else:
         raise error(f"{where}: arm '{turner}' cannot put the cap down at {_mm(T_put[:3, 3])}")
     b.add(f"{where}: carry the cap", [transit(turner, lg.lifted(T_put))])
     b.add(

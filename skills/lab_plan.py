@@ -52,6 +52,8 @@ LabSkill = Pick | Place | Handover | Unscrew | Weigh | Pour
 Point = tuple[float, float, float]
 # Rough durations (s) of each primitive for the mission's schedule; the executor times the
 # real motion.
+FREE_RADIUS = 0.05  # m: a place with a container or cap closer than this is taken
+CAP_REACH = 0.02  # m: the reach test of a place for a cap, this high over it
 DURATION = {"pick": 3.0, "place": 3.0, "weigh": 1.0, "hold": 3.0, "turn_cap": 8.0, "pour": 4.0}
 
 
@@ -91,7 +93,14 @@ def plan_lab_steps(
         b.state = replace(b.state, step=i)
         where = f"steps[{i}] {step.skill}"
         actions = _actions(mission, task)
-        for action in actions:
+        for k, action in enumerate(actions):
+            prev = actions[k - 1] if k else None
+            if prev is not None and prev.robot != action.robot and prev.kind != "hold":
+                # a robot that hands over (or is done) leaves before the other comes in
+                b.add(
+                    f"{where}: {prev.robot} back to its rest",
+                    [lm.transit(prev.robot, tcp[prev.robot])],
+                )
             _do(b, world, cell, reach, step, action, known, where)
         # as the published platform does: each robot retracts after its work, so the next
         # task finds the shared zone clear; a turner first puts the cap down, once the
@@ -167,35 +176,35 @@ def _tasks(world: World, steps: Sequence[Skill]) -> list[Task]:
 def _primitives(
     world: World, step: LabSkill, loc: Point | AnyOf, where: Mapping[str, Point]
 ) -> tuple[Primitive, ...]:
-    def p(kind: str, start: Point | AnyOf | None = None, **kw: bool) -> Primitive:
-        return Primitive(
-            kind, kind, start if start is not None else loc, None, DURATION[kind], **kw
-        )
+    """A start of None is where the object is at that moment (in a hand, or where the last
+    primitive left it): the allocator inserts a handover when another robot takes over."""
 
+    def p(
+        kind: str, start: Point | AnyOf | None, end: Point | AnyOf | None = None, **kw: bool
+    ) -> Primitive:
+        return Primitive(kind, kind, start, end, DURATION[kind], **kw)
+
+    pick = p("pick", loc)
+    back = p("place", None, loc, releases=True)  # where it was picked
     if isinstance(step, Place):
-        return (p("pick"), p("place", _point(world.pose(step.to)[:3, 3]), releases=True))
+        return (pick, p("place", None, _point(world.pose(step.to)[:3, 3]), releases=True))
     if isinstance(step, Pick):
-        return (p("pick"),)
+        return (pick,)
     if isinstance(step, Handover):
         if step.at is None:
-            return (p("pick"),)
-        return (p("pick"), p("place", _point(world.pose(step.at)[:3, 3]), releases=True))
+            return (pick,)
+        return (pick, p("place", None, _point(world.pose(step.at)[:3, 3]), releases=True))
     if isinstance(step, Weigh):
-        return (p("pick"), p("weigh"), p("place", releases=True))
+        return (pick, p("weigh", None), back)
     if isinstance(step, Unscrew):
         meet = _cooperation(world)
-        return (
-            p("pick"),
-            p("hold", meet),
-            p("turn_cap", meet, with_previous=True),
-            p("place", releases=True),
-        )
+        return (pick, p("hold", meet, meet), p("turn_cap", meet, meet, with_previous=True), back)
     assert isinstance(step, Pour)
     targets = _candidates(step.into)
     into: Point | AnyOf = (
         where[targets[0]] if len(targets) == 1 else AnyOf(tuple(where[n] for n in targets))
     )
-    return (p("pick"), p("pour", into), p("place", releases=True))
+    return (pick, p("pour", into, into), back)
 
 
 # ------------------------------------------------------------------------------- the motion
@@ -243,16 +252,25 @@ def _do(
 
 
 def _cap_place(world: World, b: lm.Builder, reach: lm.Solver, arm: str) -> Mat:
-    """Where the cap goes: the first handover place the arm reaches with nothing on it."""
-    taken = [T[:3, 3] for T in b.state.where.values()]
-    for z in world.cell.zones.values():
-        for ref in z.handovers:
-            T = world.pose(ref)
-            free = all(np.linalg.norm(T[:3, 3] - p) > 0.05 for p in taken)
-            if free and reach(arm, lg.top_grasp(T[:3, 3] + 0.05 * lg.UP, 0.0)):
-                return T
+    """Where a cap goes: the zones' free places (then their handover places) with nothing
+    on them, nearest the arm's fingertips first, the first the arm reaches."""
+    refs = [r for z in world.cell.zones.values() for r in z.free]
+    refs += [r for z in world.cell.zones.values() for r in z.handovers]
+    taken = [T[:3, 3] for T in (*b.state.where.values(), *b.state.caps.values())]
+    here = b.state.tcp[arm][:3, 3]
+    places = sorted(
+        (world.pose(r) for r in dict.fromkeys(refs)),
+        key=lambda T: float(np.linalg.norm(T[:3, 3] - here)),
+    )
+    for T in places:
+        free = all(np.linalg.norm(T[:3, 3] - p) > FREE_RADIUS for p in taken)
+        if free and reach(arm, lg.top_grasp(T[:3, 3] + CAP_REACH * lg.UP, 0.0)):
+            return T
     raise InputError(
-        Complaint(f"no free handover place within reach of arm '{arm}' to put a cap down")
+        Complaint(
+            f"no free place within reach of arm '{arm}' to put a cap down: list some in a "
+            "zone's 'free' (or 'handovers')"
+        )
     )
 
 

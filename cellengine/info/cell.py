@@ -111,6 +111,9 @@ class Zone(Frozen):
     # work on one object together (cooperation mode 2)
     handovers: tuple[str, ...] = ()
     cooperation: tuple[str, ...] = ()
+    # keypoints where anything may be put down out of the way: a cap screwed off, an object
+    # moved so that another can be grasped
+    free: tuple[str, ...] = ()
 
     @model_validator(mode="after")
     def _ordered(self) -> Zone:

@@ -151,10 +151,10 @@ def _load_objects(path: Path) -> tuple[Objects, YamlDoc]:
 
 
 def _check_zone_keypoints(world: World, doc: YamlDoc) -> list[Problem]:
-    """A zone's handover and cooperation places must be keypoints of the cell."""
+    """A zone's handover, cooperation and free places must be keypoints of the cell."""
     out: list[Problem] = []
     for name, zone in world.cell.zones.items():
-        for key in ("handovers", "cooperation"):
+        for key in ("handovers", "cooperation", "free"):
             for i, ref in enumerate(getattr(zone, key)):
                 try:
                     world.resolve(ref)

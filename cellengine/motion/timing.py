@@ -37,6 +37,7 @@ FloatArray = NDArray[np.float64]
 
 # Grid of the speed profile: points per waypoint interval, within these bounds.
 GRID_PER_SEGMENT = 10
+LIMIT_ROUNDING = 1e-12  # rad or m
 MIN_GRID_POINTS = 101
 MAX_GRID_POINTS = 2001
 
@@ -154,10 +155,13 @@ def _problem(
     if wp.ndim != 2:
         raise ValueError(f"waypoints must be (N, n), got shape {wp.shape}")
     lim = _checked(limits, wp.shape[1])
-    outside = (wp < lim.lower) | (wp > lim.upper)
+    outside = (wp < lim.lower - LIMIT_ROUNDING) | (wp > lim.upper + LIMIT_ROUNDING)
     if np.any(outside):
         k = int(np.argmax(outside.any(axis=1)))
         otg._check_in_range(f"waypoint {k}", wp[k], lim.lower, lim.upper)
+    # a waypoint on a limit can come out of a computation a rounding error past it (-1e-20
+    # for a prismatic joint at 0): that is on the limit
+    wp = np.clip(wp, lim.lower, lim.upper)
     path = SplinePath(wp)
     planner = SpeedPlanner(
         path, lim.velocity, lim.acceleration, grid_points or grid_points_for(len(path.knots))

@@ -88,10 +88,13 @@ def test_side_grasps_come_in_horizontally_away_from_the_base_first(world: World)
     base = np.array([0.0, -0.35, 0.0])
     first, *rest = lg.grasp_candidates("side", T_at, body, base)
     away = lg.horizontal(T_at[:3, 3] - base)
-    assert np.allclose(first[:3, 2], away)
+    # the 15 deg heading nearest the direction away from the base
+    assert math.degrees(math.acos(float(first[:3, 2] @ away))) <= 7.5
+    heading = math.degrees(math.atan2(first[1, 2], first[0, 2]))
+    assert heading / 15 == pytest.approx(round(heading / 15), abs=1e-9)
     assert abs(first[2, 2]) < 1e-12 and abs(first[2, 1]) < 1e-12  # z and jaw horizontal
-    assert first[2, 3] == pytest.approx(T_at[2, 3] + (0.06 - 0.015) / 2)  # body middle
-    assert len(rest) == len(lg.SIDE_TURNS_DEG) - 1
+    assert first[2, 3] == pytest.approx(T_at[2, 3] + (0.06 - 0.015) * 2 / 3)  # body, 2/3 up
+    assert len(rest) == len(lg.SIDE_HEADINGS_DEG) - 1
 
 
 def test_unscrew_turns_two_and_a_half_turns_in_half_turn_strokes(
