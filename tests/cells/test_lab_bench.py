@@ -348,6 +348,14 @@ def test_zones_tile_the_bench() -> None:
     assert separation > reach > separation / 2
     assert zones["shared"].handovers == ("bench.handover",)
     assert zones["shared"].cooperation == ("bench.unscrew",)
+    # each zone's free places are free_place elements inside it, and no object stands there
+    w = world(CARTESIAN)
+    taken = {c.at for c in w.objects.containers.values()}
+    for name, zone in zones.items():
+        assert len(zone.free) == 2, name
+        for ref in zone.free:
+            assert w.element(ref).model == "free_place"
+            assert zone_of(w, ref) == name and f"{ref}.place" not in taken
 
 
 @pytest.mark.parametrize("ref", keypoints(CARTESIAN))
