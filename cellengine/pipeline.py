@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import json
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from cellengine.errors import InputError, Problem
 from cellengine.execute.compile import Compiler, home_configuration
@@ -25,6 +25,7 @@ from cellengine.program import Program, Segment
 from cellengine.skill import Skill
 from cellengine.world import World
 
+T = TypeVar("T")
 Progress = Callable[[int, int, str], None]  # (step index, number of steps, skill)
 
 
@@ -34,25 +35,38 @@ class Compiled:
     cell: CellModel
     program: Program
     strategy: str
+    # a lab plan's mission: which robots do each step, when (report.json's "mission")
+    mission: list[dict[str, Any]] | None = None
 
     @property
     def world(self) -> World:
         return self.loaded.world
 
 
-def plan_segments(world: World, steps: Sequence[Skill]) -> list[Segment]:
-    """Every step's segments. The cable skills share one state through the whole plan."""
+def plan_segments(
+    world: World,
+    cell: CellModel,
+    steps: Sequence[Skill],
+    masses: Mapping[str, float] | None = None,
+) -> tuple[list[Segment], list[dict[str, Any]] | None]:
+    """Every step's segments, and a lab plan's mission. A plan is all cable skills (they
+    share one state through the whole plan) or all lab skills (the allocator decides which
+    robots do what; ``masses``: measured masses that choose ``heavier_of`` objects)."""
     from skills.cable import CableSkill, plan_cable_steps
+    from skills.lab_plan import LabSkill, plan_lab_steps
 
+    if all(isinstance(s, LabSkill) for s in steps):
+        lab = plan_lab_steps(world, cell, steps, masses)
+        return lab.segments, lab.mission.to_json()
     for i, step in enumerate(steps):
         if not isinstance(step, CableSkill):
             raise InputError(
                 Problem(
-                    f"steps[{i}]: {step.skill} cannot be compiled to motion yet (only the "
-                    "cable skills PickCable, PlaceConnector and RouteCable can)"
+                    f"steps[{i}]: {step.skill} cannot be compiled to motion in a plan with "
+                    "cable skills (a plan is all cable skills, or all lab skills)"
                 )
             )
-    return plan_cable_steps(world, steps)[0]
+    return plan_cable_steps(world, steps)[0], None
 
 
 def compile_plan(
@@ -82,12 +96,16 @@ def compile_loaded(
     merge: str = "joint",
     progress: Progress | None = None,
     models: Callable[[World], Models] = cell_models,
+    masses: Mapping[str, float] | None = None,
 ) -> Compiled:
-    """Compile a loaded plan; ``models`` lets a caller reuse one cell's models across plans."""
+    """Compile a loaded plan; ``models`` lets a caller reuse one cell's models across plans;
+    ``masses``: measured masses (kg) for runtime choices (else objects.yaml's)."""
     world, plan = loaded.world, loaded.plan
     cell, checker = models(world)
     chosen = strategy or plan.execution
-    segments = _with_file(plan.file, lambda: plan_segments(world, plan.steps))
+    segments, mission = _with_file(
+        plan.file, lambda: plan_segments(world, cell, plan.steps, masses)
+    )
     compiler = Compiler(
         world,
         cell,
@@ -105,10 +123,10 @@ def compile_loaded(
             progress(segment.step, len(plan.steps), plan.steps[segment.step].skill)
 
     # add_all looks ahead from each transit and comes back to it when a later segment fails
-    return Compiled(loaded, cell, compiler.add_all(segments, before_each), chosen)
+    return Compiled(loaded, cell, compiler.add_all(segments, before_each), chosen, mission)
 
 
-def _with_file(plan_file: Path, make: Callable[[], list[Segment]]) -> list[Segment]:
+def _with_file(plan_file: Path, make: Callable[[], T]) -> T:
     """Skill errors begin with the step (``steps[2] RouteCable guide3: ...``): put them at
     that step's line in the plan file."""
     try:
@@ -167,11 +185,13 @@ def write_plan_outputs(compiled: Compiled, out: Path) -> dict[str, Path]:
     from cellengine.report.write import REPORT_HTML, REPORT_JSON, report_texts
 
     plan = compiled.loaded.plan
-    extra = {
+    extra: dict[str, Any] = {
         "plan": str(plan.file),
         "execution": compiled.strategy,
         "duration": compiled.program.duration,
     }
+    if compiled.mission is not None:
+        extra["mission"] = compiled.mission
     labels = {i: step_label(step) for i, step in enumerate(plan.steps)}
     texts = {
         TRAJECTORY_JSON: json.dumps(trajectory_json(compiled.program)) + "\n",

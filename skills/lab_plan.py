@@ -151,6 +151,14 @@ def _tasks(world: World, steps: Sequence[Skill]) -> list[Task]:
         if not isinstance(step, LabSkill):
             raise InputError(Complaint(f"steps[{i}]: {step.skill} is not a lab skill"))
         names = _candidates(step.object)
+        for n in names:
+            if n not in where:
+                raise InputError(
+                    Complaint(
+                        f"steps[{i}] {step.skill}: '{n}' stands nowhere: the lab skills move "
+                        "containers, each given where it stands ('at') in objects.yaml"
+                    )
+                )
         loc: Point | AnyOf = (
             where[names[0]] if len(names) == 1 else AnyOf(tuple(where[n] for n in names))
         )
@@ -338,6 +346,25 @@ def _candidates(ref: ObjectRef) -> tuple[str, ...]:
     if isinstance(ref, LighterOf):
         return ref.lighter_of
     return (ref,)
+
+
+def choices(
+    world: World, steps: Sequence[Skill], masses: Mapping[str, float] | None = None
+) -> dict[str, str]:
+    """The objects the runtime choices (``heavier_of``, ``lighter_of``) pick, by
+    ``steps[i].field``, with ``masses`` over objects.yaml's; a choice whose masses are not
+    all known yet is left out."""
+    known = {n: float(c.mass) for n, c in world.objects.containers.items() if c.mass is not None}
+    known.update(masses or {})
+    out: dict[str, str] = {}
+    for i, step in enumerate(steps):
+        for field in ("object", "into"):
+            ref = getattr(step, field, None)
+            if isinstance(ref, HeavierOf | LighterOf) and all(
+                n in known for n in _candidates(ref)
+            ):
+                out[f"steps[{i}].{field}"] = _resolve(ref, known)
+    return out
 
 
 def _resolve(ref: ObjectRef, masses: Mapping[str, float]) -> str:

@@ -7,6 +7,7 @@ import argparse
 import json
 import os
 import time
+from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
 from cellengine.commands.plan import add_common, compile_from_args
@@ -40,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
         _entry(journal, "start", plan=str(compiled.loaded.plan.file), driver=type(driver).__name__)
         driver.configure()
         driver.activate()
-        _play(compiled, driver, journal, quiet=args.quiet)
+        _play(compiled, driver, journal, quiet=args.quiet, out=args.out)
         driver.deactivate()
         _entry(journal, "end", duration=compiled.program.duration)
     if not args.quiet:
@@ -63,13 +64,21 @@ def _driver(compiled: Compiled, args: argparse.Namespace) -> Driver:
     return make_driver(world.cell, joints, objects=world.objects, kind=args.driver, **options)
 
 
-def _play(compiled: Compiled, driver: Driver, journal: IO[str], quiet: bool) -> None:
+def _play(compiled: Compiled, driver: Driver, journal: IO[str], quiet: bool, out: Path) -> None:
+    """Send every segment; after a segment that weighs (``facts["measure"] == "mass"``),
+    read the load cell. When a measured mass changes what a runtime choice (``heavier_of``)
+    picks, the plan is compiled again with the masses measured and the run goes on with the
+    new program from the first segment that differs (the ones before are the same), its
+    trajectory and report written over the first ones."""
     from cellengine.drivers.play import segment_events
+    from cellengine.pipeline import write_plan_outputs
 
     program = compiled.program
-    for i, (segment, events) in enumerate(
-        zip(program.segments, segment_events(program), strict=True)
-    ):
+    events_of = segment_events(program)
+    measured: dict[str, float] = {}
+    i = 0
+    while i < len(program.segments):
+        segment, events = program.segments[i], events_of[i]
         seg = segment.segment
         _entry(journal, "sent", step=seg.step, segment=i, label=seg.label)
         driver.execute(segment, events)
@@ -83,6 +92,35 @@ def _play(compiled: Compiled, driver: Driver, journal: IO[str], quiet: bool) -> 
             q=[round(float(v), 6) for v in driver.joint_state()],
             grippers=grippers,
         )
+        if seg.facts.get("measure") == "mass":
+            name, arm = str(seg.facts["object"]), str(seg.facts["arm"])
+            measured[name] = driver.read_mass(arm)
+            _entry(journal, "measured", step=seg.step, object=name, arm=arm, mass_kg=measured[name])
+            again = _recompiled(compiled, measured, i + 1)
+            if again is not None:
+                compiled, program = again, again.program
+                events_of = segment_events(program)
+                write_plan_outputs(compiled, out)
+                _entry(journal, "replanned", reason="measured masses changed a choice")
+                if not quiet:
+                    print("measured masses changed a runtime choice: replanned")
+        i += 1
+
+
+def _recompiled(compiled: Compiled, measured: dict[str, float], done: int) -> Compiled | None:
+    """The plan compiled with the masses measured, if they change a runtime choice; the
+    segments already run must be the same in it."""
+    from cellengine.pipeline import compile_loaded
+    from skills.lab_plan import choices
+
+    steps = compiled.loaded.plan.steps
+    if choices(compiled.world, steps) == choices(compiled.world, steps, measured):
+        return None
+    again = compile_loaded(compiled.loaded, compiled.strategy, masses=measured)
+    before = [s.segment.label for s in compiled.program.segments[:done]]
+    if [s.segment.label for s in again.program.segments[:done]] != before:
+        raise RuntimeError("replanning changed segments already run")  # a bug, not input
+    return again
 
 
 def _entry(journal: IO[str], kind: str, **fields: Any) -> None:

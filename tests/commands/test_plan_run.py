@@ -68,7 +68,7 @@ def test_plan_writes_no_journal(tmp_path: Path, capsys: pytest.CaptureFixture[st
     assert out.out.splitlines()[-1] == f"report: {tmp_path / 'report.html'}"
 
 
-def test_a_step_without_motion_is_refused_at_its_line(tmp_path: Path) -> None:
+def test_a_lab_step_on_a_cable_is_refused_at_its_line(tmp_path: Path) -> None:
     import shutil
 
     shutil.copytree(CELLS / "cable_routing", tmp_path / "cell")
@@ -82,8 +82,8 @@ def test_a_step_without_motion_is_refused_at_its_line(tmp_path: Path) -> None:
     with pytest.raises(InputError) as e:
         compile_plan(plan)
     assert str(e.value) == (
-        f"{plan}:4:5: steps[0]: Weigh cannot be compiled to motion yet (only the cable skills "
-        "PickCable, PlaceConnector and RouteCable can)"
+        f"{plan}:4:5: steps[0] Weigh: 'cable1' stands nowhere: the lab skills move "
+        "containers, each given where it stands ('at') in objects.yaml"
     )
 
 
