@@ -360,9 +360,7 @@ def choices(
     for i, step in enumerate(steps):
         for field in ("object", "into"):
             ref = getattr(step, field, None)
-            if isinstance(ref, HeavierOf | LighterOf) and all(
-                n in known for n in _candidates(ref)
-            ):
+            if isinstance(ref, HeavierOf | LighterOf) and all(n in known for n in _candidates(ref)):
                 out[f"steps[{i}].{field}"] = _resolve(ref, known)
     return out
 
