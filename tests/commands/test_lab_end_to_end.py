@@ -1,0 +1,106 @@
+"""Issue 5, "What the output must show", on the lab bench's plans compiled and run on the
+simulated cell, on the cartesian robots and (the same plans, another cell file) on two UR5e:
+the handover before the weighing, each vial to the nearer robot, the gate passed, and never
+both robots in the shared zone at once except while they cooperate."""
+
+from __future__ import annotations
+
+import json
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import skills.lab  # noqa: F401  (registers the lab skills)
+from cellengine.cli import main
+from cellengine.pipeline import Compiled, compile_plan
+from tests.conftest import CELLS
+
+LAB = CELLS / "lab_bench"
+CELL_FILES = {"cartesian": LAB / "cell.yaml", "ur": LAB / "cell_ur.yaml"}
+DT = 0.01
+
+
+@cache
+def _compiled(plan: str, cell: str) -> Compiled:
+    return compile_plan(LAB / f"{plan}.yaml", cell=CELL_FILES[cell])
+
+
+def _mission_arms(c: Compiled, step: str) -> set[str]:
+    assert c.mission is not None
+    return {arm for e in c.mission if e["step"] == step for arm in e["arms"]}
+
+
+def _tcp_track(c: Compiled) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]:
+    """Every robot's TCP at DT over the whole program, and the label of the segment then."""
+    times, labels = [], []
+    for s in c.program.segments:
+        t = np.arange(s.trajectory.start_time, s.trajectory.end_time, DT)
+        times.append(t)
+        labels += [s.segment.label] * len(t)
+    ts = np.concatenate(times)
+    q = np.concatenate(
+        [s.trajectory.sample(t)[0] for s, t in zip(c.program.segments, times, strict=True)]
+    )
+    tcp = {
+        name: np.array([arm.fk(c.cell.split(row)[name])[:3, 3] for row in q])
+        for name, arm in c.cell.arms.items()
+    }
+    return ts, tcp, labels
+
+
+@pytest.mark.parametrize("cell", sorted(CELL_FILES))
+def test_weighing_an_object_only_robot2_reaches_goes_through_a_handover(cell: str) -> None:
+    c = _compiled("plan_weigh_handover", cell)
+    assert c.mission is not None
+    assert any(e["inserted"] == "handover" for e in c.mission)
+    assert _mission_arms(c, "weigh") == {"robot1", "robot2"}
+    (weighing,) = [s for s in c.program.segments if s.segment.facts.get("measure") == "mass"]
+    arm = weighing.segment.facts["arm"]
+    robot = c.world.cell.robots[arm]
+    assert robot.tool is not None and c.world.cell.tools[robot.tool].load_cell
+    # the object was in robot2's private zone: robot1 could not have picked it up there
+    private2 = c.world.cell.zones["private2"]
+    assert private2.contains(c.world.pose(c.world.container("vial3").at or "")[:3, 3])
+    assert private2.robots == ("robot2",)
+
+
+@pytest.mark.parametrize("cell", sorted(CELL_FILES))
+def test_each_vial_goes_to_the_nearer_robot(cell: str) -> None:
+    c = _compiled("plan_relocate", cell)
+    for step, vial in (("move_vial4", "vial4"), ("move_vial5", "vial5")):
+        at = c.world.pose(c.world.container(vial).at or "")[:3, 3]
+        home = {
+            name: arm.fk(arm.home if arm.home is not None else np.zeros(arm.nq))[:3, 3]
+            for name, arm in c.cell.arms.items()
+        }
+        nearer = min(home, key=lambda r: float(np.linalg.norm(home[r] - at)))
+        assert _mission_arms(c, step) == {nearer}
+    assert _mission_arms(c, "move_vial4") != _mission_arms(c, "move_vial5")
+
+
+@pytest.mark.parametrize("plan", ["plan_weigh_handover", "plan_relocate"])
+@pytest.mark.parametrize("cell", sorted(CELL_FILES))
+def test_one_robot_at_a_time_in_the_shared_zone(plan: str, cell: str) -> None:
+    c = _compiled(plan, cell)
+    shared = c.world.cell.zones["shared"]
+    _, tcp, labels = _tcp_track(c)
+    inside = {r: np.array([shared.contains(p) for p in tcp[r]]) for r in tcp}
+    both = inside["robot1"] & inside["robot2"]
+    cooperating = np.array(["Unscrew" in label for label in labels])
+    assert not (both & ~cooperating).any()
+    assert inside["robot1"].any() and inside["robot2"].any()  # both do work there
+
+
+def test_the_plan_runs_on_the_simulated_cell_and_weighs(tmp_path: Path) -> None:
+    plan = LAB / "plan_weigh_handover.yaml"
+    assert main(["run", str(plan), "--out", str(tmp_path), "-q"]) == 0
+    journal = [json.loads(line) for line in (tmp_path / "journal.jsonl").read_text().splitlines()]
+    (measured,) = [e for e in journal if e["entry"] == "measured"]
+    assert measured["object"] == "vial3" and measured["arm"] == "robot1"
+    # objects.yaml: 36 g; the cell's load cell: 0.2 g standard deviation
+    assert measured["mass_kg"] == pytest.approx(0.036, abs=0.001)
+    report = json.loads((tmp_path / "report.json").read_text())
+    assert {e["inserted"] for e in report["mission"]} >= {"handover", None}
+    assert journal[-1]["entry"] == "end"
