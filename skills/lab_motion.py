@@ -137,12 +137,14 @@ def pick(
 def place(
     b: Builder, reach: Solver, arm: str, T_cell_base: Mat, where: str, label: str = "put down"
 ) -> None:
-    """``arm`` puts what it holds down standing at ``T_cell_base``, opens and backs off along
-    its approach."""
+    """``arm`` puts what it holds down standing at ``T_cell_base``, opens and backs off
+    upwards."""
     name, T = set_down(b, reach, arm, T_cell_base, where, label)
     b.segments[-1] = replace(b.segments[-1], after=(GripperEvent(arm, OPEN),))
     b.state = b.state.released(arm)
-    b.add(f"{where}: back off", [line(arm, T, lg.approach_of(T))], contacts=[(arm, name)])
+    # open, the fingers clear the container upwards whichever way they came in; going up
+    # keeps the hand away from what stands beside it at the same height
+    b.add(f"{where}: back off", [line(arm, T, lg.lifted(T))], contacts=[(arm, name)])
 
 
 def hold(b: Builder, reach: Solver, arm: str, T_cell_base: Mat, where: str) -> None:

@@ -28,7 +28,17 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from cellengine.allocate import AnyOf, Mission, Primitive, Problem, Robot, Task, Zone, allocate
+from cellengine.allocate import (
+    AnyOf,
+    Blocker,
+    Mission,
+    Primitive,
+    Problem,
+    Robot,
+    Task,
+    Zone,
+    allocate,
+)
 from cellengine.allocation.options import Action
 from cellengine.errors import InputError
 from cellengine.errors import Problem as Complaint
@@ -38,13 +48,14 @@ from cellengine.info.objects import Objects
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.ik import arm_ik
 from cellengine.motion.robot import CellModel
-from cellengine.motion.scene import build_scene
+from cellengine.motion.scene import CollisionScene, build_scene
 from cellengine.program import Segment
 from cellengine.skill import HeavierOf, LighterOf, ObjectRef, Skill
 from cellengine.world import World
 from skills import lab_geometry as lg
 from skills import lab_motion as lm
 from skills.lab import Handover, Pick, Place, Pour, Unscrew, Weigh
+from skills.lab_blockers import blockers
 from skills.lab_robots import robot_skills
 from skills.lab_state import LabState
 
@@ -87,7 +98,16 @@ def plan_lab_steps(
     }
     b = lm.Builder(LabState.start(world, tcp))
     by_id = {_id(s, i): (i, s) for i, s in enumerate(steps)}
+    needs = {b.name: t.id for t in problem.tasks for b in t.blocked_by}
     for task in mission.order:
+        if task not in by_id:  # a blocker moved out of the way ("clear:<name>")
+            name = task.split(":", 1)[1]
+            i = by_id[needs[name]][0]
+            b.state = replace(b.state, step=i)
+            _clear(b, world, reach, name, _actions(mission, task), f"steps[{i}] clear {name}")
+            for arm in dict.fromkeys(a.robot for a in _actions(mission, task)):
+                b.add(f"steps[{i}] clear {name}: {arm} back", [lm.transit(arm, tcp[arm])])
+            continue
         i, step = by_id[task]
         assert isinstance(step, LabSkill)  # _tasks refused any other
         b.state = replace(b.state, step=i)
@@ -136,11 +156,18 @@ def build_problem(
     handovers = tuple(
         _point(world.pose(ref)[:3, 3]) for z in world.cell.zones.values() for ref in z.handovers
     )
-    return Problem(robots, tuple(_tasks(world, steps)), zones, handovers)
+    return Problem(robots, tuple(_tasks(world, cell, steps)), zones, handovers)
 
 
-def _tasks(world: World, steps: Sequence[Skill]) -> list[Task]:
+def _tasks(world: World, cell: CellModel, steps: Sequence[Skill]) -> list[Task]:
     last_on: dict[str, str] = {}  # object -> the id of the last step on it
+    # where plan steps put things: not free for a blocker
+    targets = {
+        _point(world.pose(ref)[:3, 3])
+        for s in steps
+        for ref in (getattr(s, "to", None), getattr(s, "at", None))
+        if isinstance(ref, str)
+    }
     where: dict[str, Point] = {
         n: _point(world.pose(c.at)[:3, 3])
         for n, c in world.objects.containers.items()
@@ -163,6 +190,7 @@ def _tasks(world: World, steps: Sequence[Skill]) -> list[Task]:
             where[names[0]] if len(names) == 1 else AnyOf(tuple(where[n] for n in names))
         )
         prims = _primitives(world, step, loc, where)
+        blocked = _blocked(world, cell, step, names, where, targets) if len(names) == 1 else ()
         after = set(step.after) | {last_on[n] for n in names if n in last_on}
         arms = (
             None
@@ -170,7 +198,7 @@ def _tasks(world: World, steps: Sequence[Skill]) -> list[Task]:
             else (tuple(world.cell.robots) if step.arm == "both" else (step.arm,))
         )
         tid = _id(step, i)
-        out.append(Task(tid, prims, tuple(sorted(after)), arms))
+        out.append(Task(tid, prims, tuple(sorted(after)), arms, blocked))
         for n in names:
             last_on[n] = tid
         if isinstance(step, Place | Handover):
@@ -179,6 +207,33 @@ def _tasks(world: World, steps: Sequence[Skill]) -> list[Task]:
                 for n in names:
                     where[n] = _point(world.pose(target)[:3, 3])
     return out
+
+
+def _blocked(
+    world: World,
+    cell: CellModel,
+    step: LabSkill,
+    names: Sequence[str],
+    where: Mapping[str, Point],
+    targets: set[Point],
+) -> tuple[Blocker, ...]:
+    """The containers in the way of every grasp of the step's object (skills/lab_blockers),
+    each with the zones' free places it may go to."""
+    name = names[0]
+    if world.container(name).at is None:
+        return ()
+    robots = [r for r in cell.arms if step.arm in ("auto", "both", r)]
+    scene = _full_scene(world, cell)
+    found = blockers(world, cell, scene, name, _pose_at(world, where[name]), robots)
+    if not found:
+        return ()
+    taken = set(where.values()) | targets
+    spots = tuple(
+        p
+        for p in (_point(world.pose(r)[:3, 3]) for z in world.cell.zones.values() for r in z.free)
+        if all(np.linalg.norm(np.subtract(p, q)) > FREE_RADIUS for q in taken)
+    )
+    return tuple(Blocker(b, where[b], spots, duration=DURATION["pick"]) for b in found)
 
 
 def _primitives(
@@ -259,6 +314,19 @@ def _do(
         raise InputError(Complaint(f"{where}: no motion for '{a.kind}'"))
 
 
+def _clear(
+    b: lm.Builder, world: World, reach: lm.Solver, name: str, actions: list[Action], where: str
+) -> None:
+    """Move blocker ``name`` to the free place the allocator chose."""
+    for a in actions:
+        if a.kind in ("pick", "handover_pick"):
+            lm.pick(b, reach, world, a.robot, name, _grasp(world, a.robot), where)
+        elif a.kind in ("place", "handover_place"):
+            lm.place(b, reach, a.robot, _pose_at(world, a.end[0]), where)
+        else:
+            raise InputError(Complaint(f"{where}: no motion for '{a.kind}'"))
+
+
 def _cap_place(world: World, b: lm.Builder, reach: lm.Solver, arm: str) -> Mat:
     """Where a cap goes: the zones' free places (then their handover places) with nothing
     on them, nearest the arm's fingertips first, the first the arm reaches."""
@@ -283,6 +351,19 @@ def _cap_place(world: World, b: lm.Builder, reach: lm.Solver, arm: str) -> Mat:
 
 
 # ------------------------------------------------------------------------------- helpers
+
+
+_SCENES: dict[int, tuple[World, CollisionScene]] = {}
+
+
+def _full_scene(world: World, cell: CellModel) -> CollisionScene:
+    """The scene with every container where it stands, built once per world."""
+    hit = _SCENES.get(id(world))
+    if hit is None or hit[0] is not world:
+        hit = (world, build_scene(cell, world))
+        _SCENES.clear()
+        _SCENES[id(world)] = hit
+    return hit[1]
 
 
 def _reach(world: World, cell: CellModel) -> lm.Solver:
