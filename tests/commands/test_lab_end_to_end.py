@@ -104,3 +104,59 @@ def test_the_plan_runs_on_the_simulated_cell_and_weighs(tmp_path: Path) -> None:
     report = json.loads((tmp_path / "report.json").read_text())
     assert {e["inserted"] for e in report["mission"]} >= {"handover", None}
     assert journal[-1]["entry"] == "end"
+
+
+def _step_spans(c: Compiled) -> dict[int, tuple[float, float]]:
+    """Each plan step's first start and last end in the program (s)."""
+    spans: dict[int, tuple[float, float]] = {}
+    for s in c.program.segments:
+        lo, hi = spans.get(s.segment.step, (np.inf, -np.inf))
+        spans[s.segment.step] = (
+            min(lo, s.trajectory.start_time),
+            max(hi, s.trajectory.end_time),
+        )
+    return spans
+
+
+def test_experiment_3_weighs_both_unscrews_and_pours_the_heavier() -> None:
+    c = _compiled("plan_pour_heavier", "cartesian")
+    steps = c.loaded.plan.steps
+    index = {s.id: i for i, s in enumerate(steps)}
+    spans = _step_spans(c)
+    for i, step in enumerate(steps):
+        for dep in step.after:
+            assert spans[index[dep]][1] <= spans[i][0] + 1e-9, (step.id, dep)
+    (poured,) = [s for s in c.program.segments if "pour" in s.segment.facts]
+    assert poured.segment.facts["pour"] == "vial2"  # objects.yaml: 42 g against 30 g
+    # the unscrew is a cooperation: robot1 holds, robot2 turns the cap
+    assert c.mission is not None
+    coop = [e for e in c.mission if e["inserted"] == "cooperation"]
+    assert coop and {a for e in coop for a in e["arms"]} == {"robot1", "robot2"}
+    turns = [s for s in c.program.segments if "turn the cap" in s.segment.label]
+    assert len(turns) == 5 and {p.arm for s in turns for p in s.segment.paths} == {"robot2"}
+    # never both in the shared zone but while they cooperate on the unscrew
+    shared = c.world.cell.zones["shared"]
+    _, tcp, labels = _tcp_track(c)
+    both = np.array([shared.contains(p) for p in tcp["robot1"]]) & np.array(
+        [shared.contains(p) for p in tcp["robot2"]]
+    )
+    assert both.any()
+    assert all("Unscrew" in label for label, b in zip(labels, both, strict=True) if b)
+
+
+@pytest.mark.parametrize("cell", sorted(CELL_FILES))
+def test_blockers_are_moved_before_the_targets(cell: str) -> None:
+    c = _compiled("plan_cluttered", cell)
+    assert c.mission is not None
+    cleared = [e["step"] for e in c.mission if e["inserted"] == "obstacle"]
+    labels = [s.segment.label for s in c.program.segments]
+    if cell == "cartesian":  # every grasp of each target hits its blocker (see the cell)
+        assert sorted(set(cleared)) == ["clear:blocker1", "clear:blocker2"]
+    for blocker in sorted({c.split(":")[1] for c in cleared}):
+        target = blocker.replace("blocker", "target")
+        moved = labels.index(next(lb for lb in labels if f"grasp {blocker}" in lb))
+        taken = labels.index(next(lb for lb in labels if f"grasp {target}" in lb))
+        assert moved < taken
+    # both targets end where the plan puts them (the program's last placements)
+    for step in c.loaded.plan.steps:
+        assert any(f"put down {step.object}" in lb for lb in labels)
