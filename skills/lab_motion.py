@@ -11,10 +11,10 @@ before any planning.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import replace
 from types import MappingProxyType
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -37,7 +37,12 @@ SET_DOWN_TURNS_DEG = (0, *(s * d for d in range(15, 181, 15) for s in (1, -1)))
 CAP_DROP = 0.01  # m: a cap may be let go of this high over where it lands
 POUR_CLEARANCE = 0.03  # m: the container's mouth above the target's rim while pouring
 
-Solver = Callable[[str, Mat], bool]  # (arm, T_cell_tcp) -> the arm can reach it
+
+class Solver(Protocol):
+    """Whether ``arm`` reaches ``T_cell_tcp`` in a configuration free of collisions, the
+    containers named in ``ignore`` (the one grasped or set down) left out."""
+
+    def __call__(self, arm: str, T_cell_tcp: Mat, ignore: Sequence[str] = ()) -> bool: ...
 
 
 class Builder:
@@ -92,15 +97,18 @@ def line(arm: str, T0: Mat, T1: Mat) -> ArmPath:
 # ------------------------------------------------------------------------- pick and place
 
 
-def choose_grasp(reach: Solver, arm: str, candidates: Sequence[Mat], where: str, what: str) -> Mat:
-    """The first candidate whose grasp, approach and lifted poses the arm reaches."""
+def choose_grasp(
+    reach: Solver, arm: str, candidates: Sequence[Mat], where: str, what: str, name: str
+) -> Mat:
+    """The first candidate whose grasp, approach and lifted poses the arm reaches (container
+    ``name`` itself left out: the fingers close on it)."""
     for T in candidates:
-        if all(reach(arm, P) for P in (T, lg.approach_of(T), lg.lifted(T))):
+        if all(reach(arm, P, (name,)) for P in (T, lg.approach_of(T), lg.lifted(T))):
             return T
     raise error(
         f"{where}: arm '{arm}' cannot grasp {what}: none of {len(candidates)} grasps round "
         f"{_mm(candidates[0][:3, 3])} has an inverse kinematics solution (with its approach "
-        "and lift) within the joint limits"
+        "and lift) within the joint limits and free of collisions"
     )
 
 
@@ -120,6 +128,7 @@ def pick(
         lg.grasp_candidates(grasp, state.where[name], body, base),
         where,
         f"'{name}'",
+        name,
     )
     b.add(
         f"{where}: to {name}", [transit(arm, lg.approach_of(T))], before=[GripperEvent(arm, OPEN)]
@@ -167,7 +176,7 @@ def set_down(
     for deg in SET_DOWN_TURNS_DEG:
         R = g.rot_z(math.radians(deg)) @ T_now_base[:3, :3]
         T = g.transform(R, target) @ held.T_base_tcp
-        if all(reach(arm, P) for P in (T, lg.lifted(T), lg.approach_of(T))):
+        if all(reach(arm, P, (held.name,)) for P in (T, lg.lifted(T), lg.approach_of(T))):
             break
     else:
         raise error(
@@ -224,7 +233,7 @@ def unscrew(
     base = world.cell.robots[turner].base.matrix()[:3, 3]
     heading = math.atan2(float((p - base)[1]), float((p - base)[0])) + math.pi / 2.0
     candidates = [lg.top_grasp(p, heading + k * math.pi / 8) for k in range(8)]
-    T0 = choose_grasp(reach, turner, candidates, where, f"the cap of '{name}'")
+    T0 = choose_grasp(reach, turner, candidates, where, f"the cap of '{name}'", name)
     b.add(
         f"{where}: to the cap",
         [transit(turner, lg.approach_of(T0))],
@@ -240,7 +249,7 @@ def unscrew(
         last = k == len(strokes) - 1
         # counter-clockwise seen from above (a right-hand thread comes off): +z of the cell
         turned = _turned(T, angle, rise_per_rad * angle)
-        if not reach(turner, turned):
+        if not reach(turner, turned, (name,)):
             raise error(
                 f"{where}: arm '{turner}' cannot turn the cap of '{name}' by "
                 f"{math.degrees(angle):.0f} deg"
@@ -276,7 +285,7 @@ def put_cap_down(
     # on the surface, or let go of it up to CAP_DROP above where the arm reaches no lower
     for drop in np.linspace(0.0, CAP_DROP, 5):
         T_put[:3, 3] = np.asarray(T_place)[:3, 3] + (body.cap_height / 2.0 + drop) * lg.UP
-        if reach(turner, T_put) and reach(turner, lg.lifted(T_put)):
+        if reach(turner, T_put, (name,)) and reach(turner, lg.lifted(T_put), (name,)):
             break
     else:
         raise error(f"{where}: arm '{turner}' cannot put the cap down at {_mm(T_put[:3, 3])}")
@@ -342,7 +351,7 @@ def pour(
     T_over[:3, 3] = T_target[:3, 3] - swing + (target.height + POUR_CLEARANCE + reach_down) * lg.UP
     tilt = [_tilted(T_over, axis, angle * s) for s in np.linspace(0.0, 1.0, 19)]
     for P in (T_over, tilt[-1]):
-        if not reach(arm, P):
+        if not reach(arm, P, (name, into)):
             raise error(
                 f"{where}: arm '{arm}' cannot pour '{name}' over '{into}': the pose at "
                 f"{_mm(P[:3, 3])} has no inverse kinematics solution within its joint limits"

@@ -44,11 +44,10 @@ from cellengine.errors import InputError
 from cellengine.errors import Problem as Complaint
 from cellengine.execute import home_configuration
 from cellengine.geometry import Mat
-from cellengine.info.objects import Objects
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.ik import arm_ik
 from cellengine.motion.robot import CellModel
-from cellengine.motion.scene import CollisionScene, build_scene
+from cellengine.motion.scene import CollisionScene, build_scene, rearranged, standing_container
 from cellengine.program import Segment
 from cellengine.skill import HeavierOf, LighterOf, ObjectRef, Skill
 from cellengine.world import World
@@ -86,7 +85,7 @@ def plan_lab_steps(
     (kg) by object; objects.yaml's for the others."""
     known = {n: float(c.mass) for n, c in world.objects.containers.items() if c.mass is not None}
     known.update(masses or {})
-    reach = _reach(world, cell)
+    reach = _Reach(world, cell, dict)  # no container for the allocation's reach tests
     problem = build_problem(world, cell, steps, reach)
     try:
         mission = allocate(problem)
@@ -97,6 +96,7 @@ def plan_lab_steps(
         for name, arm in cell.arms.items()
     }
     b = lm.Builder(LabState.start(world, tcp))
+    reach.where = lambda: b.state.where
     by_id = {_id(s, i): (i, s) for i, s in enumerate(steps)}
     needs = {b.name: t.id for t in problem.tasks for b in t.blocked_by}
     for task in mission.order:
@@ -366,24 +366,38 @@ def _full_scene(world: World, cell: CellModel) -> CollisionScene:
     return hit[1]
 
 
-def _reach(world: World, cell: CellModel) -> lm.Solver:
-    """Whether an arm reaches a pose in a configuration free of collisions with itself, the
-    platforms, the obstacles and the other arms at home (the containers left out: the
-    grasp touches them, and where they stand changes)."""
-    iks = {name: arm_ik(arm) for name, arm in cell.arms.items()}
-    bare = replace(world, objects=Objects())
-    checker = CollisionChecker(build_scene(cell, bare))
-    home = home_configuration(cell)
+class _Reach:
+    """Reach tests (lm.Solver) in the scene as it is now: the containers standing where the
+    plan has put them so far (``where()``), the held ones and those ignored left out; the
+    other arms at home. Checkers are kept per arrangement."""
 
-    def test(arm: str, T: Mat) -> bool:
-        q = np.array(home, dtype=float)
-        for sol in iks[arm].solve_all(T):
-            q[cell.slices[arm]] = sol
+    def __init__(
+        self, world: World, cell: CellModel, where: Callable[[], Mapping[str, Mat]]
+    ) -> None:
+        self.world, self.cell, self.where = world, cell, where
+        self.iks = {name: arm_ik(arm) for name, arm in cell.arms.items()}
+        self.home = home_configuration(cell)
+        self.scene = _full_scene(world, cell)
+        self.checkers: dict[tuple[object, ...], CollisionChecker] = {}
+
+    def __call__(self, arm: str, T_cell_tcp: Mat, ignore: Sequence[str] = ()) -> bool:
+        checker = self._checker(ignore)
+        q = np.array(self.home, dtype=float)
+        for sol in self.iks[arm].solve_all(T_cell_tcp):
+            q[self.cell.slices[arm]] = sol
             if checker.check(q) is None:
                 return True
         return False
 
-    return test
+    def _checker(self, ignore: Sequence[str]) -> CollisionChecker:
+        standing = {n: T for n, T in self.where().items() if n not in ignore}
+        key = tuple(sorted((n, tuple(np.round(T[:3, 3], 6))) for n, T in standing.items()))
+        if key not in self.checkers:
+            containers = self.world.objects.containers
+            statics = [s for s in self.scene.statics if s.name not in containers]
+            statics += [standing_container(self.world, n, T) for n, T in sorted(standing.items())]
+            self.checkers[key] = CollisionChecker(rearranged(self.scene, statics, {}, {}))
+        return self.checkers[key]
 
 
 def _point_reach(world: World, arm: str, reach: lm.Solver) -> Callable[[Point], bool]:

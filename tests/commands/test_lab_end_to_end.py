@@ -118,8 +118,9 @@ def _step_spans(c: Compiled) -> dict[int, tuple[float, float]]:
     return spans
 
 
-def test_experiment_3_weighs_both_unscrews_and_pours_the_heavier() -> None:
-    c = _compiled("plan_pour_heavier", "cartesian")
+@pytest.mark.parametrize("cell", sorted(CELL_FILES))
+def test_experiment_3_weighs_both_unscrews_and_pours_the_heavier(cell: str) -> None:
+    c = _compiled("plan_pour_heavier", cell)
     steps = c.loaded.plan.steps
     index = {s.id: i for i, s in enumerate(steps)}
     spans = _step_spans(c)

@@ -41,7 +41,7 @@ def world(tmp_path_factory: pytest.TempPathFactory) -> World:
 def reach(world: World) -> lm.Solver:
     model = build_cell_model(world)
     iks = {name: arm_ik(arm) for name, arm in model.arms.items()}
-    return lambda arm, T: iks[arm].solve(T) is not None
+    return lambda arm, T, ignore=(): iks[arm].solve(T) is not None
 
 
 def _start(world: World) -> LabState:
@@ -164,11 +164,13 @@ def test_weigh_tells_the_runner_what_to_read(world: World, reach: lm.Solver) -> 
 def test_an_unreachable_grasp_is_refused_in_plan_terms(world: World) -> None:
     b = lm.Builder(_start(world))
     with pytest.raises(InputError) as e:
-        lm.pick(b, lambda arm, T: False, world, "left", "vial1", "top", "steps[1] Pick vial1")
+        lm.pick(
+            b, lambda arm, T, ignore=(): False, world, "left", "vial1", "top", "steps[1] Pick vial1"
+        )
     assert e.value.problems[0].message == (
         "steps[1] Pick vial1: arm 'left' cannot grasp 'vial1': none of 8 grasps round "
         "(200.0, -20.0, 117.5) mm has an inverse kinematics solution (with its approach and "
-        "lift) within the joint limits"
+        "lift) within the joint limits and free of collisions"
     )
 
 
