@@ -444,12 +444,19 @@ def _candidates(ref: ObjectRef) -> tuple[str, ...]:
 
 
 def choices(
-    world: World, steps: Sequence[Skill], masses: Mapping[str, float] | None = None
+    world: World,
+    steps: Sequence[Skill],
+    masses: Mapping[str, float] | None = None,
+    measured_only: bool = False,
 ) -> dict[str, str]:
     """The objects the runtime choices (``heavier_of``, ``lighter_of``) pick, by
-    ``steps[i].field``, with ``masses`` over objects.yaml's; a choice whose masses are not
-    all known yet is left out."""
-    known = {n: float(c.mass) for n, c in world.objects.containers.items() if c.mass is not None}
+    ``steps[i].field``, with ``masses`` over objects.yaml's (with ``measured_only``, with
+    ``masses`` alone); a choice whose masses are not all known is left out."""
+    known: dict[str, float] = {}
+    if not measured_only:
+        known = {
+            n: float(c.mass) for n, c in world.objects.containers.items() if c.mass is not None
+        }
     known.update(masses or {})
     out: dict[str, str] = {}
     for i, step in enumerate(steps):

@@ -76,6 +76,7 @@ def _play(compiled: Compiled, driver: Driver, journal: IO[str], quiet: bool, out
     program = compiled.program
     events_of = segment_events(program)
     measured: dict[str, float] = {}
+    planned: dict[str, float] = {}  # the masses the program was planned with
     i = 0
     while i < len(program.segments):
         segment, events = program.segments[i], events_of[i]
@@ -96,9 +97,9 @@ def _play(compiled: Compiled, driver: Driver, journal: IO[str], quiet: bool, out
             name, arm = str(seg.facts["object"]), str(seg.facts["arm"])
             measured[name] = driver.read_mass(arm)
             _entry(journal, "measured", step=seg.step, object=name, arm=arm, mass_kg=measured[name])
-            again = _recompiled(compiled, measured, i + 1)
+            again = _recompiled(compiled, planned, measured, i + 1)
             if again is not None:
-                compiled, program = again, again.program
+                compiled, program, planned = again, again.program, dict(measured)
                 events_of = segment_events(program)
                 write_plan_outputs(compiled, out)
                 _entry(journal, "replanned", reason="measured masses changed a choice")
@@ -107,14 +108,20 @@ def _play(compiled: Compiled, driver: Driver, journal: IO[str], quiet: bool, out
         i += 1
 
 
-def _recompiled(compiled: Compiled, measured: dict[str, float], done: int) -> Compiled | None:
-    """The plan compiled with the masses measured, if they change a runtime choice; the
-    segments already run must be the same in it."""
+def _recompiled(
+    compiled: Compiled, planned: dict[str, float], measured: dict[str, float], done: int
+) -> Compiled | None:
+    """The plan compiled again with the masses measured, if a runtime choice whose every
+    candidate has now been weighed picks otherwise than the program (planned with
+    ``planned`` over objects.yaml's masses) does; the segments already run must be the same
+    in it."""
     from cellengine.pipeline import compile_loaded
     from skills.lab_plan import choices
 
-    steps = compiled.loaded.plan.steps
-    if choices(compiled.world, steps) == choices(compiled.world, steps, measured):
+    world, steps = compiled.world, compiled.loaded.plan.steps
+    now = choices(world, steps, measured, measured_only=True)
+    then = choices(world, steps, planned)
+    if all(then.get(k) == v for k, v in now.items()):
         return None
     again = compile_loaded(compiled.loaded, compiled.strategy, masses=measured)
     before = [s.segment.label for s in compiled.program.segments[:done]]

@@ -161,3 +161,35 @@ def test_blockers_are_moved_before_the_targets(cell: str) -> None:
     # both targets end where the plan puts them (the program's last placements)
     for step in c.loaded.plan.steps:
         assert any(f"put down {step.object}" in lb for lb in labels)
+
+
+def test_a_measured_mass_that_changes_the_choice_replans_the_rest(tmp_path: Path) -> None:
+    """objects.yaml says vial2 is the heavier; the load cell finds vial1 heavier (its mass
+    in the simulated cell is 50 g): after the weighings the run is planned again and pours
+    vial1, the segments already sent unchanged."""
+    from cellengine.commands.run import _play
+    from cellengine.drivers.sim import SimDriver
+
+    c = compile_plan(LAB / "plan_pour_heavier.yaml")
+    objects = c.world.objects
+    heavy = objects.containers["vial1"].model_copy(update={"mass": 0.050})
+    truth = objects.model_copy(update={"containers": {**objects.containers, "vial1": heavy}})
+    joints = {name: arm.joint_names for name, arm in c.cell.arms.items()}
+    q0 = c.program.segments[0].trajectory.q[0]
+    with (
+        SimDriver(c.world.cell, joints, objects=truth, q0=q0) as driver,
+        (tmp_path / "journal.jsonl").open("w") as journal,
+    ):
+        driver.configure()
+        driver.activate()
+        _play(c, driver, journal, quiet=True, out=tmp_path)
+        driver.deactivate()
+    entries = [json.loads(line) for line in (tmp_path / "journal.jsonl").read_text().splitlines()]
+    kinds = [e["entry"] for e in entries]
+    assert kinds.count("measured") == 2 and kinds.count("replanned") == 1
+    assert kinds.index("replanned") > max(i for i, k in enumerate(kinds) if k == "measured")
+    sent = [e["label"] for e in entries if e["entry"] == "sent"]
+    assert any("pour vial1" in label for label in sent)
+    assert not any("pour vial2" in label for label in sent)
+    report = json.loads((tmp_path / "report.json").read_text())
+    assert any("pour vial1" in s["label"] for s in report["segments"])
