@@ -12,7 +12,7 @@ import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from cellengine.errors import InputError, Problem
 from cellengine.execute.compile import Compiler, home_configuration
@@ -24,6 +24,9 @@ from cellengine.motion.scene import build_scene
 from cellengine.program import Program, Segment
 from cellengine.skill import Skill
 from cellengine.world import World
+
+if TYPE_CHECKING:
+    from cellengine.allocate import Mission
 
 T = TypeVar("T")
 Progress = Callable[[int, int, str], None]  # (step index, number of steps, skill)
@@ -48,7 +51,7 @@ def plan_segments(
     cell: CellModel,
     steps: Sequence[Skill],
     masses: Mapping[str, float] | None = None,
-) -> tuple[list[Segment], list[dict[str, Any]] | None]:
+) -> tuple[list[Segment], Mission | None]:
     """Every step's segments, and a lab plan's mission. A plan is all cable skills (they
     share one state through the whole plan) or all lab skills (the allocator decides which
     robots do what; ``masses``: measured masses that choose ``heavier_of`` objects)."""
@@ -57,7 +60,7 @@ def plan_segments(
 
     if all(isinstance(s, LabSkill) for s in steps):
         lab = plan_lab_steps(world, cell, steps, masses)
-        return lab.segments, lab.mission.to_json()
+        return lab.segments, lab.mission
     for i, step in enumerate(steps):
         if not isinstance(step, CableSkill):
             raise InputError(
@@ -123,7 +126,16 @@ def compile_loaded(
             progress(segment.step, len(plan.steps), plan.steps[segment.step].skill)
 
     # add_all looks ahead from each transit and comes back to it when a later segment fails
-    return Compiled(loaded, cell, compiler.add_all(segments, before_each), chosen, mission)
+    program = compiler.add_all(segments, before_each)
+    mission_json = None
+    if mission is not None:
+        from skills.lab_plan import mission_json as to_json
+
+        spans = [
+            (s.segment, s.trajectory.start_time, s.trajectory.end_time) for s in program.segments
+        ]
+        mission_json = to_json(mission, spans)
+    return Compiled(loaded, cell, program, chosen, mission_json)
 
 
 def _with_file(plan_file: Path, make: Callable[[], T]) -> T:

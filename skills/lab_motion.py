@@ -51,6 +51,7 @@ class Builder:
     def __init__(self, state: LabState) -> None:
         self.state = state
         self.segments: list[Segment] = []
+        self.tag: Mapping[str, Any] = {}  # facts every segment added gets (the mission part)
 
     def add(
         self,
@@ -71,7 +72,7 @@ class Builder:
             after=tuple(after),
             closed_chain=closed_chain,
             contacts=tuple(contacts),
-            facts=MappingProxyType(dict(facts or {})),
+            facts=MappingProxyType({**self.tag, **(facts or {})}),
         )
         for path in seg.paths:
             self.state = self.state.moved(path.arm, path.poses[-1])

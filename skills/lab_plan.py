@@ -26,6 +26,8 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 
+from typing import Any
+
 import numpy as np
 
 from cellengine.allocate import (
@@ -104,6 +106,7 @@ def plan_lab_steps(
             name = task.split(":", 1)[1]
             i = by_id[needs[name]][0]
             b.state = replace(b.state, step=i)
+            b.tag = {"mission": (task, 0)}
             _clear(b, world, reach, name, _actions(mission, task), f"steps[{i}] clear {name}")
             for arm in dict.fromkeys(a.robot for a in _actions(mission, task)):
                 b.add(f"steps[{i}] clear {name}: {arm} back", [lm.transit(arm, tcp[arm])])
@@ -115,6 +118,7 @@ def plan_lab_steps(
         actions = _actions(mission, task)
         for k, action in enumerate(actions):
             prev = actions[k - 1] if k else None
+            b.tag = {"mission": (task, _part(mission, task, action))}
             if prev is not None and prev.robot != action.robot and prev.kind != "hold":
                 # a robot that hands over (or is done) leaves before the other comes in
                 b.add(
@@ -133,6 +137,7 @@ def plan_lab_steps(
             T = _cap_place(world, b, reach, arm)
             lm.put_cap_down(b, reach, world, arm, name, T, where)
             b.add(f"{where}: {arm} back to its rest", [lm.transit(arm, tcp[arm])])
+    b.tag = {}
     return LabPlan(problem, mission, b.segments, b.state)
 
 
@@ -275,6 +280,43 @@ def _primitives(
 
 def _actions(mission: Mission, task: str) -> list[Action]:
     return [a for seg in mission.options[task].segments for a in seg.actions]
+
+
+def _part(mission: Mission, task: str, action: Action) -> int:
+    """The index of the mission part (schedule entry) of ``task`` that ``action`` is in."""
+    return next(j for j, seg in enumerate(mission.options[task].segments) if action in seg.actions)
+
+
+def mission_json(
+    mission: Mission, segments: Sequence[tuple[Segment, float, float]]
+) -> list[dict[str, Any]]:
+    """report.json's ``mission``: each part of each step (one robot's run, a handover side,
+    a cooperation, an obstacle moved), its robots, its start and end in the program (s)
+    and the allocator's estimate of them; ``segments``: each compiled segment with its
+    start and end."""
+    spans: dict[tuple[str, int], tuple[float, float]] = {}
+    for seg, t0, t1 in segments:
+        key = seg.facts.get("mission")
+        if key is not None:
+            k = (str(key[0]), int(key[1]))
+            lo, hi = spans.get(k, (t0, t1))
+            spans[k] = (min(lo, t0), max(hi, t1))
+    out = []
+    for (task, j), (lo, hi) in spans.items():
+        part = mission.options[task].segments[j]
+        # a task's parts follow one another: its schedule entries in time order are its parts
+        est = [e for e in mission.schedule if e.step == task][j]
+        out.append(
+            {
+                "step": task,
+                "arms": list(part.robots),
+                "start": round(lo, 6),
+                "end": round(hi, 6),
+                "inserted": part.inserted,
+                "estimate": [round(est.start, 6), round(est.end, 6)],
+            }
+        )
+    return sorted(out, key=lambda e: (float(e["start"]), float(e["end"])))
 
 
 def _do(

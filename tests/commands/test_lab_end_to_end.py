@@ -56,6 +56,13 @@ def test_weighing_an_object_only_robot2_reaches_goes_through_a_handover(cell: st
     assert c.mission is not None
     assert any(e["inserted"] == "handover" for e in c.mission)
     assert _mission_arms(c, "weigh") == {"robot1", "robot2"}
+    # the mission's times are the program's: robot2 puts the vial down at the handover
+    # before robot1 takes it there, and robot1 weighs after that
+    hand = [e for e in c.mission if e["inserted"] == "handover"]
+    put = next(e for e in hand if e["arms"] == ["robot2"])
+    take = next(e for e in hand if e["arms"] == ["robot1"])
+    assert put["end"] <= take["start"]
+    assert 0.0 <= c.mission[0]["start"] and c.mission[-1]["end"] <= c.program.duration + 1e-6
     (weighing,) = [s for s in c.program.segments if s.segment.facts.get("measure") == "mass"]
     arm = weighing.segment.facts["arm"]
     robot = c.world.cell.robots[arm]
