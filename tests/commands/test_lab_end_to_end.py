@@ -62,7 +62,7 @@ def test_weighing_an_object_only_robot2_reaches_goes_through_a_handover(cell: st
     put = next(e for e in hand if e["arms"] == ["robot2"])
     take = next(e for e in hand if e["arms"] == ["robot1"])
     assert put["end"] <= take["start"]
-    assert 0.0 <= c.mission[0]["start"] and c.mission[-1]["end"] <= c.program.duration + 1e-6
+    assert c.mission[0]["start"] >= 0.0 and c.mission[-1]["end"] <= c.program.duration + 1e-6
     (weighing,) = [s for s in c.program.segments if s.segment.facts.get("measure") == "mass"]
     arm = weighing.segment.facts["arm"]
     robot = c.world.cell.robots[arm]
