@@ -182,8 +182,20 @@ def trajectory_json(program: Program) -> dict[str, Any]:
 
 
 def step_label(step: Skill) -> str:
-    """A step as people read it: ``RouteCable cable1: routing.guide1, routing.guide2``."""
-    names = [name for _, _, name in step.refs()]
+    """A step as people read it: ``RouteCable cable1: routing.guide1, routing.guide2``; a
+    runtime choice as ``Pour heavier of vial1/vial2: beaker``."""
+    fields: dict[str, list[str]] = {}
+    choice: dict[str, str] = {}
+    for loc, _, name in step.refs():
+        key = str(loc[0])
+        fields.setdefault(key, []).append(name)
+        if len(loc) > 1 and loc[1] in ("heavier_of", "lighter_of"):
+            choice[key] = str(loc[1]).replace("_of", " of")
+    names = [
+        f"{choice[k]} {'/'.join(v)}" if k in choice else n
+        for k, v in fields.items()
+        for n in (v if k not in choice else v[:1])
+    ]
     if not names:
         return step.skill
     head, rest = names[0], names[1:]

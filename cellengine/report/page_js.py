@@ -45,6 +45,9 @@ JS = r"""
   const GROUP_COLORS = ['#7f93b2', '#8fa37a', '#b89a6a', '#9284bd', '#5fa3a8'];
   const STEP_COLORS = ['#4f6d9a', '#5b8c6e', '#9a6b4f', '#7a5b9a', '#4f8a9a', '#9a4f6d'];
   const STRATEGY_COLORS = { split: '#64748b', sync: '#0e7490', async: '#a16207' };
+  // the mission (lab plans): a robot's own work, and what the allocator inserted
+  const MISSION_COLORS = { task: '#2563eb', handover: '#d97706', cooperation: '#7c3aed',
+    obstacle: '#64748b' };
   const BG = '#e9edf3';
   const WHITE = [255, 255, 255];
   const FOV = 40 * Math.PI / 180;
@@ -767,6 +770,19 @@ JS = r"""
     RP.steps.forEach((s, k) => bar(steps, s, STEP_COLORS[k % STEP_COLORS.length],
       '#' + s.step + ' ' + s.label, '#' + s.step + ' ' + s.label + ': ' + fmt(s.start, 2) +
       ' to ' + fmt(s.end, 2) + ' s', tl.steps));
+    if (RE.mission && RE.mission.length) {
+      // one lane per robot: which steps it works on, when, and what was inserted
+      const arms = [...new Set(RE.mission.flatMap((m) => m.arms))];
+      for (const arm of arms) {
+        const ml = lane('', 'Mission: ' + arm);
+        ml.dataset.mission = arm;
+        for (const m of RE.mission.filter((x) => x.arms.includes(arm))) {
+          const what = m.inserted ? m.step + ' (' + m.inserted + ')' : m.step;
+          bar(ml, m, MISSION_COLORS[m.inserted || 'task'], what, what + ' [' +
+            m.arms.join(' + ') + ']: ' + fmt(m.start, 2) + ' to ' + fmt(m.end, 2) + ' s', []);
+        }
+      }
+    }
     const segs = lane('thin', 'Segments');
     const key = segs.previousSibling;
     for (const [name, color] of Object.entries(STRATEGY_COLORS)) {

@@ -200,3 +200,16 @@ def test_a_measured_mass_that_changes_the_choice_replans_the_rest(tmp_path: Path
     assert not any("pour vial2" in label for label in sent)
     report = json.loads((tmp_path / "report.json").read_text())
     assert any("pour vial1" in s["label"] for s in report["segments"])
+
+
+def test_step_labels_say_a_runtime_choice() -> None:
+    from cellengine.info.load import load_plan
+    from cellengine.pipeline import step_label
+
+    steps = load_plan(LAB / "plan_pour_heavier.yaml").plan.steps
+    assert [step_label(s) for s in steps] == [
+        "Weigh vial1",
+        "Weigh vial2",
+        "Unscrew heavier of vial1/vial2",
+        "Pour heavier of vial1/vial2: beaker",
+    ]

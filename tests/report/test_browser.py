@@ -130,6 +130,33 @@ def test_an_empty_program_loads(tmp_path: Path) -> None:
     assert int(attrs["data-drawn"]) > 100 and attrs["data-cables"] == "0"
 
 
+def test_a_lab_mission_is_drawn_as_lanes_per_robot(tmp_path: Path) -> None:
+    """report.json's mission (lab plans) becomes one timeline lane per robot, each part a
+    bar saying its step and what the allocator inserted."""
+    world, cell = cable_cell()
+    mission = [
+        {"step": "weigh", "arms": ["right"], "start": 0.0, "end": 1.0, "inserted": None},
+        {"step": "weigh", "arms": ["right"], "start": 1.0, "end": 2.0, "inserted": "handover"},
+        {"step": "weigh", "arms": ["left"], "start": 2.0, "end": 3.0, "inserted": "handover"},
+        {
+            "step": "cap",
+            "arms": ["left", "right"],
+            "start": 3.0,
+            "end": 5.0,
+            "inserted": "cooperation",
+        },
+    ]
+    extra = {"plan": "p.yaml", "mission": mission}
+    _, page = write_report(tmp_path / "run", sample_program(cell), world, cell, extra)
+    dom = run_chromium(page.as_uri(), tmp_path / "profile", "--dump-dom").stdout
+    assert 'data-status="ok"' in dom
+    lanes = re.findall(r'<div class="lane ?" data-mission="(\w+)">(.*?)</div></div>', dom)
+    assert sorted(arm for arm, _ in lanes) == ["left", "right"]
+    right = next(body for arm, body in lanes if arm == "right")
+    assert right.count('class="bar') == 3
+    assert "weigh (handover)" in right and "cap (cooperation)" in right
+
+
 INTERACT = """
 <script>
 (function () {
