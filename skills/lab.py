@@ -65,3 +65,13 @@ class Pour(Skill):
         if angle > math.pi:
             raise ValueError("a pour tilts at most 180 deg (pi rad)")
         return angle
+
+
+@register
+class BimanualCarry(Skill):
+    """Both hands grasp one object (a box) on opposite sides and carry it to ``to`` keeping
+    their relative pose (a closed chain: the follower tracks the leader)."""
+
+    skill: Literal["BimanualCarry"]
+    object: ObjectRef
+    to: KeypointRef

@@ -56,16 +56,17 @@ class Body:
 
     @classmethod
     def of(cls, c: Container) -> Body:
-        if c.height is None:
-            raise ValueError("a container needs a height to be grasped")
+        height = c.size[2] if c.size is not None else c.height
+        if height is None:
+            raise ValueError("a container needs a height (or a box size) to be grasped")
         if c.diameter is not None:
             width = c.diameter
         elif c.size is not None:
             width = min(c.size[0], c.size[1])
         else:
             raise ValueError("a container needs a diameter (or a box size) to be grasped")
-        cap = min(CAP_HEIGHT, CAP_SHARE * c.height) if c.cap is not None else 0.0
-        return cls(c.height, width, cap)
+        cap = min(CAP_HEIGHT, CAP_SHARE * height) if c.cap is not None else 0.0
+        return cls(height, width, cap)
 
     def grasp_height(self, grasp: Grasp) -> float:
         """Height of the fingertip centre above the base."""
@@ -130,6 +131,18 @@ def grasp_candidates(grasp: Grasp, T_at: Mat, body: Body, base: Vec, n_top: int 
         return abs(math.remainder(math.radians(deg) - heading, 2.0 * math.pi))
 
     return [
-        side_grasp(p, np.array([math.cos(math.radians(d)), math.sin(math.radians(d)), 0.0]))
+        T
         for d in sorted(SIDE_HEADINGS_DEG, key=off)
+        for T in both_ways(
+            side_grasp(p, np.array([math.cos(math.radians(d)), math.sin(math.radians(d)), 0.0]))
+        )
     ]
+
+
+def both_ways(T: Mat) -> tuple[Mat, Mat]:
+    """A grasp and the same grasp turned half a turn about the tool's axis: a parallel
+    gripper is symmetric about it, and an arm may reach only one of the two (a tool whose
+    fingertips are off the flange's axis)."""
+    flipped = np.array(T, dtype=float)
+    flipped[:3, :2] *= -1.0
+    return T, flipped

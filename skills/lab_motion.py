@@ -371,3 +371,111 @@ def _tilted(T: Mat, axis: Any, angle: float) -> Mat:
     R = g.axis_angle_to_matrix(list(np.asarray(axis, dtype=float)), angle)[:3, :3]
     out[:3, :3] = R @ T[:3, :3]
     return out
+
+
+# ---------------------------------------------------------------------------- carry together
+
+
+def carry_together(
+    b: Builder,
+    reach: Solver,
+    world: World,
+    leader: str,
+    follower: str,
+    name: str,
+    T_to: Mat,
+    where: str,
+) -> None:
+    """Both arms take container ``name`` (a box) by the middle of two opposite sides, the
+    sides facing their bases, lift it, carry it over ``T_to``'s position, set it down there
+    and let go: the follower keeps its pose relative to the leader throughout."""
+    c = world.container(name)
+    if c.size is None:
+        raise error(f"{where}: '{name}' is not a box: BimanualCarry takes boxes (give 'size')")
+    T_base = b.state.where.get(name)
+    if T_base is None:
+        raise error(f"{where}: '{name}' is in a hand, not standing anywhere")
+    sx, sy, sz = c.size
+    centre = T_base[:3, 3] + sz / 2.0 * lg.UP
+    # the box's horizontal axis nearer the line from the leader's base to the follower's
+    bases = [world.cell.robots[a].base.matrix()[:3, 3] for a in (leader, follower)]
+    line_ab = lg.horizontal(bases[1] - bases[0])
+    x_box, y_box = T_base[:3, 0], T_base[:3, 1]
+    n, half = (
+        (x_box, sx / 2.0) if abs(x_box @ line_ab) >= abs(y_box @ line_ab) else (y_box, sy / 2.0)
+    )
+    n = lg.horizontal(n if float(n @ line_ab) >= 0 else -n)  # from the leader towards the follower
+    move = np.asarray(T_to)[:3, 3] - T_base[:3, 3]
+
+    def route(T: Mat) -> list[Mat]:  # grasp, lifted, over the target, set down
+        return [T, lg.lifted(T), _shifted(lg.lifted(T), move), _shifted(T, move)]
+
+    def hold_way(arm: str, T: Mat) -> Mat:
+        """The grasp either way round the tool's axis (the gripper is symmetric) that the
+        arm holds all along the route."""
+        missed = []
+        for way in lg.both_ways(T):
+            out = [P for P in route(way) if not reach(arm, P, (name,))]
+            if not out:
+                return way
+            missed.append(out[0])
+        raise error(
+            f"{where}: arm '{arm}' cannot hold '{name}' by its side at {_mm(missed[0][:3, 3])} "
+            f"on the way from {_mm(T_base[:3, 3])} to {_mm(np.asarray(T_to)[:3, 3])} (no "
+            "inverse kinematics solution free of collisions, either way round its tool axis)"
+        )
+
+    T_lead = hold_way(leader, lg.side_grasp(centre - half * n, n))
+    T_follow = hold_way(follower, lg.side_grasp(centre + half * n, -n))
+    T_rel = g.inverse(T_lead) @ T_follow  # kept while both hold the box
+    key_poses = route(T_lead)
+    for arm, T in ((leader, T_lead), (follower, T_follow)):
+        b.add(
+            f"{where}: {arm} to {name}",
+            [transit(arm, lg.approach_of(T))],
+            before=[GripperEvent(arm, OPEN)],
+        )
+    # the leader holds the box, the follower a grip on its side (one rigid object, one owner)
+    b.add(
+        f"{where}: take {name}",
+        [
+            line(leader, lg.approach_of(T_lead), T_lead),
+            line(follower, lg.approach_of(T_follow), T_follow),
+        ],
+        after=[GripperEvent(leader, GRASP, name), GripperEvent(follower, GRASP, f"{name}.side")],
+        contacts=[(leader, name), (follower, name)],
+    )
+    b.state = b.state.grasped(leader, name)
+    chain = (leader, follower)
+    for label, P0, P1 in (
+        ("lift", key_poses[0], key_poses[1]),
+        ("carry", key_poses[1], key_poses[2]),
+        ("set down", key_poses[2], key_poses[3]),
+    ):
+        lead_path = ip.line(P0, P1)
+        follow_path = np.stack([P @ T_rel for P in lead_path])
+        b.add(
+            f"{where}: {label} {name} together",
+            [ArmPath(leader, "cartesian", lead_path), ArmPath(follower, "cartesian", follow_path)],
+            closed_chain=chain,
+            contacts=[(follower, name)],
+        )
+    b.segments[-1] = replace(
+        b.segments[-1], after=(GripperEvent(leader, OPEN), GripperEvent(follower, OPEN))
+    )
+    b.state = b.state.released(leader)
+    T_end_f = key_poses[3] @ T_rel
+    b.add(
+        f"{where}: let go of {name}",
+        [
+            line(leader, key_poses[3], lg.approach_of(key_poses[3])),
+            line(follower, T_end_f, lg.approach_of(T_end_f)),
+        ],
+        contacts=[(leader, name), (follower, name)],
+    )
+
+
+def _shifted(T: Mat, move: Any) -> Mat:
+    out = np.array(T, dtype=float)
+    out[:3, 3] += np.asarray(move, dtype=float)
+    return out

@@ -54,18 +54,26 @@ from cellengine.skill import HeavierOf, LighterOf, ObjectRef, Skill
 from cellengine.world import World
 from skills import lab_geometry as lg
 from skills import lab_motion as lm
-from skills.lab import Handover, Pick, Place, Pour, Unscrew, Weigh
+from skills.lab import BimanualCarry, Handover, Pick, Place, Pour, Unscrew, Weigh
 from skills.lab_blockers import blockers
 from skills.lab_robots import robot_skills
 from skills.lab_state import LabState
 
-LabSkill = Pick | Place | Handover | Unscrew | Weigh | Pour
+LabSkill = Pick | Place | Handover | Unscrew | Weigh | Pour | BimanualCarry
 Point = tuple[float, float, float]
 # Rough durations (s) of each primitive for the mission's schedule; the executor times the
 # real motion.
 FREE_RADIUS = 0.05  # m: a place with a container or cap closer than this is taken
 CAP_REACH = 0.02  # m: the reach test of a place for a cap, this high over it
-DURATION = {"pick": 3.0, "place": 3.0, "weigh": 1.0, "hold": 3.0, "turn_cap": 8.0, "pour": 4.0}
+DURATION = {
+    "carry": 8.0,
+    "pick": 3.0,
+    "place": 3.0,
+    "weigh": 1.0,
+    "hold": 3.0,
+    "turn_cap": 8.0,
+    "pour": 4.0,
+}
 
 
 @dataclass(frozen=True)
@@ -124,7 +132,7 @@ def plan_lab_steps(
                     f"{where}: {prev.robot} back to its rest",
                     [lm.transit(prev.robot, tcp[prev.robot])],
                 )
-            _do(b, world, cell, reach, step, action, known, where)
+            _do(b, world, cell, reach, step, action, known, where, actions)
         # as the published platform does: each robot retracts after its work, so the next
         # task finds the shared zone clear; a turner first puts the cap down, once the
         # holder has gone
@@ -266,6 +274,13 @@ def _primitives(
     if isinstance(step, Unscrew):
         meet = _cooperation(world)
         return (pick, p("hold", meet, meet), p("turn_cap", meet, meet, with_previous=True), back)
+    if isinstance(step, BimanualCarry):
+        # two hands at once: a cooperation of any two robots with grippers
+        to = _point(world.pose(step.to)[:3, 3])
+        return (
+            Primitive("carry", "pick", loc, to, DURATION["carry"]),
+            Primitive("carry", "pick", loc, to, DURATION["carry"], with_previous=True),
+        )
     assert isinstance(step, Pour)
     targets = _candidates(step.into)
     into: Point | AnyOf = (
@@ -327,7 +342,9 @@ def _do(
     a: Action,
     masses: Mapping[str, float],
     where: str,
+    actions: Sequence[Action] = (),
 ) -> None:
+    """One action of a step; ``actions``: all the step's (a carry needs its partner's)."""
     name = _resolve(step.object, masses)
     names = _candidates(step.object)
 
@@ -348,6 +365,12 @@ def _do(
         lm.hold(b, reach, arm, at(a.start), where)
     elif a.kind == "turn_cap":
         lm.unscrew(b, reach, world, arm, name, where)
+    elif a.kind == "carry":
+        assert isinstance(step, BimanualCarry)
+        pair = [x for x in actions if x.kind == "carry"]
+        if a is pair[0]:  # the first carries for both; the second is the follower's part
+            to = world.pose(step.to)
+            lm.carry_together(b, reach, world, a.robot, pair[1].robot, name, to, where)
     elif a.kind == "pour":
         assert isinstance(step, Pour)
         lm.pour(b, reach, world, arm, name, _resolve(step.into, masses), step.angle, where)

@@ -213,3 +213,24 @@ def test_step_labels_say_a_runtime_choice() -> None:
         "Unscrew heavier of vial1/vial2",
         "Pour heavier of vial1/vial2: beaker",
     ]
+
+
+def test_a_bimanual_carry_plan_is_a_cooperation_of_both_arms(tmp_path: Path) -> None:
+    import shutil
+
+    folder = tmp_path / "cell"
+    shutil.copytree(CELLS / "cable_routing", folder)
+    objects = folder / "objects.yaml"
+    tray = "  tray: {kind: box, size: [60, 100, 80], mass: 200, at: routing.guide1.slot}\n"
+    objects.write_text(objects.read_text() + "containers:\n" + tray)
+    plan = folder / "plan_carry.yaml"
+    plan.write_text(
+        "cell: cell.yaml\nobjects: objects.yaml\nsteps:\n"
+        "  - {id: carry, skill: BimanualCarry, object: tray, to: routing.guide5.slot}\n"
+    )
+    c = compile_plan(plan)
+    assert c.mission is not None
+    (entry,) = c.mission
+    assert entry["inserted"] == "cooperation" and sorted(entry["arms"]) == ["left", "right"]
+    chained = [s for s in c.program.segments if s.segment.closed_chain is not None]
+    assert len(chained) == 3

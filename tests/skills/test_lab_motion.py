@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -94,7 +95,7 @@ def test_side_grasps_come_in_horizontally_away_from_the_base_first(world: World)
     assert heading / 15 == pytest.approx(round(heading / 15), abs=1e-9)
     assert abs(first[2, 2]) < 1e-12 and abs(first[2, 1]) < 1e-12  # z and jaw horizontal
     assert first[2, 3] == pytest.approx(T_at[2, 3] + (0.06 - 0.015) * 2 / 3)  # body, 2/3 up
-    assert len(rest) == len(lg.SIDE_HEADINGS_DEG) - 1
+    assert len(rest) == 2 * len(lg.SIDE_HEADINGS_DEG) - 1  # each heading both ways round
 
 
 def test_unscrew_turns_two_and_a_half_turns_in_half_turn_strokes(
@@ -238,3 +239,51 @@ def test_the_vial_blocks_a_tool_that_does_not_grasp_it(world: World, reach: lm.S
     assert holding.checker.check(q) is None
     holding.touch(())
     assert holding.checker.check(q) is not None
+
+
+def test_two_arms_carry_a_box_as_one_closed_chain(tmp_path: Path) -> None:
+    """BimanualCarry: each hand at the middle of the side facing its base, the follower's pose
+    relative to the leader's the same at every waypoint of lift, carry and set down, and the
+    program (through the executor) leaves the box where it was asked to go."""
+    from cellengine.execute import Compiler
+    from cellengine.motion.collision import CollisionChecker
+    from cellengine.motion.scene import build_scene
+    from skills.lab_plan import _Reach
+
+    folder = tmp_path / "cell"
+    shutil.copytree(CELLS / "cable_routing", folder)
+    objects = folder / "objects.yaml"
+    tray = "  tray: {kind: box, size: [60, 100, 80], mass: 200, at: routing.guide1.slot}\n"
+    objects.write_text(objects.read_text() + "containers:\n" + tray)
+    world = load_world(folder / "cell.yaml", objects)
+    model = build_cell_model(world)
+    b = lm.Builder(_start(world))
+    reach = _Reach(world, model, lambda: b.state.where)
+    target = world.pose("routing.guide5.slot")
+    lm.carry_together(b, reach, world, "left", "right", "tray", target, "carry")
+    chained = [s for s in b.segments if s.closed_chain is not None]
+    assert [s.label for s in chained] == [
+        "carry: lift tray together",
+        "carry: carry tray together",
+        "carry: set down tray together",
+    ]
+    take = next(s for s in b.segments if s.label == "carry: take tray")
+    lead0, follow0 = (p.poses[-1] for p in take.paths)
+    centre = world.pose("routing.guide1.slot")[:3, 3] + np.array([0, 0, 0.04])
+    # guide1's slot turns the box's x (60 mm) along the cell's y, the line between the bases:
+    # the hands face each other across those 60 mm, the left (its base at +y) from +y
+    assert np.allclose(lead0[:3, 3], centre + np.array([0, 0.03, 0]), atol=1e-6)
+    assert np.allclose(follow0[:3, 3], centre - np.array([0, 0.03, 0]), atol=1e-6)
+    assert np.allclose(lead0[:3, 2], [0, -1, 0], atol=1e-6)
+    T_rel = np.linalg.inv(lead0) @ follow0
+    for s in chained:
+        lead, follow = s.paths
+        assert (lead.arm, follow.arm) == ("left", "right")
+        for A, B in zip(lead.poses, follow.poses, strict=True):
+            assert np.allclose(np.linalg.inv(A) @ B, T_rel, atol=1e-9)
+    model_q0 = np.concatenate([a.home for a in model.arms.values() if a.home is not None])
+    c = Compiler(world, model, CollisionChecker(build_scene(model, world)), model_q0, "split")
+    c.add_all(b.segments)
+    stood = np.array(c.holding.state.standing["tray"])
+    assert np.allclose(stood[:3, 3], target[:3, 3], atol=1e-5)
+    assert not c.holding.state.by_arm
