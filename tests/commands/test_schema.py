@@ -18,6 +18,7 @@ def test_plan_schema_has_one_branch_per_skill() -> None:
     names = sorted(b["$ref"].rsplit("/", 1)[1] for b in branches)
     assert names == sorted(
         [
+            "BimanualCarry",
             "Handover",
             "Pick",
             "PickCable",
