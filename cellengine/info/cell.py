@@ -134,9 +134,28 @@ class SimDriver(Frozen):
     mass_noise: Mass = Field(0.0, ge=0)
 
 
+class Servo(Frozen):
+    """servoJ's smoothing, within the ranges the UR controller accepts."""
+
+    gain: float = Field(300.0, ge=100.0, le=2000.0)
+    lookahead: float = Field(0.1, ge=0.03, le=0.2)  # s
+
+
 class UrRtdeDriver(Frozen):
     kind: Literal["ur_rtde"]
     arms: dict[Name, IPv4Address]
+    servo: Servo = Servo()
+    # largest deviation (angle unit) of a measured joint from its command before both arms stop
+    tracking_tolerance: Angle = Field(0.05, gt=0)
+    # largest distance (angle unit) of a joint from the plan's first point at the start
+    start_tolerance: Angle = Field(0.01, gt=0)
+    # a segment may take this many times its duration, plus overrun_margin s, before it is
+    # stopped as overrun (a controller slows the arms with its speed slider)
+    overrun_scale: float = Field(1.5, ge=1.0)
+    overrun_margin: float = Field(1.0, ge=0.0)
+    # the grippers: the standard digital outputs high in each jaw mode (the others listed
+    # for any mode are set low)
+    gripper_io: dict[Name, tuple[Annotated[int, Field(ge=0, le=7)], ...]] = {}
 
 
 Driver = Annotated[SimDriver | UrRtdeDriver, Field(discriminator="kind")]

@@ -114,6 +114,16 @@ def _check_cell(cell: Cell, doc: YamlDoc) -> list[Problem]:
         for name in cell.robots:
             if name not in driver.arms:
                 err(f"driver.arms: no address for robot '{name}'", "driver", "arms")
+        modes = {m for tool in cell.tools.values() for m in tool.jaw}
+        for mode in driver.gripper_io:
+            if mode not in modes:
+                err(
+                    f"driver.gripper_io.{mode}: no tool has a jaw mode '{mode}'" + known(modes),
+                    "driver",
+                    "gripper_io",
+                    mode,
+                    key=True,
+                )
     return out
 
 

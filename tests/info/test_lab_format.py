@@ -3,6 +3,7 @@ objects.yaml, tool grasp and load cell, the simulated load cell's noise."""
 
 from __future__ import annotations
 
+import math
 import shutil
 from pathlib import Path
 
@@ -142,3 +143,34 @@ zones:
     path.write_text(path.read_text().replace("holder.comb_q", "holder.comb_b"))
     zone = load_world(path).cell.zones["shared"]
     assert (zone.handovers, zone.cooperation) == (("holder.comb_a.slot",), ("holder.comb_b",))
+
+
+def test_the_ur_driver_options_load_and_are_checked(tmp_path: Path) -> None:
+    path = _cell(tmp_path, "")
+    ur = (
+        "{kind: ur_rtde, arms: {left: 127.0.0.2, right: 127.0.0.3}, "
+        "servo: {gain: 500, lookahead: 0.05}, tracking_tolerance: 2, "
+        "gripper_io: {open: [], slide: [0], grasp: [0, 1]}}"
+    )
+    path.write_text(path.read_text().replace("{kind: sim}", ur))
+    cell, _ = load_cell(path)
+    assert cell.driver.kind == "ur_rtde"
+    assert (cell.driver.servo.gain, cell.driver.servo.lookahead) == (500.0, 0.05)
+    assert cell.driver.tracking_tolerance == pytest.approx(math.radians(2))
+    assert cell.driver.gripper_io == {"open": (), "slide": (0,), "grasp": (0, 1)}
+    line = next(i for i, s in enumerate(path.read_text().splitlines(), 1) if "ur_rtde" in s)
+    path.write_text(path.read_text().replace("grasp: [0, 1]", "squeeze: [0, 1]"))
+    with pytest.raises(InputError) as e:
+        load_cell(path)
+    (problem,) = e.value.problems
+    assert problem.line == line
+    assert problem.message == (
+        "driver.gripper_io.squeeze: no tool has a jaw mode 'squeeze'; known: grasp, open, slide"
+    )
+    path.write_text(path.read_text().replace("gain: 500", "gain: 5000"))
+    with pytest.raises(InputError) as e:
+        load_cell(path)
+    assert any(
+        "driver.ur_rtde.servo.gain" in p.message or "servo.gain" in p.message
+        for p in e.value.problems
+    )
