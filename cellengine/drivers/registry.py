@@ -11,11 +11,13 @@ from typing import Any
 from cellengine.drivers.base import Driver
 from cellengine.drivers.fault import Refused
 from cellengine.drivers.sim import SimDriver
+from cellengine.drivers.ur_rtde import UrDriver
 from cellengine.errors import known
 from cellengine.info.cell import Cell
 from cellengine.info.objects import Objects
 
-DRIVERS: dict[str, type[Driver]] = {"sim": SimDriver}
+# the UR driver imports its vendor library only when it configures
+DRIVERS: dict[str, type[Driver]] = {"sim": SimDriver, "ur_rtde": UrDriver}
 
 
 def make_driver(

@@ -1,0 +1,345 @@
+"""Two (or more) Universal Robots arms through ur-rtde: ``driver: {kind: ur_rtde, arms: {...}}``.
+
+Per arm one ``RTDEReceiveInterface`` (state), one ``RTDEControlInterface`` (servoJ,
+stops, watchdog) and one ``RTDEIOInterface`` (the gripper's digital outputs), to the
+addresses in the cell file only. The vendor modules are imported when the driver
+configures, never before.
+
+Execution streams the validated trajectory with servoJ at the servo period (2 ms) to every
+arm from one loop and one clock, so the arms start together and stay in step. Each tick
+checks, on every arm: the connections, the controller's safety status bits (protective or
+emergency stop), each joint against what was commanded over the last lookahead (servoJ's
+delay, see ur_watch.py), and the segment's wall time against its duration times
+``overrun_scale`` plus ``overrun_margin``. Any of them stops every arm (the others too: they
+may hold one cable), records the safety status bits, and puts the driver in its error
+state; it never resumes on its own (``recover`` checks the controllers first).
+
+The vendor's constructors wait for their controller without a timeout: they run in a
+helper thread with a deadline, and an address that does not answer is refused before
+anything moves.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import threading
+import time
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, TypeVar
+
+import numpy as np
+
+from cellengine.drivers.base import Driver as Base
+from cellengine.drivers.base import GripperState
+from cellengine.drivers.fault import Fault, Refused
+from cellengine.drivers.record import AppliedEvent, Played
+from cellengine.drivers.sim import servo_ticks
+from cellengine.drivers.ur_watch import safety_stop, set_bits, tracking_deviation
+from cellengine.info.cell import Cell
+from cellengine.info.cell import UrRtdeDriver as Config
+from cellengine.info.objects import Objects
+from cellengine.program import CompiledSegment, TimedEvent
+
+T = TypeVar("T")
+FloatArray = np.ndarray
+
+SERVO_PERIOD = 0.002  # s: 500 Hz, the e-Series controller's rate
+CONNECT_TIMEOUT = 5.0  # s for each vendor constructor
+WATCHDOG_HZ = 10.0  # the control script stops an arm not kicked for 0.1 s
+STOP_DECELERATION = 10.0  # rad/s^2 for servoStop / stopJ on a fault
+SAFETY_NORMAL = 1  # getSafetyMode()
+ROBOT_RUNNING = 7  # getRobotMode()
+MODEL_NAMES = {"ur3e": "UR3", "ur5e": "UR5", "ur10e": "UR10", "ur5": "UR5"}
+STOPPED = "every arm stopped"
+
+
+class UrDriver(Base):
+    kind = "ur_rtde"
+
+    def __init__(
+        self,
+        cell: Cell,
+        joints: Mapping[str, Sequence[str]],
+        *,
+        objects: Objects | None = None,
+        connect_timeout: float = CONNECT_TIMEOUT,
+        servo_period: float = SERVO_PERIOD,
+    ) -> None:
+        if not isinstance(cell.driver, Config):
+            raise Refused("ur_rtde", f"the cell's driver is '{cell.driver.kind}', not ur_rtde")
+        self.config: Config = cell.driver
+        super().__init__(cell, joints, objects=objects, start_tolerance=self.config.start_tolerance)
+        self.addresses = {arm: str(ip) for arm, ip in self.config.arms.items()}
+        self.connect_timeout = connect_timeout
+        self.servo_period = servo_period
+        self._models = {name: r.model for name, r in cell.robots.items()}
+        self._ctl: dict[str, Any] = {}
+        self._rcv: dict[str, Any] = {}
+        self._io: dict[str, Any] = {}
+        self._grippers = {arm: GripperState(None, None) for arm in self.layout.arms}
+        self.periods: list[float] = []  # every servo period measured (s), for the report
+
+    # -- lifecycle hooks --------------------------------------------------------------------
+
+    def _on_configure(self) -> None:
+        try:
+            import dashboard_client
+            import rtde_control
+            import rtde_io
+            import rtde_receive
+        except ImportError as e:  # pragma: no cover - a dependency
+            raise Refused(self.kind, f"the ur-rtde library is not installed: {e}") from None
+        for arm, ip in self.addresses.items():
+            self._check_model(arm, ip, dashboard_client.DashboardClient)
+            rcv = self._connect(
+                arm, ip, "RTDE receive (port 30004)", rtde_receive.RTDEReceiveInterface
+            )
+            mode, safety = int(rcv.getRobotMode()), int(rcv.getSafetyMode())
+            if safety != SAFETY_NORMAL:
+                bits = set_bits(int(rcv.getSafetyStatusBits()))
+                raise Refused(self.kind, f"arm '{arm}' at {ip}: safety status {', '.join(bits)}")
+            if mode != ROBOT_RUNNING:
+                raise Refused(self.kind, f"arm '{arm}' at {ip}: robot mode {mode}, not running (7)")
+            self._rcv[arm] = rcv
+            self._ctl[arm] = self._connect(
+                arm, ip, "RTDE control", rtde_control.RTDEControlInterface
+            )
+            self._io[arm] = self._connect(arm, ip, "RTDE IO", rtde_io.RTDEIOInterface)
+
+    def _on_activate(self) -> None:
+        for arm, ctl in self._ctl.items():
+            if not ctl.setWatchdog(WATCHDOG_HZ):
+                raise Refused(self.kind, f"arm '{arm}': the controller refused the watchdog")
+
+    def _on_deactivate(self) -> None:
+        self._stop_all()
+
+    def _on_finalize(self) -> None:
+        for group in (self._ctl, self._rcv, self._io):
+            for client in group.values():
+                with contextlib.suppress(Exception):  # leaving anyway
+                    client.disconnect()
+            group.clear()
+
+    def _on_recover(self) -> None:
+        for arm, rcv in self._rcv.items():
+            if not rcv.isConnected():
+                raise Refused(self.kind, f"cannot recover: arm '{arm}' is not connected")
+            bits = int(rcv.getSafetyStatusBits())
+            if safety_stop(bits) is not None:
+                raise Refused(
+                    self.kind,
+                    f"cannot recover: arm '{arm}' reports {', '.join(set_bits(bits))} "
+                    "(clear it on the teach pendant first)",
+                )
+
+    def _on_fault(self) -> None:
+        self._stop_all()
+
+    # -- readings ---------------------------------------------------------------------------
+
+    def _read_joints(self) -> FloatArray:
+        q = np.zeros(len(self.joint_names))
+        for arm, s in self.layout.slices.items():
+            rcv = self._rcv[arm]
+            if not rcv.isConnected():
+                raise Refused(self.kind, f"arm '{arm}' at {self.addresses[arm]} is not connected")
+            q[s] = rcv.getActualQ()
+        return q
+
+    def _read_gripper(self, arm: str) -> GripperState:
+        return self._grippers[arm]
+
+    def _last_known(self) -> tuple[FloatArray, dict[str, GripperState]]:
+        q = np.zeros(len(self.joint_names))
+        for arm, s in self.layout.slices.items():
+            try:
+                q[s] = self._rcv[arm].getActualQ()
+            except Exception:
+                q[s] = np.nan
+        return q, dict(self._grippers)
+
+    # -- execution ----------------------------------------------------------------------
+
+    def _on_execute(self, segment: CompiledSegment, events: tuple[TimedEvent, ...]) -> Played:
+        traj = segment.trajectory
+        ticks = servo_ticks(traj.start_time, traj.end_time, self.servo_period)
+        commanded = np.atleast_2d(traj.sample(ticks)[0])
+        commanded[-1] = traj.q[-1]
+        measured = np.zeros_like(commanded)
+        applied: list[AppliedEvent] = []
+        pending = list(events)
+        servo = self.config.servo
+        window = max(1, int(np.ceil((servo.lookahead + 2 * self.servo_period) / self.servo_period)))
+        deadline = traj.duration * self.config.overrun_scale + self.config.overrun_margin
+        wall0 = time.perf_counter()
+        last = wall0
+        fault: Fault | None = None
+        k = 0
+        for k, t in enumerate(ticks):
+            starts = {arm: ctl.initPeriod() for arm, ctl in self._ctl.items()}
+            for arm, s in self.layout.slices.items():
+                ctl = self._ctl[arm]
+                ctl.servoJ(
+                    list(commanded[k, s]), 0.0, 0.0, self.servo_period, servo.lookahead, servo.gain
+                )
+                ctl.kickWatchdog()
+            fault = self._watch(float(t), k, commanded, measured, window)
+            if fault is None and time.perf_counter() - wall0 > deadline:
+                fault = self._overrun(float(t), traj.duration, deadline)
+            if fault is None:
+                fault = self._apply_due(float(t), pending, applied)
+            if fault is not None:
+                break
+            first = next(iter(self._ctl))
+            self._ctl[first].waitPeriod(starts[first])  # one clock for every arm
+            now = time.perf_counter()
+            self.periods.append(now - last)
+            last = now
+        m = k + 1
+        if fault is not None:
+            self._stop_all()
+        else:
+            for ctl in self._ctl.values():
+                ctl.servoStop(STOP_DECELERATION)
+        return Played(
+            segment.segment.step,
+            segment.segment.label,
+            self.joint_names,
+            ticks[:m],
+            commanded[:m],
+            measured[:m],
+            tuple(applied),
+            fault,
+            None,
+        )
+
+    def _watch(
+        self, t: float, k: int, commanded: FloatArray, measured: FloatArray, window: int
+    ) -> Fault | None:
+        """Read every arm; the first fault found (connection, safety stop, tracking)."""
+        for arm, s in self.layout.slices.items():
+            rcv, ctl = self._rcv[arm], self._ctl[arm]
+            if not (rcv.isConnected() and ctl.isConnected()):
+                return Fault(
+                    "connection",
+                    f"connection to arm '{arm}' at {self.addresses[arm]} lost at t = {t:.3f} s; "
+                    f"{STOPPED}",
+                    arm,
+                    time=t,
+                )
+            bits = int(rcv.getSafetyStatusBits())
+            kind = safety_stop(bits)
+            if kind is not None:
+                names = ", ".join(set_bits(bits))
+                return Fault(
+                    kind,  # type: ignore[arg-type]
+                    f"arm '{arm}' at {self.addresses[arm]}: {names} at t = {t:.3f} s; {STOPPED}",
+                    arm,
+                    time=t,
+                    value=bits,
+                    details={"safety_status_bits": bits, "set": names},
+                )
+            measured[k, s] = rcv.getActualQ()
+        recent = commanded[max(0, k - window) : k + 1]
+        j, d = tracking_deviation(measured[k], recent)
+        if d > self.config.tracking_tolerance:
+            arm, joint = self.layout.arm_of(j), self.joint_names[j]
+            return Fault(
+                "tracking",
+                f"arm '{arm}' joint '{joint}' does not follow at t = {t:.3f} s: measured "
+                f"{measured[k, j]:.4f}, {d:.4f} rad from every command of the last "
+                f"{self.config.servo.lookahead:g} s (tolerance "
+                f"{self.config.tracking_tolerance:g}); {STOPPED}",
+                arm,
+                joint,
+                t,
+                d,
+            )
+        return None
+
+    def _overrun(self, t: float, duration: float, deadline: float) -> Fault:
+        return Fault(
+            "overrun",
+            f"the segment ({duration:.2f} s of motion) still runs after {deadline:.2f} s of wall "
+            f"time at t = {t:.3f} s (is the speed slider down?); {STOPPED}",
+            time=t,
+        )
+
+    def _apply_due(
+        self, t: float, pending: list[TimedEvent], applied: list[AppliedEvent]
+    ) -> Fault | None:
+        while pending and pending[0].time <= t + 1e-9:
+            event = pending.pop(0).event
+            pins = self.config.gripper_io
+            if pins:
+                high = set(pins.get(event.mode, ()))
+                for pin in sorted({p for ps in pins.values() for p in ps}):
+                    if not self._io[event.arm].setStandardDigitalOut(pin, pin in high):
+                        message = (
+                            f"gripper of arm '{event.arm}': the controller refused digital "
+                            f"output {pin} for mode '{event.mode}' at t = {t:.3f} s; {STOPPED}"
+                        )
+                        return Fault("gripper", message, event.arm, None, t, event.mode)
+            self._grippers[event.arm] = GripperState(event.mode, event.holds)
+            applied.append(AppliedEvent(t, event.arm, event.mode, event.holds, True))
+        return None
+
+    # -- helpers ------------------------------------------------------------------------
+
+    def _stop_all(self) -> None:
+        """Every arm stopped, best effort, each on its own (one failing must not spare the
+        others)."""
+        for ctl in self._ctl.values():
+            with contextlib.suppress(Exception):  # stopping the others matters more
+                ctl.servoStop(STOP_DECELERATION)
+            with contextlib.suppress(Exception):
+                ctl.stopJ(STOP_DECELERATION)
+
+    def _connect(self, arm: str, ip: str, what: str, make: Callable[[str], T]) -> T:
+        return _within(
+            self.connect_timeout,
+            lambda: make(ip),
+            lambda why: Refused(
+                self.kind, f"arm '{arm}': no UR controller answers at {ip} ({what}): {why}"
+            ),
+        )
+
+    def _check_model(self, arm: str, ip: str, dashboard: Callable[[str], Any]) -> None:
+        """The controller's robot model must be the cell's (e.g. a UR5 for 'ur5e')."""
+        model = self._models.get(arm)
+        want = MODEL_NAMES.get(model) if isinstance(model, str) else None
+        client = self._connect(arm, ip, "dashboard (port 29999)", dashboard)
+        _within(
+            self.connect_timeout,
+            client.connect,
+            lambda why: Refused(self.kind, f"arm '{arm}': dashboard at {ip}: {why}"),
+        )
+        got = str(client.getRobotModel()).strip()
+        client.disconnect()
+        if want is not None and got.upper() != want:
+            raise Refused(
+                self.kind,
+                f"arm '{arm}' at {ip} reports robot model '{got}', but the cell says "
+                f"'{model}' ({want})",
+            )
+
+
+def _within(timeout: float, call: Callable[[], T], refuse: Callable[[str], Refused]) -> T:
+    """``call()`` in a helper thread; Refused when it raises or has not returned in time."""
+    box: dict[str, Any] = {}
+
+    def run() -> None:
+        try:
+            box["value"] = call()
+        except Exception as e:
+            box["error"] = e
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    thread.join(timeout)
+    if thread.is_alive():
+        raise refuse(f"no answer within {timeout:g} s")
+    if "error" in box:
+        raise refuse(str(box["error"]))
+    return box["value"]  # type: ignore[no-any-return]

@@ -1,0 +1,44 @@
+"""The UR driver with the real ur-rtde client: what it refuses before anything moves.
+(Streaming to emulated controllers is tested with the emulator.)"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+
+from cellengine.drivers.fault import Refused
+from cellengine.drivers.lifecycle import State
+from cellengine.drivers.registry import make_driver
+from cellengine.drivers.ur_rtde import UrDriver
+from cellengine.info.load import load_cell
+from tests.conftest import CELLS
+
+JOINTS = {"left": [f"l{i}" for i in range(6)], "right": [f"r{i}" for i in range(6)]}
+
+
+def _cell(tmp_path: Path, driver: str) -> Path:
+    folder = tmp_path / "cell"
+    shutil.copytree(CELLS / "cable_routing", folder)
+    path = folder / "cell.yaml"
+    path.write_text(path.read_text().replace("{kind: sim}", driver))
+    return path
+
+
+def test_an_address_where_no_controller_answers_is_refused(tmp_path: Path) -> None:
+    path = _cell(tmp_path, "{kind: ur_rtde, arms: {left: 127.0.0.9, right: 127.0.0.10}}")
+    cell, _ = load_cell(path)
+    driver = make_driver(cell, JOINTS, connect_timeout=2.0)
+    assert isinstance(driver, UrDriver)
+    assert driver.addresses == {"left": "127.0.0.9", "right": "127.0.0.10"}
+    with pytest.raises(Refused) as e:
+        driver.configure()
+    assert str(e.value).startswith("ur_rtde driver: arm 'left': dashboard at 127.0.0.9: ")
+    assert driver.state is State.UNCONFIGURED  # nothing half-done: still unconfigured
+
+
+def test_the_ur_driver_needs_a_ur_rtde_cell(tmp_path: Path) -> None:
+    cell, _ = load_cell(_cell(tmp_path, "{kind: sim}"))
+    with pytest.raises(Refused, match="the cell's driver is 'sim', not ur_rtde"):
+        UrDriver(cell, JOINTS)
