@@ -6,12 +6,13 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import sys
 import time
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
 from cellengine.commands.plan import add_common, compile_from_args
-from cellengine.errors import EXIT_OK, display_path
+from cellengine.errors import EXIT_OK, UsageError, display_path
 
 if TYPE_CHECKING:  # the motion stack and drivers are imported when the command runs
     from cellengine.drivers.base import Driver
@@ -28,6 +29,9 @@ def add_parser(sub: Any, name: str) -> None:
     add_common(p)
     p.add_argument("--driver", help="driver to use instead of the cell's (e.g. sim)")
     p.add_argument("--realtime", action="store_true", help="simulated cell: in real time")
+    p.add_argument(
+        "--yes", action="store_true", help="move real arms without asking for confirmation"
+    )
     p.set_defaults(run=run)
 
 
@@ -37,6 +41,7 @@ def run(args: argparse.Namespace) -> int:
     compiled = compile_from_args(args)
     paths = write_plan_outputs(compiled, args.out)
     driver = _driver(compiled, args)
+    _confirm(driver, args.yes)
     with (args.out / "journal.jsonl").open("a") as journal, driver:
         _entry(journal, "start", plan=str(compiled.loaded.plan.file), driver=type(driver).__name__)
         driver.configure()
@@ -51,6 +56,20 @@ def run(args: argparse.Namespace) -> int:
         )
         print(f"report: {display_path(paths['html'])}")
     return EXIT_OK
+
+
+def _confirm(driver: Driver, yes: bool) -> None:
+    """Real arms move only when the user says so: --yes, or 'yes' typed at a terminal."""
+    if driver.kind == "sim" or yes:
+        return
+    where = ", ".join(f"{arm} at {ip}" for arm, ip in getattr(driver, "addresses", {}).items())
+    if not sys.stdin.isatty():
+        raise UsageError.at(
+            f"refusing to move real arms ({where}) without --yes: no terminal to ask", None
+        )
+    answer = input(f"This moves real arms: {where}. Type 'yes' to go on: ")
+    if answer.strip().lower() != "yes":
+        raise UsageError.at("not confirmed: nothing moved", None)
 
 
 def _driver(compiled: Compiled, args: argparse.Namespace) -> Driver:

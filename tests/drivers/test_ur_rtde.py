@@ -42,3 +42,25 @@ def test_the_ur_driver_needs_a_ur_rtde_cell(tmp_path: Path) -> None:
     cell, _ = load_cell(_cell(tmp_path, "{kind: sim}"))
     with pytest.raises(Refused, match="the cell's driver is 'sim', not ur_rtde"):
         UrDriver(cell, JOINTS)
+
+
+def test_run_asks_before_moving_real_arms(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """No terminal to ask and no --yes: refused (exit 2) before any connection; with --yes
+    the driver tries the cell's addresses, and one that does not answer stops the run
+    (exit 3) before anything moves."""
+    from cellengine.cli import main
+
+    path = _cell(tmp_path, "{kind: ur_rtde, arms: {left: 127.0.0.9, right: 127.0.0.10}}")
+    plan = path.parent / "plan_straight.yaml"
+    out = tmp_path / "run"
+    assert main(["run", str(plan), "--out", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert (
+        "refusing to move real arms (left at 127.0.0.9, right at 127.0.0.10) without --yes: "
+        "no terminal to ask"
+    ) in err
+    assert not (out / "journal.jsonl").exists()
+    assert main(["run", str(plan), "--out", str(out), "-q", "--yes"]) == 3
+    assert "arm 'left': dashboard at 127.0.0.9" in capsys.readouterr().err
