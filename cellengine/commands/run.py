@@ -8,6 +8,7 @@ import json
 import os
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
@@ -32,12 +33,22 @@ def add_parser(sub: Any, name: str) -> None:
     p.add_argument(
         "--yes", action="store_true", help="move real arms without asking for confirmation"
     )
+    p.add_argument(
+        "--resume",
+        type=Path,
+        metavar="RUN_DIR",
+        help="go on with the run in RUN_DIR from the last segment it finished",
+    )
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from cellengine.pipeline import write_plan_outputs
 
+    if args.resume is not None:
+        from cellengine.commands.resume import resume
+
+        return resume(args)
     compiled = compile_from_args(args)
     paths = write_plan_outputs(compiled, args.out)
     driver = _driver(compiled, args)
@@ -46,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
         _entry(journal, "start", plan=str(compiled.loaded.plan.file), driver=type(driver).__name__)
         driver.configure()
         driver.activate()
-        _play(compiled, driver, journal, quiet=args.quiet, out=args.out)
+        journaled(journal, driver, lambda: _play(compiled, driver, journal, args.quiet, args.out))
         driver.deactivate()
         _entry(journal, "end", duration=compiled.program.duration)
     if not args.quiet:
@@ -72,18 +83,54 @@ def _confirm(driver: Driver, yes: bool) -> None:
         raise UsageError.at("not confirmed: nothing moved", None)
 
 
-def _driver(compiled: Compiled, args: argparse.Namespace) -> Driver:
+def journaled(journal: IO[str], driver: Driver, play: Callable[[], None]) -> None:
+    """``play()``; a driver fault is journaled (what, where, when, the controller's safety
+    bits, where the arms stopped) before it ends the run, so that ``--resume`` knows."""
+    from cellengine.drivers.fault import DriverFault
+    from cellengine.drivers.record import FaultRecord
+
+    try:
+        play()
+    except DriverFault as e:
+        record = next(
+            (r for r in reversed(driver.recorder.entries) if isinstance(r, FaultRecord)), None
+        )
+        stopped = record.to_json() if record is not None else {}
+        stopped.pop("entry", None)
+        _entry(journal, "fault", fault={**e.fault.to_json(), **stopped})
+        raise
+
+
+def _driver(
+    compiled: Compiled,
+    args: argparse.Namespace,
+    q0: Any = None,
+    grippers: dict[str, Any] | None = None,
+) -> Driver:
+    """The cell's driver (or --driver's). The simulated cell starts where the program does,
+    or at ``q0`` with ``grippers`` (where a journal left it)."""
     from cellengine.drivers.registry import make_driver
 
     world, cell = compiled.world, compiled.cell
     joints = {name: arm.joint_names for name, arm in cell.arms.items()}
     options: dict[str, Any] = {}
     if (args.driver or world.cell.driver.kind) == "sim":
-        options = {"realtime": args.realtime, "q0": compiled.program.segments[0].trajectory.q[0]}
+        start = compiled.program.segments[0].trajectory.q[0] if q0 is None else q0
+        options = {"realtime": args.realtime, "q0": start}
+        if grippers is not None:
+            options["grippers"] = grippers
     return make_driver(world.cell, joints, objects=world.objects, kind=args.driver, **options)
 
 
-def _play(compiled: Compiled, driver: Driver, journal: IO[str], quiet: bool, out: Path) -> None:
+def _play(
+    compiled: Compiled,
+    driver: Driver,
+    journal: IO[str],
+    quiet: bool,
+    out: Path,
+    start: int = 0,
+    measured: dict[str, float] | None = None,
+) -> None:
     """Send every segment; after a segment that weighs (``facts["measure"] == "mass"``),
     read the load cell. When a measured mass changes what a runtime choice (``heavier_of``)
     picks, the plan is compiled again with the masses measured and the run goes on with the
@@ -94,9 +141,9 @@ def _play(compiled: Compiled, driver: Driver, journal: IO[str], quiet: bool, out
 
     program = compiled.program
     events_of = segment_events(program)
-    measured: dict[str, float] = {}
-    planned: dict[str, float] = {}  # the masses the program was planned with
-    i = 0
+    measured = dict(measured or {})
+    planned = dict(measured)  # the masses the program was planned with
+    i = start
     while i < len(program.segments):
         segment, events = program.segments[i], events_of[i]
         seg = segment.segment

@@ -1,0 +1,82 @@
+"""Reading a run's journal.jsonl back: how far the run got, for ``run --resume``.
+
+The journal is append-only, one JSON object per line, flushed at each entry (commands/run.py):
+``start``, then per segment ``sent`` and ``finished`` (with the arms' q and grippers after
+it), ``measured`` (a load cell), ``replanned``, ``fault`` (what stopped the run), ``end``.
+A run killed at any moment leaves whole lines and at most one torn last line, which is
+ignored; any other line that is not a JSON object is an error at its line.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from cellengine.errors import InputError, Problem
+
+
+@dataclass(frozen=True)
+class Progress:
+    """``labels``: the segments finished, in order (the next to run is ``len(labels)``);
+    ``q`` and ``grippers``: the arms after the last of them (None before any); ``measured``:
+    the load cell's readings; ``ended``: the run reached its end; ``fault``: the last fault
+    journaled, if any."""
+
+    labels: tuple[str, ...] = ()
+    q: tuple[float, ...] | None = None
+    grippers: dict[str, tuple[str | None, str | None]] = field(default_factory=dict)
+    measured: dict[str, float] = field(default_factory=dict)
+    ended: bool = False
+    fault: dict[str, Any] | None = None
+
+    @property
+    def done(self) -> int:
+        return len(self.labels)
+
+
+def read_progress(path: Path) -> Progress:
+    if not path.is_file():
+        raise InputError(Problem("no journal.jsonl here: is this a run directory?", str(path)))
+    lines = path.read_text(encoding="utf-8").split("\n")
+    entries: list[dict[str, Any]] = []
+    for n, line in enumerate(lines, 1):
+        if not line.strip():
+            continue
+        try:
+            entry = json.loads(line)
+        except json.JSONDecodeError:
+            if n == len(lines):
+                break  # the last line, torn by a kill (no newline yet): it never happened
+            raise InputError(Problem("not a journal entry (JSON)", str(path), n)) from None
+        if not isinstance(entry, dict) or "entry" not in entry:
+            raise InputError(Problem("not a journal entry (no 'entry')", str(path), n))
+        entries.append(entry)
+    return _progress(entries)
+
+
+def _progress(entries: list[dict[str, Any]]) -> Progress:
+    labels: list[str] = []
+    q: tuple[float, ...] | None = None
+    grippers: dict[str, tuple[str | None, str | None]] = {}
+    measured: dict[str, float] = {}
+    ended, fault = False, None
+    for e in entries:
+        kind = e["entry"]
+        if kind == "finished":
+            if int(e["segment"]) != len(labels):
+                labels = labels[: int(e["segment"])]  # a replanned or resumed run goes on
+            labels.append(str(e["label"]))
+            fault = None  # the run went on after it
+            q = tuple(float(v) for v in e["q"])
+            grippers = {str(a): (g[0], g[1]) for a, g in e["grippers"].items()}
+        elif kind == "measured":
+            measured[str(e["object"])] = float(e["mass_kg"])
+        elif kind == "end":
+            ended = True
+        elif kind == "fault":
+            fault = dict(e.get("fault") or {})
+        elif kind == "start":
+            ended = False
+    return Progress(tuple(labels), q, grippers, measured, ended, fault)

@@ -1,0 +1,78 @@
+"""`run --resume`: a run stopped by a fault goes on from the last segment it finished, after
+a planned move back from where the arms stopped, repeating nothing."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import skills.cable  # noqa: F401  (registers the cable skills)
+from cellengine.cli import main
+from cellengine.commands.run import _play, journaled
+from cellengine.drivers.fault import DriverFault
+from cellengine.drivers.sim import SimDriver
+from cellengine.journal import read_progress
+from cellengine.pipeline import compile_plan, write_plan_outputs
+from tests.conftest import CELLS
+
+PLAN = CELLS / "cable_routing" / "plan_straight.yaml"
+
+
+def _entries(run: Path) -> list[dict]:
+    return [json.loads(line) for line in (run / "journal.jsonl").read_text().splitlines()]
+
+
+def test_a_faulted_run_resumes_where_it_stopped(tmp_path: Path) -> None:
+    c = compile_plan(PLAN)
+    write_plan_outputs(c, tmp_path)
+    joints = {name: arm.joint_names for name, arm in c.cell.arms.items()}
+    q0 = c.program.segments[0].trajectory.q[0]
+    stop_at = 12  # a segment in the middle of the pick
+    t_fault = float(
+        np.mean(
+            [
+                c.program.segments[stop_at].trajectory.start_time,
+                c.program.segments[stop_at].trajectory.end_time,
+            ]
+        )
+    )
+    with (tmp_path / "journal.jsonl").open("a") as journal:
+        driver = SimDriver(c.world.cell, joints, objects=c.world.objects, q0=q0)
+        driver.configure()
+        driver.activate()
+        driver.freeze_joint(c.cell.joint_names[1], at=t_fault)  # the left shoulder lift
+        with pytest.raises(DriverFault):
+            journaled(journal, driver, lambda: _play(c, driver, journal, True, tmp_path))
+    progress = read_progress(tmp_path / "journal.jsonl")
+    assert progress.done == stop_at and progress.fault is not None
+    assert progress.fault["kind"] == "tracking" and len(progress.fault["q"]) == len(q0)
+
+    assert main(["run", str(PLAN), "--resume", str(tmp_path), "-q"]) == 0
+    entries = _entries(tmp_path)
+    kinds = [e["entry"] for e in entries]
+    assert kinds.count("fault") == 1 and kinds.count("resume") == 1
+    assert kinds.count("recovery") == 1  # the arm stopped mid-segment: a move back first
+    finished = [e["segment"] for e in entries if e["entry"] == "finished"]
+    assert finished == list(range(len(c.program.segments)))  # each once, none repeated
+    assert kinds[-1] == "end"
+    done = read_progress(tmp_path / "journal.jsonl")
+    assert done.ended and np.allclose(done.q, c.program.segments[-1].trajectory.q[-1], atol=1e-6)
+    # resuming a complete run does nothing
+    assert main(["run", str(PLAN), "--resume", str(tmp_path), "-q"]) == 0
+    assert _entries(tmp_path) == entries
+
+
+def test_a_torn_last_line_is_ignored_and_a_bad_one_is_an_error(tmp_path: Path) -> None:
+    path = tmp_path / "journal.jsonl"
+    ok = '{"entry": "finished", "segment": 0, "label": "a", "q": [0.0], "grippers": {}}\n'
+    path.write_text(ok + '{"entry": "sent", "seg')
+    assert read_progress(path).labels == ("a",)
+    path.write_text('{"entry": "sent", "seg\n' + ok)
+    from cellengine.errors import InputError
+
+    with pytest.raises(InputError) as e:
+        read_progress(path)
+    assert str(e.value) == f"{path}:1: not a journal entry (JSON)"
