@@ -13,13 +13,13 @@ from __future__ import annotations
 import argparse
 
 from cellengine.commands.plan import compile_from_args
-from cellengine.commands.run import _confirm, _driver, _entry, _play, journaled
+from cellengine.commands.run import _confirm, _driver, _entry, _play, journaled, move_to
 from cellengine.errors import EXIT_OK, InputError, Problem, display_path
 
 
 def resume(args: argparse.Namespace) -> int:
     from cellengine.journal import read_progress
-    from cellengine.pipeline import cell_models, compile_loaded, write_plan_outputs
+    from cellengine.pipeline import compile_loaded, write_plan_outputs
 
     run_dir = args.resume
     journal_path = run_dir / "journal.jsonl"
@@ -60,29 +60,7 @@ def resume(args: argparse.Namespace) -> int:
         _entry(journal, "resume", from_segment=progress.done, label=nxt.segment.label)
         driver.configure()
         driver.activate()
-        q_now = driver.joint_state()
-        holds = {arm: driver.gripper(arm).holds for arm in compiled.cell.arms}
-        _, checker = cell_models(compiled.world)
-        from cellengine.execute.recovery import recovery_segment
-
-        back = recovery_segment(
-            compiled.world,
-            compiled.cell,
-            checker.scene,
-            q_now,
-            nxt.trajectory.q[0],
-            holds,
-            driver.start_tolerance,
-            nxt.segment.step,
-        )
-        if back is not None:
-            move = back
-            _entry(journal, "recovery", label=move.segment.label, duration=move.trajectory.duration)
-
-            def recover() -> None:
-                driver.execute(move)
-
-            journaled(journal, driver, recover)
+        move_to(compiled, driver, journal, progress.done)
 
         def go_on() -> None:
             _play(compiled, driver, journal, args.quiet, run_dir, progress.done, progress.measured)

@@ -12,6 +12,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
+import numpy as np
+
 from cellengine.commands.plan import add_common, compile_from_args
 from cellengine.errors import EXIT_OK, UsageError, display_path
 
@@ -57,6 +59,7 @@ def run(args: argparse.Namespace) -> int:
         _entry(journal, "start", plan=str(compiled.loaded.plan.file), driver=type(driver).__name__)
         driver.configure()
         driver.activate()
+        move_to(compiled, driver, journal, 0)
         journaled(journal, driver, lambda: _play(compiled, driver, journal, args.quiet, args.out))
         driver.deactivate()
         _entry(journal, "end", duration=compiled.program.duration)
@@ -81,6 +84,41 @@ def _confirm(driver: Driver, yes: bool) -> None:
     answer = input(f"This moves real arms: {where}. Type 'yes' to go on: ")
     if answer.strip().lower() != "yes":
         raise UsageError.at("not confirmed: nothing moved", None)
+
+
+def move_to(compiled: Compiled, driver: Driver, journal: IO[str], index: int) -> None:
+    """When the arms are not where segment ``index`` starts (real arms left elsewhere, or
+    stopped by a fault), a planned, gated, collision-free move there first (journaled)."""
+
+    from cellengine.execute.recovery import recovery_segment
+    from cellengine.pipeline import cell_models
+
+    segment = compiled.program.segments[index]
+    q_now = driver.joint_state()
+    target = segment.trajectory.q[0]
+    if float(np.max(np.abs(q_now - target))) <= driver.start_tolerance:
+        return
+    holds = {arm: driver.gripper(arm).holds for arm in compiled.cell.arms}
+    _, checker = cell_models(compiled.world)
+    move = recovery_segment(
+        compiled.world,
+        compiled.cell,
+        checker.scene,
+        q_now,
+        target,
+        holds,
+        driver.start_tolerance,
+        segment.segment.step,
+    )
+    if move is None:
+        return
+    _entry(journal, "recovery", label=move.segment.label, duration=move.trajectory.duration)
+
+    def go() -> None:
+        assert move is not None
+        driver.execute(move)
+
+    journaled(journal, driver, go)
 
 
 def journaled(journal: IO[str], driver: Driver, play: Callable[[], None]) -> None:

@@ -76,3 +76,24 @@ def test_a_torn_last_line_is_ignored_and_a_bad_one_is_an_error(tmp_path: Path) -
     with pytest.raises(InputError) as e:
         read_progress(path)
     assert str(e.value) == f"{path}:1: not a journal entry (JSON)"
+
+
+def test_a_run_begins_with_a_move_to_the_plans_start(tmp_path: Path) -> None:
+    """Arms left elsewhere (here 0.3 rad off on two joints of each arm): a planned move to
+    where the first segment starts, journaled; arms already there: nothing."""
+    from cellengine.commands.run import move_to
+
+    c = compile_plan(PLAN)
+    joints = {name: arm.joint_names for name, arm in c.cell.arms.items()}
+    start = c.program.segments[0].trajectory.q[0]
+    off = start.copy()
+    off[[0, 2, 6, 8]] += 0.3
+    with (tmp_path / "journal.jsonl").open("a") as journal:
+        driver = SimDriver(c.world.cell, joints, objects=c.world.objects, q0=off)
+        driver.configure()
+        driver.activate()
+        move_to(c, driver, journal, 0)
+        assert np.allclose(driver.joint_state(), start, atol=1e-6)
+        move_to(c, driver, journal, 0)  # there already
+    kinds = [e["entry"] for e in _entries(tmp_path)]
+    assert kinds == ["recovery"]
