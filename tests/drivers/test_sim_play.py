@@ -303,7 +303,9 @@ def test_same_inputs_same_record() -> None:
 
 
 def test_registry_and_make_driver() -> None:
-    assert {"sim": SimDriver} == DRIVERS
+    from cellengine.drivers.ur_rtde import UrDriver
+
+    assert {"sim": SimDriver, "ur_rtde": UrDriver} == DRIVERS
     d = make_driver(cell(), JOINTS, objects=objects(), lag=0.01, realtime=False)
     assert isinstance(d, SimDriver) and d.state is State.UNCONFIGURED
     assert d.joint_names == NAMES and d.arms.gain < 1.0
@@ -313,8 +315,8 @@ def test_registry_and_make_driver() -> None:
 def test_make_driver_names_a_missing_driver() -> None:
     ur = cell(kind="ur_rtde", arms={"left": "127.0.0.2", "right": "127.0.0.3"})
     with pytest.raises(Refused) as info:
-        make_driver(ur, JOINTS)
-    assert str(info.value) == "ur_rtde driver: no driver 'ur_rtde' is available; known: sim"
+        make_driver(ur, JOINTS, kind="kuka")
+    assert str(info.value) == "kuka driver: no driver 'kuka' is available; known: sim, ur_rtde"
     assert isinstance(make_driver(ur, JOINTS, kind="sim"), SimDriver)
 
 
