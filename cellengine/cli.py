@@ -6,7 +6,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from cellengine.commands import import_remodel, plan, run, schema, show, validate
+from cellengine.commands import emulate, import_remodel, plan, run, schema, show, validate
 from cellengine.errors import EXIT_USAGE, CellError
 
 COMMANDS = {
@@ -16,6 +16,7 @@ COMMANDS = {
     "show": show,
     "schema": schema,
     "import": import_remodel,
+    "emulate": emulate,
 }
 
 
