@@ -51,6 +51,12 @@ SAFETY_NORMAL = 1  # getSafetyMode()
 ROBOT_RUNNING = 7  # getRobotMode()
 MODEL_NAMES = {"ur3e": "UR3", "ur5e": "UR5", "ur10e": "UR10", "ur5": "UR5"}
 STOPPED = "every arm stopped"
+LAG_WINDOWS = 2.0  # how many lookaheads behind its command a joint may be
+SETTLE_TIME = 1.0  # s a segment's end may take to be reached after its last command
+# settled: every joint within this share of the start tolerance of the end, and slower than
+# SETTLE_SPEED (rad/s), so that servoStop's deceleration moves it no further to speak of
+SETTLE_SHARE = 0.25
+SETTLE_SPEED = 0.01
 
 
 class UrDriver(Base):
@@ -170,7 +176,10 @@ class UrDriver(Base):
         applied: list[AppliedEvent] = []
         pending = list(events)
         servo = self.config.servo
-        window = max(1, int(np.ceil((servo.lookahead + 2 * self.servo_period) / self.servo_period)))
+        # servoJ trails its target by about the lookahead: a joint is compared with the
+        # commands of the last LAG_WINDOWS lookaheads (and two periods)
+        span = LAG_WINDOWS * servo.lookahead + 2 * self.servo_period
+        window = max(1, int(np.ceil(span / self.servo_period)))
         deadline = traj.duration * self.config.overrun_scale + self.config.overrun_margin
         wall0 = time.perf_counter()
         last = wall0
@@ -197,6 +206,8 @@ class UrDriver(Base):
             self.periods.append(now - last)
             last = now
         m = k + 1
+        if fault is None:
+            fault = self._settle(commanded[-1], float(ticks[-1]))
         if fault is not None:
             self._stop_all()
         else:
@@ -213,6 +224,45 @@ class UrDriver(Base):
             fault,
             None,
         )
+
+    def _settle(self, q_end: FloatArray, t: float) -> Fault | None:
+        """Hold the last point until every joint is there: servoJ trails its target, and a
+        segment that ends before the arm does would leave it short of the next one's start.
+        A fault when it does not settle within SETTLE_TIME."""
+        servo = self.config.servo
+        tolerance = self.start_tolerance * SETTLE_SHARE
+        deadline = time.perf_counter() + SETTLE_TIME
+        while True:
+            starts = {arm: ctl.initPeriod() for arm, ctl in self._ctl.items()}
+            q = np.zeros_like(q_end)
+            for arm, s in self.layout.slices.items():
+                ctl = self._ctl[arm]
+                ctl.servoJ(list(q_end[s]), 0.0, 0.0, self.servo_period, servo.lookahead, servo.gain)
+                ctl.kickWatchdog()
+                q[s] = self._rcv[arm].getActualQ()
+                bits = int(self._rcv[arm].getSafetyStatusBits())
+                if safety_stop(bits) is not None or not self._rcv[arm].isConnected():
+                    return self._watch(t, 0, q_end[None, :], q[None, :], 0)
+            j = int(np.argmax(np.abs(q - q_end)))
+            still = all(
+                float(np.max(np.abs(self._rcv[arm].getActualQd()))) <= SETTLE_SPEED
+                for arm in self.layout.arms
+            )
+            if abs(q[j] - q_end[j]) <= tolerance and still:
+                return None
+            if time.perf_counter() > deadline:
+                arm, joint = self.layout.arm_of(j), self.joint_names[j]
+                return Fault(
+                    "tracking",
+                    f"arm '{arm}' joint '{joint}' did not reach the end of the segment within "
+                    f"{SETTLE_TIME:g} s: at {q[j]:.4f}, commanded {q_end[j]:.4f}; {STOPPED}",
+                    arm,
+                    joint,
+                    t,
+                    float(abs(q[j] - q_end[j])),
+                )
+            first = next(iter(self._ctl))
+            self._ctl[first].waitPeriod(starts[first])
 
     def _watch(
         self, t: float, k: int, commanded: FloatArray, measured: FloatArray, window: int
@@ -249,7 +299,7 @@ class UrDriver(Base):
                 "tracking",
                 f"arm '{arm}' joint '{joint}' does not follow at t = {t:.3f} s: measured "
                 f"{measured[k, j]:.4f}, {d:.4f} rad from every command of the last "
-                f"{self.config.servo.lookahead:g} s (tolerance "
+                f"{LAG_WINDOWS * self.config.servo.lookahead:g} s (tolerance "
                 f"{self.config.tracking_tolerance:g}); {STOPPED}",
                 arm,
                 joint,
