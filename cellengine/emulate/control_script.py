@@ -4,10 +4,15 @@ one pass of the script's main loop per 2 ms tick.
 The handshake: the client writes a command into ``input_int_register_0`` and its arguments
 into ``input_double_register_0..`` (``input_int_register_1``: async flag, movec mode,
 steps). The script answers in ``output_int_register_0``: 1 ready, 2 done. Streaming
-commands (servoJ, speedJ, ... and the watchdog kick, which writes 0) are taken every tick
-and answered ready at once; any other command runs once, answers done when finished (a
-blocking moveJ when the arm arrives) and waits for the client to clear the register to 0
-before it answers ready again. ``output_int_register_2`` is the async progress word.
+commands (servoJ, speedJ, ...) are taken every tick and answered ready at once; any other
+command runs once, answers done when finished (a blocking moveJ when the arm arrives) and
+waits for the client to clear the register to 0 before it answers ready again.
+``output_int_register_2`` is the async progress word.
+
+Registers hold the last value received: a command overwritten before the script's tick is
+never seen. ur-rtde's kickWatchdog() writes 0 into ``input_int_register_0``, so a kick sent
+in the same 2 ms as a servoJ hides that servoJ (the watchdog watches that register, which
+servoJ writes too).
 """
 
 from __future__ import annotations
@@ -21,8 +26,8 @@ if TYPE_CHECKING:
     from cellengine.emulate.controller import Controller
 
 READY, DONE = 1, 2
-# answered ready in the same tick: the client does not wait for these to finish
-STREAMING = frozenset({6, 9, 10, 11, 12, 24, 25, 26, 27, 38, 55, 66, 99})
+# taken every tick and answered ready at once (the script's own list, ur-rtde 1.6)
+STREAMING = frozenset({6, 9, 10, 11, 24, 25, 26, 27, 38, 58, 66, 67, 68, 69, 70, 71})
 STOP_SCRIPT = 255
 DEFAULT_STOP = 10.0  # rad/s^2 when a stop command carries no deceleration
 # commands whose script code needs what the emulator does not model (IK, tool space, force)
@@ -45,6 +50,11 @@ UNSUPPORTED = {
     60: "getInverseKinematicsHasSolution",
     61: "getInverseKinematicsHasSolution",
     66: "directTorque",
+    67: "getMassMatrix",
+    68: "getCoriolisAndCentrifugalTorques",
+    69: "getTargetJointAccelerations",
+    70: "getJacobian",
+    71: "getJacobianTimeDerivative",
 }
 _OFFSET = re.compile(r"global reg_offset_(float|int)\s*=\s*(\d+)")
 
@@ -158,6 +168,8 @@ class ControlScript:
             self._out_doubles(ctl.pose(arm.target if cmd == 28 else arm.actual))
         elif cmd == 44:
             self._out_doubles(ctl.pose(self._q(0), self._q(6)))
+        elif cmd == 58:  # the flange pose: no TCP offset
+            self._out_doubles(ctl.pose(arm.actual, (0.0,) * 6))
         elif cmd == 26:
             self._out_doubles([0.002])
         elif cmd == 27:

@@ -45,7 +45,8 @@ def plain(value: Any) -> Any:
 
 
 def servo_sine(req: dict[str, Any]) -> dict[str, Any]:
-    """servoJ at 500 Hz for ``seconds``: joint ``joint`` follows q0 + A sin(2 pi f t)."""
+    """servoJ at 500 Hz for ``seconds``: joint ``joint`` follows q0 + A sin(2 pi f t)
+    (``kick``: and kickWatchdog after each servoJ)."""
     c, r = objects[req["control"]], objects[req["receive"]]
     q0, joint, amp, freq = req["q0"], req["joint"], req["amplitude"], req["frequency"]
     commanded, actual, target, periods = [], [], [], []
@@ -56,6 +57,8 @@ def servo_sine(req: dict[str, Any]) -> dict[str, Any]:
         q[joint] += amp * math.sin(2 * math.pi * freq * k * 0.002)
         if not c.servoJ(q, 0.0, 0.0, 0.002, req["lookahead"], req["gain"]):
             return {"ok": False, "error": f"servoJ returned False at cycle {k}"}
+        if req.get("kick"):  # writes 0 where servoJ wrote its command
+            c.kickWatchdog()
         commanded.append(q[joint])
         actual.append(r.getActualQ()[joint])
         target.append(r.getTargetQ()[joint])

@@ -161,6 +161,23 @@ def test_servoj_at_500_hz_follows_a_sine(emulate: Any, worker: Worker) -> None:
     assert sum(n - 1 for n in steps) <= 0.02 * len(steps)
 
 
+def test_a_kick_after_each_servoj_hides_the_servoj(emulate: Any, worker: Worker) -> None:
+    """kickWatchdog writes 0 where servoJ wrote 11 (input_int_register_0): sent in the same
+    2 ms, it overwrites the command before the control script reads it, as on a controller
+    whose RTDE inputs are registers; the arm then gets only the odd servo target and lags."""
+    _, (host,) = emulate(1, q0_flag(HOME))
+    connect(worker, host)
+    worker.call("c", "setWatchdog", 10.0)
+    req = {"control": "c", "receive": "r", "q0": HOME, "joint": 0, "amplitude": 0.2}
+    run = worker.loop(
+        "servo_sine", **req, frequency=0.5, seconds=1.0, lookahead=0.1, gain=300, kick=True
+    )
+    cmd, actual = run["commanded"], run["actual"]
+    best = min(max(abs(actual[k] - cmd[k - lag]) for k in range(60, len(cmd))) for lag in range(60))
+    assert best > 0.03  # against < 0.01 without the kicks (test above)
+    assert worker.call("c", "isProgramRunning") is True  # servoJ alone feeds the watchdog
+
+
 def test_speedj_then_speedstop(emulate: Any, worker: Worker) -> None:
     _, (host,) = emulate(1, q0_flag(HOME))
     connect(worker, host)
