@@ -12,6 +12,7 @@ import signal
 import socket
 import sys
 import time
+import traceback
 from collections.abc import Callable
 from pathlib import Path
 
@@ -169,7 +170,7 @@ class Emulator:
         next_tick = time.monotonic() + DT
         while not self.stopping:
             for key, _ in self.sel.select(max(0.0, next_tick - time.monotonic())):
-                key.data()
+                self._event(key.data)
             if self.kill_now:
                 self._flush_all()
                 os.kill(os.getpid(), signal.SIGKILL)
@@ -192,6 +193,15 @@ class Emulator:
             log(f"{host}: {n} data packages in {seconds:.1f} s")
         log(f"stopped after {self.tick} ticks, {self.late_ticks} of them caught up late")
         return 0
+
+    def _event(self, callback: Callable[[], None]) -> None:
+        try:
+            callback()
+        except Exception:  # a bug in one session must not take every controller down
+            log("internal error, connection closed:\n" + traceback.format_exc())
+            conn = getattr(callback, "__self__", None)
+            if isinstance(conn, Conn):
+                conn.close()
 
     def _flush_all(self) -> None:
         for conns in [*self.conns.values(), self.fault_conns]:
