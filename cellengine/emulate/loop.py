@@ -6,6 +6,7 @@ of time skips packages."""
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import selectors
 import signal
@@ -40,6 +41,7 @@ class Emulator:
         self.conns: dict[str, list[Conn]] = {h: [] for h in self.controllers}
         self.claims: dict[str, dict[str, RtdeSession]] = {h: {} for h in self.controllers}
         self.fault_conns: list[Conn] = []
+        self.fault_listener: socket.socket | None = None
         self.tick = 0
         self.first_start: int | None = None  # tick of the first RTDE start
         self.late_ticks = 0
@@ -58,10 +60,17 @@ class Emulator:
             self.sel.unregister(sock)
 
     def open_listeners(self, host: str) -> None:
-        for port in (DASHBOARD, SCRIPT, RTDE):
-            sock = listen(host, port)
+        opened: list[socket.socket] = []
+        try:
+            for port in (DASHBOARD, SCRIPT, RTDE):
+                opened.append(listen(host, port))
+        except OSError:
+            for sock in opened:
+                sock.close()
+            raise
+        for sock, port in zip(opened, (DASHBOARD, SCRIPT, RTDE), strict=True):
             self.listeners[host].append(sock)
-            self._watch(sock, lambda s=sock, p=port: self._accept(host, s, p))  # type: ignore[misc]
+            self._watch(sock, functools.partial(self._accept, host, sock, port))
 
     def _accept(self, host: str, listener: socket.socket, port: int) -> None:
         try:
@@ -91,8 +100,8 @@ class Emulator:
         sock.bind(str(path))
         sock.listen(4)
         sock.setblocking(False)
-        self.listeners.setdefault("", []).append(sock)
-        self._watch(sock, lambda: self._accept_fault(sock))
+        self.fault_listener = sock
+        self._watch(sock, functools.partial(self._accept_fault, sock))
 
     def _accept_fault(self, listener: socket.socket) -> None:
         try:
@@ -135,7 +144,10 @@ class Emulator:
         else:  # clear
             ctl.clear()
             if not self.listeners[fault.host]:
-                self.open_listeners(fault.host)
+                try:
+                    self.open_listeners(fault.host)
+                except OSError as e:
+                    return f"cannot listen on {fault.host} again: {e}"
         return None
 
     def _due_faults(self) -> None:
@@ -212,8 +224,8 @@ class Emulator:
         for conns in [*self.conns.values(), self.fault_conns]:
             for conn in list(conns):
                 conn.close()
-        for socks in self.listeners.values():
-            for sock in socks:
+        for sock in [*(s for socks in self.listeners.values() for s in socks), self.fault_listener]:
+            if sock is not None:
                 self._forget(sock)
                 sock.close()
         if self.fault_socket is not None:

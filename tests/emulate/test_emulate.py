@@ -261,11 +261,13 @@ def test_faults_from_the_command_line(emulate: Any, worker: Worker) -> None:
     assert worker.call("0r", "getTimestamp") - t0 >= 0.8 - 0.01
     bits = worker.call("0r", "getSafetyStatusBits")
     assert bits & PROTECTIVE and bits & STOPPED_FOR_SAFETY and not bits & 1
+    assert worker.call("0r", "isProtectiveStopped") is True
     assert worker.call("0c", "isProgramRunning") is False
     assert worker.call("0c", "moveJ", HOME, 1.0, 1.0) is False  # as a real controller's
 
     wait_for(lambda: worker.call("1r", "getSafetyMode") == 7, 2, "emergency stop")
     assert worker.call("1r", "getSafetyStatusBits") & EMERGENCY
+    assert worker.call("1r", "isEmergencyStopped") is True
     assert worker.call("1r", "getRobotMode") == 3  # powered off
 
     frozen = worker.call("2r", "getActualQ")
@@ -336,6 +338,8 @@ def test_faults_from_the_socket(emulate: Any, worker: Worker) -> None:
     assert worker.call("r", "reconnect") is True
     assert worker.call("c", "reconnect") is True
     assert worker.call("c", "moveJ", HOME, 1.0, 2.0) is True
+    worker.call("c", "triggerProtectiveStop")  # the control script's own protective stop
+    wait_for(lambda: worker.call("r", "isProtectiveStopped"), 2, "triggered protective stop")
 
     assert emu.fault(host, "kill") == "ok"
     assert emu.wait(3) < 0
