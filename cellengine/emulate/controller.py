@@ -145,23 +145,25 @@ class Controller:
 
     def write_inputs(self, values: dict[str, Value]) -> None:
         """An input package: registers are kept; masked outputs are set as a controller
-        sets them (bits whose mask bit is 1)."""
+        sets them (the bits whose mask bit is 1)."""
         for name, v in values.items():
             self.inputs[name] = v
             self.input_tick[name] = self.tick_count
+
+        def num(name: str, default: float = 0.0) -> float:
+            v = values.get(name, default)
+            return float(v[0] if isinstance(v, tuple) else v)
+
         for prefix, shift in (("standard", 0), ("configurable", 8), ("tool", 16)):
-            mask = values.get(f"{prefix}_digital_output_mask")
-            if isinstance(mask, int) and mask:
-                bits = int(values.get(f"{prefix}_digital_output", 0))  # type: ignore[arg-type]
-                self.digital_out = (self.digital_out & ~(mask << shift)) | (bits & mask) << shift
-        if int(values.get("speed_slider_mask", 0)) & 1:  # type: ignore[arg-type]
-            fraction = float(values.get("speed_slider_fraction", 1.0))  # type: ignore[arg-type]
-            self.speed_fraction = max(0.0, min(1.0, fraction))
-        mask = values.get("standard_analog_output_mask")
-        if isinstance(mask, int):
-            for i in (0, 1):
-                if mask >> i & 1:
-                    self.analog_out[i] = float(values.get(f"standard_analog_output_{i}", 0.0))  # type: ignore[arg-type]
+            mask = int(num(f"{prefix}_digital_output_mask"))
+            bits = int(num(f"{prefix}_digital_output"))
+            self.digital_out = (self.digital_out & ~(mask << shift)) | (bits & mask) << shift
+        if int(num("speed_slider_mask")) & 1:
+            self.speed_fraction = max(0.0, min(1.0, num("speed_slider_fraction", 1.0)))
+        mask = int(num("standard_analog_output_mask"))
+        for i in (0, 1):
+            if mask >> i & 1:
+                self.analog_out[i] = num(f"standard_analog_output_{i}")
 
     def set_watchdog(self, variable: str, frequency: float) -> None:
         """The program stops when ``variable`` is not written at ``frequency`` Hz or more."""
