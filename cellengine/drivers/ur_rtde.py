@@ -6,7 +6,9 @@ addresses in the cell file only. The vendor modules are imported when the driver
 configures, never before.
 
 Execution streams the validated trajectory with servoJ at the servo period (2 ms) to every
-arm from one loop and one clock, so the arms start together and stay in step. Each tick
+arm from one loop and one clock, so the arms start together and stay in step. servoJ feeds
+the controller's watchdog itself: a kickWatchdog after it would overwrite its command in the
+control script's register before the script reads it (the arm then lags). Each tick
 checks, on every arm: the connections, the controller's safety status bits (protective or
 emergency stop), each joint against what was commanded over the last lookahead (servoJ's
 delay, see ur_watch.py), and the segment's wall time against its duration times
@@ -192,7 +194,6 @@ class UrDriver(Base):
                 ctl.servoJ(
                     list(commanded[k, s]), 0.0, 0.0, self.servo_period, servo.lookahead, servo.gain
                 )
-                ctl.kickWatchdog()
             fault = self._watch(float(t), k, commanded, measured, window)
             if fault is None and time.perf_counter() - wall0 > deadline:
                 fault = self._overrun(float(t), traj.duration, deadline)
@@ -238,7 +239,6 @@ class UrDriver(Base):
             for arm, s in self.layout.slices.items():
                 ctl = self._ctl[arm]
                 ctl.servoJ(list(q_end[s]), 0.0, 0.0, self.servo_period, servo.lookahead, servo.gain)
-                ctl.kickWatchdog()
                 q[s] = self._rcv[arm].getActualQ()
                 bits = int(self._rcv[arm].getSafetyStatusBits())
                 if safety_stop(bits) is not None or not self._rcv[arm].isConnected():
