@@ -9,6 +9,8 @@ import math
 import signal
 import socket
 import struct
+import subprocess
+import sys
 import time
 from collections.abc import Callable, Iterator
 from typing import Any
@@ -17,6 +19,7 @@ import pytest
 
 from cellengine.cli import main
 from tests.emulate.harness import (
+    ROOT,
     ClientError,
     Emulator,
     Worker,
@@ -355,8 +358,14 @@ def test_faults_from_the_socket(emulate: Any, worker: Worker) -> None:
 
 
 def test_sigint_stops_it_cleanly_too(emulate: Any) -> None:
+    """SIGINT as SIGTERM; and a second emulator on the same address exits 2 at once."""
     emu, (host,) = emulate(1)
     assert emu.socket_path is not None and emu.socket_path.exists()
+    args = [sys.executable, "-m", "cellengine.cli", "emulate", "ur", "--host", host]
+    second = subprocess.run(args, cwd=ROOT, capture_output=True, text=True, timeout=20)
+    assert second.returncode == 2
+    assert "cannot listen: [Errno 98] Address already in use" in second.stderr
+    assert "ready" not in second.stdout
     emu.proc.send_signal(signal.SIGINT)
     assert emu.wait(5) == 0
     assert not emu.socket_path.exists()  # the fault socket is removed
