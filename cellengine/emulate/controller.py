@@ -3,6 +3,7 @@ the arm. RTDE packages and dashboard answers are read from here; the servers onl
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
@@ -54,7 +55,9 @@ class Controller:
         self.host, self.model, self._log = host, model, log
         self.arm = Arm(q0)
         self.inputs: dict[str, Value] = {}  # the last value a client wrote to each input
-        self.input_tick: dict[str, int] = {}  # and the tick when it did
+        # and when it did, by the wall clock: the watchdog must not fire because the emulator
+        # itself was late reading (a controller is never late)
+        self.input_time: dict[str, float] = {}
         self.outputs: dict[str, Value] = {}  # output registers the program wrote
         self.program: Program | None = None
         self.loaded: str | None = None  # a program loaded through the dashboard
@@ -148,7 +151,7 @@ class Controller:
         sets them (the bits whose mask bit is 1)."""
         for name, v in values.items():
             self.inputs[name] = v
-            self.input_tick[name] = self.tick_count
+            self.input_time[name] = time.monotonic()
 
         def num(name: str, default: float = 0.0) -> float:
             v = values.get(name, default)
@@ -168,7 +171,7 @@ class Controller:
     def set_watchdog(self, variable: str, frequency: float) -> None:
         """The program stops when ``variable`` is not written at ``frequency`` Hz or more."""
         self.watchdog = (variable, frequency) if frequency > 0 else None
-        self.input_tick[variable] = self.tick_count
+        self.input_time[variable] = time.monotonic()
 
     # -- programs ---------------------------------------------------------------------------
 
@@ -196,7 +199,7 @@ class Controller:
         if self.program is not None:
             if self.watchdog is not None:
                 variable, frequency = self.watchdog
-                if (self.tick_count - self.input_tick.get(variable, 0)) * DT > 1.0 / frequency:
+                if time.monotonic() - self.input_time.get(variable, 0.0) > 1.0 / frequency:
                     self.stop_program(f"RTDE watchdog: {variable} not written at {frequency:g} Hz")
             if self.program is not None and not self.program.tick():
                 self.stop_program("the script ended")

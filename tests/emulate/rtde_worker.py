@@ -8,7 +8,7 @@ with a deadline and kills the worker when it does not come (see harness.py).
 
 Requests: {"op": "new", "name": N, "cls": "control"|"receive"|"io"|"dashboard", "host": H},
 {"op": "call", "name": N, "method": M, "args": [...]}, and the loops that must run at 500 Hz
-next to the client: "servo_sine", "speed", "kick", "sample".
+next to the client: "servo_sine", "speed", "kick".
 """
 
 from __future__ import annotations
@@ -45,8 +45,7 @@ def plain(value: Any) -> Any:
 
 
 def servo_sine(req: dict[str, Any]) -> dict[str, Any]:
-    """servoJ at 500 Hz for ``seconds``: joint ``joint`` follows q0 + A sin(2 pi f t)
-    (``kick``: and kickWatchdog after each servoJ)."""
+    """servoJ at 500 Hz for ``seconds``: joint ``joint`` follows q0 + A sin(2 pi f t)."""
     c, r = objects[req["control"]], objects[req["receive"]]
     q0, joint, amp, freq = req["q0"], req["joint"], req["amplitude"], req["frequency"]
     commanded, actual, target, periods = [], [], [], []
@@ -57,8 +56,6 @@ def servo_sine(req: dict[str, Any]) -> dict[str, Any]:
         q[joint] += amp * math.sin(2 * math.pi * freq * k * 0.002)
         if not c.servoJ(q, 0.0, 0.0, 0.002, req["lookahead"], req["gain"]):
             return {"ok": False, "error": f"servoJ returned False at cycle {k}"}
-        if req.get("kick"):  # writes 0 where servoJ wrote its command
-            c.kickWatchdog()
         commanded.append(q[joint])
         actual.append(r.getActualQ()[joint])
         target.append(r.getTargetQ()[joint])
@@ -103,17 +100,6 @@ def kick(req: dict[str, Any]) -> dict[str, Any]:
     return {"ok": True, "value": good}
 
 
-def sample(req: dict[str, Any]) -> dict[str, Any]:
-    """Call ``methods`` of ``name`` every ``period`` s for ``seconds``: one row a sample."""
-    obj = objects[req["name"]]
-    rows = []
-    end = time.perf_counter() + req["seconds"]
-    while time.perf_counter() < end:
-        rows.append([time.perf_counter()] + [plain(getattr(obj, m)()) for m in req["methods"]])
-        time.sleep(req["period"])
-    return {"ok": True, "value": rows}
-
-
 def handle(req: dict[str, Any]) -> dict[str, Any]:
     op = req["op"]
     if op == "new":
@@ -122,7 +108,7 @@ def handle(req: dict[str, Any]) -> dict[str, Any]:
     if op == "call":
         value = getattr(objects[req["name"]], req["method"])(*req.get("args", []))
         return {"ok": True, "value": plain(value)}
-    loops = {"servo_sine": servo_sine, "speed": speed, "kick": kick, "sample": sample}
+    loops = {"servo_sine": servo_sine, "speed": speed, "kick": kick}
     return loops[op](req)
 
 
