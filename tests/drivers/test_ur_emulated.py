@@ -107,3 +107,39 @@ def test_a_protective_stop_stops_the_run_and_resume_completes_it(
     finished = [e["segment"] for e in entries if e["entry"] == "finished"]
     assert finished == list(range(len(program.segments)))
     assert entries[-1]["entry"] == "end"
+
+
+def test_a_controller_reporting_another_model_is_refused(
+    tmp_path: Path, emulated: tuple[Path, list[str], list[Emulator]]
+) -> None:
+    """The cell says ur5e; the right controller says it is a UR10: refused at configure,
+    before anything moves, naming the arm, the address and both models."""
+    folder, hosts, started = emulated
+    plan = folder / "plan_straight.yaml"
+    program = compile_plan(plan).program
+    _start(hosts, program.segments[0].trajectory.q[0], started, "--model", f"{hosts[1]}=UR10")
+    result = _run(str(plan), "--out", str(tmp_path / "run"), timeout=120)
+    assert result.returncode == 3, result.stderr[-2000:]
+    assert (
+        f"arm 'right' at {hosts[1]} reports robot model 'UR10', but the cell says 'ur5e' (UR5)"
+    ) in result.stderr
+    kinds = [e["entry"] for e in _journal(tmp_path / "run")]
+    assert "sent" not in kinds
+
+
+def test_arms_far_from_the_plans_start_get_a_planned_move_there_first(
+    tmp_path: Path, emulated: tuple[Path, list[str], list[Emulator]]
+) -> None:
+    """The emulated arms start 0.3 rad off the plan's start on two joints each: the run
+    begins with a planned move there (journaled), then runs the plan."""
+    folder, hosts, started = emulated
+    plan = folder / "plan_straight.yaml"
+    program = compile_plan(plan).program
+    q0 = program.segments[0].trajectory.q[0].copy()
+    q0[[0, 2, 6, 8]] += 0.3
+    _start(hosts, q0, started)
+    run = tmp_path / "run"
+    result = _run(str(plan), "--out", str(run), timeout=300)
+    assert result.returncode == 0, result.stderr[-2000:]
+    kinds = [e["entry"] for e in _journal(run)]
+    assert kinds.index("recovery") < kinds.index("sent") and kinds[-1] == "end"
