@@ -23,6 +23,7 @@ MODULES = [
     "bench_plan",
     "bench_execute",
     "bench_allocate",
+    "bench_ur_servo",
 ]
 
 

@@ -86,6 +86,8 @@ class UrDriver(Base):
         self._io: dict[str, Any] = {}
         self._grippers = {arm: GripperState(None, None) for arm in self.layout.arms}
         self.periods: list[float] = []  # every servo period measured (s), for the report
+        # from a fault's detection to every arm's stop command sent (s)
+        self.stop_latencies: list[float] = []
 
     # -- lifecycle hooks --------------------------------------------------------------------
 
@@ -210,7 +212,7 @@ class UrDriver(Base):
         if fault is None:
             fault = self._settle(commanded[-1], float(ticks[-1]))
         if fault is not None:
-            self._stop_all()
+            self.stop_latencies.append(self._stop_all())
         else:
             for ctl in self._ctl.values():
                 ctl.servoStop(STOP_DECELERATION)
@@ -337,14 +339,20 @@ class UrDriver(Base):
 
     # -- helpers ------------------------------------------------------------------------
 
-    def _stop_all(self) -> None:
+    def _stop_all(self) -> float:
         """Every arm stopped, best effort, each on its own (one failing must not spare the
-        others)."""
+        others): first an asynchronous stopJ to every arm, so that none waits for another to
+        stand, then servoStop on each (which returns when it stands). The seconds until
+        every arm had its stop command."""
+        t0 = time.perf_counter()
         for ctl in self._ctl.values():
             with contextlib.suppress(Exception):  # stopping the others matters more
-                ctl.servoStop(STOP_DECELERATION)
+                ctl.stopJ(STOP_DECELERATION, True)
+        sent = time.perf_counter() - t0
+        for ctl in self._ctl.values():
             with contextlib.suppress(Exception):
-                ctl.stopJ(STOP_DECELERATION)
+                ctl.servoStop(STOP_DECELERATION)
+        return sent
 
     def _connect(self, arm: str, ip: str, what: str, make: Callable[[str], T]) -> T:
         return _within(
