@@ -48,6 +48,7 @@ FloatArray = np.ndarray
 SERVO_PERIOD = 0.002  # s: 500 Hz, the e-Series controller's rate
 CONNECT_TIMEOUT = 5.0  # s for each vendor constructor
 WATCHDOG_HZ = 10.0  # the control script stops an arm not kicked for 0.1 s
+KICK_PERIOD = 0.02  # s between the idle kicks, five times within the watchdog's 0.1 s
 STOP_DECELERATION = 10.0  # rad/s^2 for servoStop / stopJ on a fault
 SAFETY_NORMAL = 1  # getSafetyMode()
 ROBOT_RUNNING = 7  # getRobotMode()
@@ -86,6 +87,9 @@ class UrDriver(Base):
         self._io: dict[str, Any] = {}
         self._grippers = {arm: GripperState(None, None) for arm in self.layout.arms}
         self.periods: list[float] = []  # every servo period measured (s), for the report
+        self._link = threading.Lock()  # one user of the control interfaces at a time
+        self._alive = threading.Event()
+        self._kicker: threading.Thread | None = None
         # from a fault's detection to every arm's stop command sent (s)
         self.stop_latencies: list[float] = []
 
@@ -120,11 +124,38 @@ class UrDriver(Base):
         for arm, ctl in self._ctl.items():
             if not ctl.setWatchdog(WATCHDOG_HZ):
                 raise Refused(self.kind, f"arm '{arm}': the controller refused the watchdog")
+        self._keep_alive(True)
 
     def _on_deactivate(self) -> None:
+        self._keep_alive(False)
         self._stop_all()
 
+    def _keep_alive(self, on: bool) -> None:
+        """Between segments (planning a move back, replanning after a weighing, writing the
+        journal) nothing streams: a thread kicks every arm's watchdog then, so it fires only
+        when this process is gone. It holds ``_link`` for each kick; streaming holds it for
+        the whole segment (a kick during servoJ would overwrite the servoJ)."""
+        if not on:
+            self._alive.clear()
+            if self._kicker is not None:
+                self._kicker.join(1.0)
+                self._kicker = None
+            return
+        self._alive.set()
+
+        def kick() -> None:
+            while self._alive.is_set():
+                with self._link:
+                    for ctl in self._ctl.values():
+                        with contextlib.suppress(Exception):
+                            ctl.kickWatchdog()
+                time.sleep(KICK_PERIOD)
+
+        self._kicker = threading.Thread(target=kick, name="ur-watchdog", daemon=True)
+        self._kicker.start()
+
     def _on_finalize(self) -> None:
+        self._keep_alive(False)
         for group in (self._ctl, self._rcv, self._io):
             for client in group.values():
                 with contextlib.suppress(Exception):  # leaving anyway
@@ -144,6 +175,7 @@ class UrDriver(Base):
                 )
 
     def _on_fault(self) -> None:
+        self._keep_alive(False)
         self._stop_all()
 
     # -- readings ---------------------------------------------------------------------------
@@ -172,6 +204,10 @@ class UrDriver(Base):
     # -- execution ----------------------------------------------------------------------
 
     def _on_execute(self, segment: CompiledSegment, events: tuple[TimedEvent, ...]) -> Played:
+        with self._link:  # no watchdog kick while servoJ streams
+            return self._stream(segment, events)
+
+    def _stream(self, segment: CompiledSegment, events: tuple[TimedEvent, ...]) -> Played:
         traj = segment.trajectory
         ticks = servo_ticks(traj.start_time, traj.end_time, self.servo_period)
         commanded = np.atleast_2d(traj.sample(ticks)[0])
@@ -244,7 +280,9 @@ class UrDriver(Base):
                 q[s] = self._rcv[arm].getActualQ()
                 bits = int(self._rcv[arm].getSafetyStatusBits())
                 if safety_stop(bits) is not None or not self._rcv[arm].isConnected():
-                    return self._watch(t, 0, q_end[None, :], q[None, :], 0)
+                    fault = self._watch(t, 0, q_end[None, :], q[None, :], 0)
+                    if fault is not None:  # else it cleared between two readings
+                        return fault
             j = int(np.argmax(np.abs(q - q_end)))
             still = all(
                 float(np.max(np.abs(self._rcv[arm].getActualQd()))) <= SETTLE_SPEED
