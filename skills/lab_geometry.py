@@ -56,7 +56,7 @@ class Body:
 
     @classmethod
     def of(cls, c: Container) -> Body:
-        height = c.size[2] if c.size is not None else c.height
+        height = c.full_height
         if height is None:
             raise ValueError("a container needs a height (or a box size) to be grasped")
         if c.diameter is not None:

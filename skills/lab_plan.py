@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from cellengine import geometry as g
 from cellengine.allocate import (
     AnyOf,
     Blocker,
@@ -236,7 +237,7 @@ def _blocked(
         return ()
     robots = [r for r in cell.arms if step.arm in ("auto", "both", r)]
     scene = _full_scene(world, cell)
-    found = blockers(world, cell, scene, name, _pose_at(world, where[name]), robots)
+    found = blockers(world, cell, scene, name, _pose_at(where[name]), robots)
     if not found:
         return ()
     taken = set(where.values()) | targets
@@ -350,7 +351,7 @@ def _do(
 
     def at(loc: tuple[Point, ...]) -> Mat:
         # a location planned for every candidate object: the chosen one's
-        return _pose_at(world, loc[names.index(name)] if len(loc) == len(names) else loc[0])
+        return _pose_at(loc[names.index(name)] if len(loc) == len(names) else loc[0])
 
     arm = a.robot
     grasp = _grasp(world, arm)
@@ -386,7 +387,7 @@ def _clear(
         if a.kind in ("pick", "handover_pick"):
             lm.pick(b, reach, world, a.robot, name, _grasp(world, a.robot), where)
         elif a.kind in ("place", "handover_place"):
-            lm.place(b, reach, a.robot, _pose_at(world, a.end[0]), where)
+            lm.place(b, reach, a.robot, _pose_at(a.end[0]), where)
         else:
             raise InputError(Complaint(f"{where}: no motion for '{a.kind}'"))
 
@@ -547,10 +548,8 @@ def _resolve(ref: ObjectRef, masses: Mapping[str, float]) -> str:
     return pick(names, key=lambda n: masses[n])
 
 
-def _pose_at(world: World, p: Point) -> Mat:
-    T = np.eye(4)
-    T[:3, 3] = p
-    return T
+def _pose_at(p: Point) -> Mat:
+    return g.transform(None, p)
 
 
 def _point(v: Sequence[float] | np.ndarray) -> Point:

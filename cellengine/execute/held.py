@@ -204,7 +204,7 @@ class Holding:
 
 def _half_height(world: World, name: str, sign: float) -> Mat:
     c = world.container(name)
-    h = float(c.size[2] if c.size is not None else (c.height or 0.0))
+    h = float(c.full_height or 0.0)
     T = np.eye(4)
     T[2, 3] = sign * h / 2.0
     return T

@@ -42,6 +42,11 @@ class Container(Frozen):
     # of its base, z up
     at: str | None = None
 
+    @property
+    def full_height(self) -> float | None:
+        """How tall it stands: a box's size in z, else its height (None: not given)."""
+        return self.size[2] if self.size is not None else self.height
+
 
 class Objects(Frozen):
     units: Units = Units()

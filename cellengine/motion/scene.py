@@ -489,7 +489,7 @@ def standing_container(world: World, name: str, T_cell_base: Mat) -> StaticShape
     """Container ``name`` standing with its base at ``T_cell_base``: its cylinder (or box),
     named as the container, centred half its height above the base."""
     c = world.container(name)
-    height = c.size[2] if c.size is not None else c.height
+    height = c.full_height
     if height is None or (c.diameter is None and c.size is None):
         raise ValueError(f"container '{name}' needs a size, or a height and a diameter")
     T = np.array(T_cell_base, dtype=float) @ g.transform(np.eye(3), (0.0, 0.0, height / 2))
