@@ -49,66 +49,122 @@ def sine(seconds: float, names: tuple[str, ...]) -> Trajectory:
     return Trajectory(names, t, q, qd, qdd)
 
 
+FAULTS = [  # (fault, arm that has it)
+    ("protective_stop", "right"),
+    ("emergency_stop", "left"),
+    ("frozen", "right"),
+    ("drop", "left"),
+    ("kill", "right"),
+]
+REST_SPEED = 0.005  # rad/s: an arm slower than this on every joint stands
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seconds", type=float, default=60.0)
+    ap.add_argument("--repeats", type=int, default=3, help="runs of each fault")
     args = ap.parse_args()
-    print(json.dumps(run(args.seconds), indent=2))
+    print(json.dumps(run(args.seconds, args.repeats), indent=2))
 
 
-def run(seconds: float = 60.0) -> dict[str, float]:
-    hosts = free_hosts(2)
+def _cell(hosts: list[str]) -> Path:
     folder = Path(tempfile.mkdtemp()) / "cell"
     shutil.copytree(ROOT / "cells" / "cable_routing", folder)
     path = folder / "cell.yaml"
     driver_yaml = f"{{kind: ur_rtde, arms: {{left: {hosts[0]}, right: {hosts[1]}}}}}"
     path.write_text(path.read_text().replace("driver: {kind: sim}", f"driver: {driver_yaml}"))
-    cell, _ = load_cell(path)
-    joints = {
-        "left": [f"left_j{i}" for i in range(6)],
-        "right": [f"right_j{i}" for i in range(6)],
-    }
-    names = tuple(joints["left"] + joints["right"])
+    return path
+
+
+JOINTS = {"left": [f"left_j{i}" for i in range(6)], "right": [f"right_j{i}" for i in range(6)]}
+NAMES = tuple(JOINTS["left"] + JOINTS["right"])
+
+
+def _emulators(hosts: list[str]) -> list[Emulator]:
+    """One emulator process per arm (so that killing one spares the other), at home."""
     q0 = ",".join(f"{v:.6f}" for v in HOME)
-    emulator = Emulator(hosts, "--q0", f"{hosts[0]}={q0}", "--q0", f"{hosts[1]}={q0}")
+    return [Emulator([h], "--q0", f"{h}={q0}") for h in hosts]
+
+
+def run(seconds: float = 60.0, repeats: int = 3) -> dict[str, float]:
+    hosts = free_hosts(2)
+    cell, _ = load_cell(_cell(hosts))
+    emulators = _emulators(hosts)
     out: dict[str, float] = {}
     try:
-        driver = UrDriver(cell, joints)
+        driver = UrDriver(cell, JOINTS)
         driver.configure()
         driver.activate()
-        traj = sine(seconds, names)
         t0 = time.perf_counter()
-        driver.execute(CompiledSegment(Segment(0, "bench"), "split", traj, {}))
+        driver.execute(CompiledSegment(Segment(0, "bench"), "split", sine(seconds, NAMES), {}))
         wall = time.perf_counter() - t0
-        periods = np.array(driver.periods)
-        err = np.abs(periods - 0.002) * 1e3
-        out.update(
-            {
-                "ur_servo_seconds": seconds,
-                "ur_servo_wall_s": wall,
-                "ur_servo_rate_hz": float(1.0 / periods.mean()),
-                "ur_servo_period_error_p50_ms": float(np.percentile(err, 50)),
-                "ur_servo_period_error_p99_ms": float(np.percentile(err, 99)),
-                "ur_servo_period_error_p999_ms": float(np.percentile(err, 99.9)),
-                "ur_servo_period_max_ms": float(periods.max() * 1e3),
-            }
-        )
-        short = sine(6.0, names)
-        emulator_fault_at = time.perf_counter() + 2.0
+        timing = driver.timing()
+        driver.finalize()
+    finally:
+        for e in emulators:
+            e.close()
+    err = timing["period_error_ms"]
+    out.update(
+        {
+            "ur_servo_seconds": seconds,
+            "ur_servo_wall_s": wall,
+            "ur_servo_rate_hz": timing["rate_hz"],
+            "ur_servo_period_error_p50_ms": err["p50"],
+            "ur_servo_period_error_p99_ms": err["p99"],
+            "ur_servo_period_error_p999_ms": err["p99.9"],
+            "ur_servo_period_max_ms": timing["nominal_period_ms"] + err["max"],
+        }
+    )
+    for kind, arm in FAULTS:
+        runs = [fault_run(kind, arm) for _ in range(repeats)]
+        for key in runs[0]:
+            values = [r[key] for r in runs]
+            out[f"ur_{kind}_{arm}_{key}_median"] = float(np.median(values))
+            out[f"ur_{kind}_{arm}_{key}_max"] = float(np.max(values))
+    stops = [v for k, v in out.items() if k.endswith("stop_commands_ms_max")]
+    out["ur_fault_to_stop_ms"] = max(stops)
+    return out
+
+
+def fault_run(kind: str, arm: str) -> dict[str, float]:
+    """A 6 s segment on fresh controllers, ``kind`` injected on ``arm`` 2 s in: from the
+    injection to its detection, from detection to every arm's stop command, and from
+    detection to the other arm standing (its speed at the fault, and 10 rad/s^2)."""
+    hosts = free_hosts(2)
+    cell, _ = load_cell(_cell(hosts))
+    emulators = _emulators(hosts)
+    i = ("left", "right").index(arm)
+    other = ("left", "right")[1 - i]
+    try:
+        driver = UrDriver(cell, JOINTS)
+        driver.configure()
+        driver.activate()
+        injected: list[float] = []
 
         def inject() -> None:
-            time.sleep(max(0.0, emulator_fault_at - time.perf_counter()))
-            emulator.fault(hosts[1], "protective_stop")
+            time.sleep(2.0)
+            injected.append(time.perf_counter())
+            with contextlib.suppress(Exception):  # a killed emulator does not answer
+                emulators[i].fault(hosts[i], kind, timeout=1.0)
 
         threading.Thread(target=inject, daemon=True).start()
         with contextlib.suppress(DriverFault):  # the fault is the point
-            driver.execute(CompiledSegment(Segment(0, "fault"), "split", short, {}))
-        if driver.stop_latencies:
-            out["ur_fault_to_stop_ms"] = driver.stop_latencies[-1] * 1e3
+            driver.execute(CompiledSegment(Segment(0, kind), "split", sine(6.0, NAMES), {}))
+        detected = driver.detections[-1]
+        rcv = driver._rcv[other]  # the bench reads the healthy arm directly
+        while max(abs(v) for v in rcv.getActualQd()) > REST_SPEED:
+            time.sleep(0.0005)
+        rest = time.perf_counter()
+        figures = {
+            "detect_ms": (detected - injected[0]) * 1e3,
+            "stop_commands_ms": driver.stop_latencies[-1] * 1e3,
+            "other_at_rest_ms": (rest - detected) * 1e3,
+        }
         driver.finalize()
     finally:
-        emulator.close()
-    return out
+        for e in emulators:
+            e.close()
+    return figures
 
 
 if __name__ == "__main__":

@@ -13,7 +13,15 @@ from __future__ import annotations
 import argparse
 
 from cellengine.commands.plan import compile_from_args
-from cellengine.commands.run import _confirm, _driver, _entry, _play, journaled, move_to
+from cellengine.commands.run import (
+    _confirm,
+    _driver,
+    _entry,
+    _play,
+    journaled,
+    move_to,
+    timed,
+)
 from cellengine.errors import EXIT_OK, InputError, Problem, display_path
 
 
@@ -58,15 +66,16 @@ def resume(args: argparse.Namespace) -> int:
     nxt = compiled.program.segments[progress.done]
     with journal_path.open("a") as journal, driver:
         _entry(journal, "resume", from_segment=progress.done, label=nxt.segment.label)
-        driver.configure()
-        driver.activate()
-        move_to(compiled, driver, journal, progress.done)
 
         def go_on() -> None:
             _play(compiled, driver, journal, args.quiet, run_dir, progress.done, progress.measured)
 
-        journaled(journal, driver, go_on)
-        driver.deactivate()
+        with timed(journal, driver, run_dir, args.quiet):
+            driver.configure()
+            driver.activate()
+            move_to(compiled, driver, journal, progress.done, q0)
+            journaled(journal, driver, go_on)
+            driver.deactivate()
         _entry(journal, "end", duration=compiled.program.duration)
     if not args.quiet:
         done = len(labels) - progress.done

@@ -4,11 +4,12 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
@@ -57,11 +58,14 @@ def run(args: argparse.Namespace) -> int:
     _confirm(driver, args.yes)
     with (args.out / "journal.jsonl").open("a") as journal, driver:
         _entry(journal, "start", plan=str(compiled.loaded.plan.file), driver=type(driver).__name__)
-        driver.configure()
-        driver.activate()
-        move_to(compiled, driver, journal, 0)
-        journaled(journal, driver, lambda: _play(compiled, driver, journal, args.quiet, args.out))
-        driver.deactivate()
+        with timed(journal, driver, args.out, args.quiet):
+            driver.configure()
+            driver.activate()
+            move_to(compiled, driver, journal, 0)
+            journaled(
+                journal, driver, lambda: _play(compiled, driver, journal, args.quiet, args.out)
+            )
+            driver.deactivate()
         _entry(journal, "end", duration=compiled.program.duration)
     if not args.quiet:
         print(
@@ -86,9 +90,13 @@ def _confirm(driver: Driver, yes: bool) -> None:
         raise UsageError.at("not confirmed: nothing moved", None)
 
 
-def move_to(compiled: Compiled, driver: Driver, journal: IO[str], index: int) -> None:
+def move_to(
+    compiled: Compiled, driver: Driver, journal: IO[str], index: int, left: Any = None
+) -> None:
     """When the arms are not where segment ``index`` starts (real arms left elsewhere, or
-    stopped by a fault), a planned, gated, collision-free move there first (journaled)."""
+    stopped by a fault), a planned, gated, collision-free move there first (journaled).
+    Only from near where the run expects them: the segment's start, or ``left``, where
+    the journal says an earlier run left them (a fault may stop them far into a segment)."""
 
     from cellengine.execute.recovery import recovery_segment
     from cellengine.pipeline import cell_models
@@ -98,6 +106,12 @@ def move_to(compiled: Compiled, driver: Driver, journal: IO[str], index: int) ->
     target = segment.trajectory.q[0]
     if float(np.max(np.abs(q_now - target))) <= driver.start_tolerance:
         return
+    label = segment.segment.label
+    if left is None:
+        _check_move_limit(driver, q_now, target[None, :], f"'{label}' starts")
+    else:  # a killed run journals no stop: the arms may be anywhere along the segment
+        near = np.vstack([np.asarray(left, dtype=float)[None, :], segment.trajectory.q])
+        _check_move_limit(driver, q_now, near, f"the run left it (in or before '{label}')")
     holds = {arm: driver.gripper(arm).holds for arm in compiled.cell.arms}
     _, checker = cell_models(compiled.world)
     move = recovery_segment(
@@ -119,6 +133,51 @@ def move_to(compiled: Compiled, driver: Driver, journal: IO[str], index: int) ->
         driver.execute(move)
 
     journaled(journal, driver, go)
+
+
+def _check_move_limit(driver: Driver, q_now: Any, expected: Any, where: str) -> None:
+    """Arms far from every place the run expects them (rows of ``expected``) were put there
+    on purpose, or by someone who does not know this run: they are not moved on their own
+    (the driver's ``start_move_limit``)."""
+    from cellengine.drivers.fault import Refused
+
+    offs = np.abs(q_now[None, :] - expected)
+    nearest = int(np.argmin(offs.max(axis=1)))
+    target, off = expected[nearest], offs[nearest]
+    j = int(np.argmax(off))
+    if off[j] <= driver.start_move_limit:
+        return
+    arm, joint = driver.layout.arm_of(j), driver.joint_names[j]
+    raise Refused(
+        driver.kind,
+        f"arm '{arm}' joint '{joint}' is at {q_now[j]:.4f}, {off[j]:.4f} rad from where "
+        f"{where} ({target[j]:.4f}): farther than start_move_limit "
+        f"({driver.start_move_limit:g} rad), so the run does not move it there on its own; "
+        "jog the arms closer, or raise the driver's start_move_limit in the cell file",
+    )
+
+
+@contextlib.contextmanager
+def timed(journal: IO[str], driver: Driver, out: Path, quiet: bool) -> Iterator[None]:
+    """Whatever happens inside, afterwards: how the driver's real-time loop kept its period
+    (a real driver's), journaled, printed, and in report.json's ``run``."""
+    outcome = "fault"
+    try:
+        yield
+        outcome = "completed"
+    finally:
+        timing = driver.timing()
+        if timing is not None:
+            from cellengine.drivers.servo_timing import describe
+            from cellengine.outfiles import write_files
+            from cellengine.report.write import REPORT_JSON
+
+            _entry(journal, "timing", servo=timing)
+            report = json.loads((out / REPORT_JSON).read_text())
+            report["run"] = {"driver": driver.kind, "outcome": outcome, "servo": timing}
+            write_files(out, {REPORT_JSON: json.dumps(report) + "\n"})
+            if not quiet:
+                print(describe(timing))
 
 
 def journaled(journal: IO[str], driver: Driver, play: Callable[[], None]) -> None:

@@ -21,6 +21,7 @@ class then moves to ``error`` and raises :class:`DriverFault`.
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping, Sequence
 from types import TracebackType
@@ -71,6 +72,8 @@ class Driver(ABC):
         self.layout = CellLayout.of(cell, joints)
         self.objects = objects
         self.start_tolerance = float(start_tolerance)
+        # how far (rad) a run may move the arms on its own to where a segment starts
+        self.start_move_limit = math.inf
         self.recorder = Recorder()
         self.fault: Fault | None = None  # the fault that put the driver in error, if any
         self._life = Lifecycle(self.kind)
@@ -163,6 +166,10 @@ class Driver(ABC):
         self._life.check_operation("read_mass")
         self._check_arm(arm)
         return self._guarded(lambda: self._read_mass(arm))
+
+    def timing(self) -> dict[str, Any] | None:
+        """How a real-time loop kept its period (servo_timing.py), where the driver has one."""
+        return None
 
     # -- hooks for concrete drivers -------------------------------------------------------
 

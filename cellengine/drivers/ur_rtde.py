@@ -24,6 +24,8 @@ anything moves.
 from __future__ import annotations
 
 import contextlib
+import ctypes
+import dataclasses
 import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -35,6 +37,7 @@ from cellengine.drivers.base import Driver as Base
 from cellengine.drivers.base import GripperState
 from cellengine.drivers.fault import Fault, Refused
 from cellengine.drivers.record import AppliedEvent, Played
+from cellengine.drivers.servo_timing import servo_timing
 from cellengine.drivers.sim import servo_ticks
 from cellengine.drivers.ur_watch import safety_stop, set_bits, tracking_deviation
 from cellengine.info.cell import Cell
@@ -50,6 +53,8 @@ CONNECT_TIMEOUT = 5.0  # s for each vendor constructor
 WATCHDOG_HZ = 10.0  # the control script stops an arm not kicked for 0.1 s
 KICK_PERIOD = 0.02  # s between the idle kicks, five times within the watchdog's 0.1 s
 STOP_DECELERATION = 10.0  # rad/s^2 for servoStop / stopJ on a fault
+STOP_TIMEOUT = 0.5  # s: a stop command not sent by then is given up (its arm's watchdog fires)
+DISCONNECT_TIMEOUT = 5.0  # s for every client of a kind to disconnect
 SAFETY_NORMAL = 1  # getSafetyMode()
 ROBOT_RUNNING = 7  # getRobotMode()
 MODEL_NAMES = {"ur3e": "UR3", "ur5e": "UR5", "ur10e": "UR10", "ur5": "UR5"}
@@ -79,6 +84,7 @@ class UrDriver(Base):
         self.config: Config = cell.driver
         super().__init__(cell, joints, objects=objects, start_tolerance=self.config.start_tolerance)
         self.addresses = {arm: str(ip) for arm, ip in self.config.arms.items()}
+        self.start_move_limit = self.config.start_move_limit
         self.connect_timeout = connect_timeout
         self.servo_period = servo_period
         self._models = {name: r.model for name, r in cell.robots.items()}
@@ -86,12 +92,16 @@ class UrDriver(Base):
         self._rcv: dict[str, Any] = {}
         self._io: dict[str, Any] = {}
         self._grippers = {arm: GripperState(None, None) for arm in self.layout.arms}
+        self._last_q = np.full(len(self.joint_names), np.nan)  # each arm's last reading
         self.periods: list[float] = []  # every servo period measured (s), for the report
         self._link = threading.Lock()  # one user of the control interfaces at a time
         self._alive = threading.Event()
         self._kicker: threading.Thread | None = None
         # from a fault's detection to every arm's stop command sent (s)
         self.stop_latencies: list[float] = []
+
+    def timing(self) -> dict[str, Any]:
+        return servo_timing(self.periods, self.servo_period, self.stop_latencies)
 
     # -- lifecycle hooks --------------------------------------------------------------------
 
@@ -118,7 +128,8 @@ class UrDriver(Base):
             self._ctl[arm] = self._connect(
                 arm, ip, "RTDE control", rtde_control.RTDEControlInterface
             )
-            self._io[arm] = self._connect(arm, ip, "RTDE IO", rtde_io.RTDEIOInterface)
+            if self.config.gripper_io:  # the grippers' digital outputs
+                self._io[arm] = self._connect(arm, ip, "RTDE IO", rtde_io.RTDEIOInterface)
 
     def _on_activate(self) -> None:
         for arm, ctl in self._ctl.items():
@@ -147,8 +158,8 @@ class UrDriver(Base):
             while self._alive.is_set():
                 with self._link:
                     for ctl in self._ctl.values():
-                        with contextlib.suppress(Exception):
-                            ctl.kickWatchdog()
+                        if _connected(ctl):  # a lost one would block, reconnecting
+                            _quietly(lambda c: c.kickWatchdog(), ctl)
                 time.sleep(KICK_PERIOD)
 
         self._kicker = threading.Thread(target=kick, name="ur-watchdog", daemon=True)
@@ -156,10 +167,15 @@ class UrDriver(Base):
 
     def _on_finalize(self) -> None:
         self._keep_alive(False)
-        for group in (self._ctl, self._rcv, self._io):
-            for client in group.values():
-                with contextlib.suppress(Exception):  # leaving anyway
-                    client.disconnect()
+        for arm, io in self._io.items():
+            if not _connected(self._rcv[arm]):  # its own isConnected() cannot tell
+                _never_destroyed(io)
+        live = {arm: io for arm, io in self._io.items() if _connected(self._rcv[arm])}
+        for group in (self._ctl, live, self._rcv):
+            for arm in _each(group, lambda client: client.disconnect(), DISCONNECT_TIMEOUT):
+                # destroying a client whose threads still run aborts the process
+                _never_destroyed(group[arm])
+        for group in (self._ctl, self._io, self._rcv):
             group.clear()
 
     def _on_recover(self) -> None:
@@ -186,19 +202,20 @@ class UrDriver(Base):
             rcv = self._rcv[arm]
             if not rcv.isConnected():
                 raise Refused(self.kind, f"arm '{arm}' at {self.addresses[arm]} is not connected")
-            q[s] = rcv.getActualQ()
+            q[s] = self._last_q[s] = rcv.getActualQ()
         return q
 
     def _read_gripper(self, arm: str) -> GripperState:
         return self._grippers[arm]
 
     def _last_known(self) -> tuple[FloatArray, dict[str, GripperState]]:
-        q = np.zeros(len(self.joint_names))
+        """Where the arms are; an arm whose controller has gone: its last reading."""
+        q = self._last_q.copy()
         for arm, s in self.layout.slices.items():
-            try:
-                q[s] = self._rcv[arm].getActualQ()
-            except Exception:
-                q[s] = np.nan
+            rcv = self._rcv.get(arm)
+            with contextlib.suppress(Exception):
+                if rcv is not None and rcv.isConnected():
+                    q[s] = rcv.getActualQ()
         return q, dict(self._grippers)
 
     # -- execution ----------------------------------------------------------------------
@@ -226,29 +243,39 @@ class UrDriver(Base):
         fault: Fault | None = None
         k = 0
         for k, t in enumerate(ticks):
-            starts = {arm: ctl.initPeriod() for arm, ctl in self._ctl.items()}
-            for arm, s in self.layout.slices.items():
-                ctl = self._ctl[arm]
-                ctl.servoJ(
-                    list(commanded[k, s]), 0.0, 0.0, self.servo_period, servo.lookahead, servo.gain
-                )
-            fault = self._watch(float(t), k, commanded, measured, window)
-            if fault is None and time.perf_counter() - wall0 > deadline:
-                fault = self._overrun(float(t), traj.duration, deadline)
-            if fault is None:
-                fault = self._apply_due(float(t), pending, applied)
+            try:
+                starts = {arm: ctl.initPeriod() for arm, ctl in self._ctl.items()}
+                for arm, s in self.layout.slices.items():
+                    if not _connected(self._ctl[arm]):  # servoJ would try to reconnect
+                        raise ConnectionError("the control interface is disconnected")
+                    self._ctl[arm].servoJ(
+                        list(commanded[k, s]), 0, 0, self.servo_period, servo.lookahead, servo.gain
+                    )
+                fault = self._watch(float(t), k, commanded, measured, window)
+                if fault is None and time.perf_counter() - wall0 > deadline:
+                    fault = self._overrun(float(t), traj.duration, deadline)
+                if fault is None:
+                    fault = self._apply_due(float(t), pending, applied)
+                if fault is None:
+                    first = next(iter(self._ctl))
+                    self._ctl[first].waitPeriod(starts[first])  # one clock for every arm
+            except Exception as e:  # the client raises when its controller has gone
+                fault = self._lost(float(t), e)
             if fault is not None:
                 break
-            first = next(iter(self._ctl))
-            self._ctl[first].waitPeriod(starts[first])  # one clock for every arm
             now = time.perf_counter()
             self.periods.append(now - last)
             last = now
         m = k + 1
         if fault is None:
-            fault = self._settle(commanded[-1], float(ticks[-1]))
+            try:
+                fault = self._settle(commanded[-1], float(ticks[-1]))
+            except Exception as e:
+                fault = self._lost(float(ticks[-1]), e)
         if fault is not None:
             self.stop_latencies.append(self._stop_all())
+            details = {**fault.details, "stop_commands_s": round(self.stop_latencies[-1], 6)}
+            fault = dataclasses.replace(fault, details=details)
         else:
             for ctl in self._ctl.values():
                 ctl.servoStop(STOP_DECELERATION)
@@ -276,6 +303,8 @@ class UrDriver(Base):
             q = np.zeros_like(q_end)
             for arm, s in self.layout.slices.items():
                 ctl = self._ctl[arm]
+                if not _connected(ctl):  # servoJ would try to reconnect
+                    raise ConnectionError("the control interface is disconnected")
                 ctl.servoJ(list(q_end[s]), 0.0, 0.0, self.servo_period, servo.lookahead, servo.gain)
                 q[s] = self._rcv[arm].getActualQ()
                 bits = int(self._rcv[arm].getSafetyStatusBits())
@@ -310,7 +339,7 @@ class UrDriver(Base):
         """Read every arm; the first fault found (connection, safety stop, tracking)."""
         for arm, s in self.layout.slices.items():
             rcv, ctl = self._rcv[arm], self._ctl[arm]
-            if not (rcv.isConnected() and ctl.isConnected()):
+            if not _connected(rcv, ctl):
                 return Fault(
                     "connection",
                     f"connection to arm '{arm}' at {self.addresses[arm]} lost at t = {t:.3f} s; "
@@ -330,7 +359,7 @@ class UrDriver(Base):
                     value=bits,
                     details={"safety_status_bits": bits, "set": names},
                 )
-            measured[k, s] = rcv.getActualQ()
+            measured[k, s] = self._last_q[s] = rcv.getActualQ()
         recent = commanded[max(0, k - window) : k + 1]
         j, d = tracking_deviation(measured[k], recent)
         if d > self.config.tracking_tolerance:
@@ -347,6 +376,21 @@ class UrDriver(Base):
                 d,
             )
         return None
+
+    def _lost(self, t: float, error: Exception) -> Fault:
+        """A client call raised mid-segment: the arm whose connection is gone (the first
+        if every one still says it is connected)."""
+        arm = next(
+            (a for a in self.layout.arms if not _connected(self._rcv[a], self._ctl[a])),
+            self.layout.arms[0],
+        )
+        return Fault(
+            "connection",
+            f"connection to arm '{arm}' at {self.addresses[arm]} lost at t = {t:.3f} s "
+            f"({error}); {STOPPED}",
+            arm,
+            time=t,
+        )
 
     def _overrun(self, t: float, duration: float, deadline: float) -> Fault:
         return Fault(
@@ -378,18 +422,16 @@ class UrDriver(Base):
     # -- helpers ------------------------------------------------------------------------
 
     def _stop_all(self) -> float:
-        """Every arm stopped, best effort, each on its own (one failing must not spare the
-        others): first an asynchronous stopJ to every arm, so that none waits for another to
-        stand, then servoStop on each (which returns when it stands). The seconds until
-        every arm had its stop command."""
+        """Every arm stopped, best effort, each on its own thread (one failing or hanging must
+        not spare the others): first an asynchronous stopJ to every arm at once, then
+        servoStop on each (which returns when it stands). An arm whose connection is gone is
+        left alone: its client would block trying to reconnect, and its controller stops it
+        when the watchdog is no longer kicked. The seconds until every arm had its stop
+        command."""
         t0 = time.perf_counter()
-        for ctl in self._ctl.values():
-            with contextlib.suppress(Exception):  # stopping the others matters more
-                ctl.stopJ(STOP_DECELERATION, True)
+        _each(self._ctl, lambda ctl: ctl.stopJ(STOP_DECELERATION, True), STOP_TIMEOUT)
         sent = time.perf_counter() - t0
-        for ctl in self._ctl.values():
-            with contextlib.suppress(Exception):
-                ctl.servoStop(STOP_DECELERATION)
+        _each(self._ctl, lambda ctl: ctl.servoStop(STOP_DECELERATION), SETTLE_TIME)
         return sent
 
     def _connect(self, arm: str, ip: str, what: str, make: Callable[[str], T]) -> T:
@@ -419,6 +461,43 @@ class UrDriver(Base):
                 f"arm '{arm}' at {ip} reports robot model '{got}', but the cell says "
                 f"'{model}' ({want})",
             )
+
+
+def _never_destroyed(client: Any) -> None:
+    """ur-rtde's clients abort the process when destroyed in some states (RTDEIOInterface
+    throws from its destructor once its controller has gone; any client whose threads
+    still run, stuck in a call): such a client is leaked on purpose (one reference never
+    released), and the operating system closes its sockets when the process ends."""
+    ctypes.pythonapi.Py_IncRef(ctypes.py_object(client))
+
+
+def _each(clients: Mapping[str, Any], call: Callable[[Any], object], timeout: float) -> list[str]:
+    """``call(client)`` for every connected client at once, each in a thread of its own; the
+    arms whose call had not returned within ``timeout`` (errors are ignored: leaving anyway).
+    A client whose connection is gone is skipped: its calls block trying to reconnect."""
+    threads = {}
+    for arm, client in clients.items():
+        if _connected(client):
+            threads[arm] = threading.Thread(
+                target=lambda c=client: _quietly(call, c), name=f"ur-{arm}", daemon=True
+            )
+            threads[arm].start()
+    end = time.perf_counter() + timeout
+    for thread in threads.values():
+        thread.join(max(0.0, end - time.perf_counter()))
+    return [arm for arm, thread in threads.items() if thread.is_alive()]
+
+
+def _quietly(call: Callable[[Any], object], client: Any) -> None:
+    with contextlib.suppress(Exception):
+        call(client)
+
+
+def _connected(*clients: Any) -> bool:
+    try:
+        return all(c.isConnected() for c in clients)
+    except Exception:
+        return False
 
 
 def _within(timeout: float, call: Callable[[], T], refuse: Callable[[str], Refused]) -> T:

@@ -29,6 +29,7 @@ READY, DONE = 1, 2
 # taken every tick and answered ready at once (the script's own list, ur-rtde 1.6)
 STREAMING = frozenset({6, 9, 10, 11, 24, 25, 26, 27, 38, 58, 66, 67, 68, 69, 70, 71})
 STOP_SCRIPT = 255
+STOPS = {15: "speedStop", 16: "servoStop", 33: "stopL", 34: "stopJ"}
 DEFAULT_STOP = 10.0  # rad/s^2 when a stop command carries no deceleration
 # commands whose script code needs what the emulator does not model (IK, tool space, force)
 UNSUPPORTED = {
@@ -143,10 +144,10 @@ class ControlScript:
             servo.set(self._q(0), self._in_double(9), self._in_double(10))
             self._replace(servo)
         elif cmd in (15, 16):  # speedStop, servoStop: block until the arm stands
-            self._stop(self._in_double(0) or DEFAULT_STOP, wait=True)
+            self._stop(self._in_double(0) or DEFAULT_STOP, wait=True, name=STOPS[cmd])
             return True
         elif cmd in (33, 34):  # stopL, stopJ: async flag in int register 1
-            self._stop(self._in_double(0) or DEFAULT_STOP, wait=self._in_int(1) != 1)
+            self._stop(self._in_double(0) or DEFAULT_STOP, self._in_int(1) != 1, STOPS[cmd])
             return True
         elif cmd == 31:
             ctl.protective_stop("triggered by the control script (triggerProtectiveStop)")
@@ -200,7 +201,9 @@ class ControlScript:
         else:
             self.waiting = move
 
-    def _stop(self, a: float, wait: bool) -> None:
+    def _stop(self, a: float, wait: bool, name: str) -> None:
+        # logged with the tick, so that tests see which arms were told to stop, and when
+        self.ctl.log(f"{name} (a = {a:g}) at tick {self.ctl.tick_count}")
         stop = Stop(a)
         self.ctl.arm.start(stop)
         if wait:

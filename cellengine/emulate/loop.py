@@ -125,7 +125,7 @@ class Emulator:
         ctl = self.controllers.get(fault.host)
         if ctl is None:
             return f"no emulated controller at '{fault.host}'; known: {', '.join(self.controllers)}"
-        log(f"{fault.host}: fault '{fault.kind}' injected")
+        ctl.log(f"fault '{fault.kind}' injected at tick {ctl.tick_count}")
         if fault.kind == "protective_stop":
             ctl.protective_stop("injected")
         elif fault.kind == "emergency_stop":

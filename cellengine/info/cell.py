@@ -149,6 +149,9 @@ class UrRtdeDriver(Frozen):
     tracking_tolerance: Angle = Field(0.05, gt=0)
     # largest distance (angle unit) of a joint from the plan's first point at the start
     start_tolerance: Angle = Field(0.01, gt=0)
+    # the run moves the arms to the plan's start (or, resumed, to the next segment's) on its
+    # own only when no joint is farther than this (angle unit) from it; else it is refused
+    start_move_limit: Angle = Field(0.5, gt=0)
     # a segment may take this many times its duration, plus overrun_margin s, before it is
     # stopped as overrun (a controller slows the arms with its speed slider)
     overrun_scale: float = Field(1.5, ge=1.0)

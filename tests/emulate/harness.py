@@ -231,3 +231,17 @@ class Worker:
         if self.proc.stdin is not None:
             with contextlib.suppress(OSError):
                 self.proc.stdin.close()
+
+
+def dashboard(host: str, *commands: str, timeout: float = 5.0) -> list[str]:
+    """What the dashboard server at ``host`` answers to each command (as an operator would
+    type them on the pendant: 'power on', 'brake release', ...)."""
+    answers = []
+    with socket.create_connection((host, 29999), timeout=timeout) as s:
+        buf = bytearray()
+        deadline = time.monotonic() + timeout
+        _readline(s.fileno(), buf, deadline, "dashboard welcome")
+        for command in commands:
+            s.sendall(command.encode() + b"\n")
+            answers.append(_readline(s.fileno(), buf, deadline, f"dashboard '{command}'"))
+    return answers
