@@ -36,6 +36,7 @@ import numpy as np
 from cellengine.drivers.base import Driver as Base
 from cellengine.drivers.base import GripperState
 from cellengine.drivers.fault import Fault, Refused
+from cellengine.drivers.lead_in import lead_in
 from cellengine.drivers.record import AppliedEvent, Played
 from cellengine.drivers.servo_timing import servo_timing
 from cellengine.drivers.sim import servo_ticks
@@ -92,12 +93,15 @@ class UrDriver(Base):
         self._rcv: dict[str, Any] = {}
         self._io: dict[str, Any] = {}
         self._grippers = {arm: GripperState(None, None) for arm in self.layout.arms}
+        self._stuck: set[int] = set()  # ids of clients a call hangs in
         self._last_q = np.full(len(self.joint_names), np.nan)  # each arm's last reading
         self.periods: list[float] = []  # every servo period measured (s), for the report
         self._link = threading.Lock()  # one user of the control interfaces at a time
         self._alive = threading.Event()
         self._kicker: threading.Thread | None = None
-        # from a fault's detection to every arm's stop command sent (s)
+        # when each fault was detected (perf_counter), and from there to every arm's stop
+        # command sent (s)
+        self.detections: list[float] = []
         self.stop_latencies: list[float] = []
 
     def timing(self) -> dict[str, Any]:
@@ -157,9 +161,8 @@ class UrDriver(Base):
         def kick() -> None:
             while self._alive.is_set():
                 with self._link:
-                    for ctl in self._ctl.values():
-                        if _connected(ctl):  # a lost one would block, reconnecting
-                            _quietly(lambda c: c.kickWatchdog(), ctl)
+                    for ctl in self._live(self._ctl).values():  # a lost one would block
+                        _quietly(lambda c: c.kickWatchdog(), ctl)
                 time.sleep(KICK_PERIOD)
 
         self._kicker = threading.Thread(target=kick, name="ur-watchdog", daemon=True)
@@ -167,14 +170,12 @@ class UrDriver(Base):
 
     def _on_finalize(self) -> None:
         self._keep_alive(False)
-        for arm, io in self._io.items():
-            if not _connected(self._rcv[arm]):  # its own isConnected() cannot tell
-                _never_destroyed(io)
-        live = {arm: io for arm, io in self._io.items() if _connected(self._rcv[arm])}
-        for group in (self._ctl, live, self._rcv):
-            for arm in _each(group, lambda client: client.disconnect(), DISCONNECT_TIMEOUT):
-                # destroying a client whose threads still run aborts the process
-                _never_destroyed(group[arm])
+        for group in (self._ctl, self._io, self._rcv):
+            live = self._live(group)
+            for arm, client in group.items():
+                if arm not in live:  # e.g. an RTDEIOInterface whose controller has gone
+                    _never_destroyed(client)
+            self._on_each(live, lambda client: client.disconnect(), DISCONNECT_TIMEOUT)
         for group in (self._ctl, self._io, self._rcv):
             group.clear()
 
@@ -227,8 +228,11 @@ class UrDriver(Base):
     def _stream(self, segment: CompiledSegment, events: tuple[TimedEvent, ...]) -> Played:
         traj = segment.trajectory
         ticks = servo_ticks(traj.start_time, traj.end_time, self.servo_period)
-        commanded = np.atleast_2d(traj.sample(ticks)[0])
-        commanded[-1] = traj.q[-1]
+        planned = np.atleast_2d(traj.sample(ticks)[0])
+        planned[-1] = traj.q[-1]
+        lead = self._lead_in(segment, planned[0])
+        commanded = np.vstack([lead, planned])  # the program's time stands during the lead-in
+        times = np.concatenate([np.full(len(lead), ticks[0]), ticks])
         measured = np.zeros_like(commanded)
         applied: list[AppliedEvent] = []
         pending = list(events)
@@ -237,12 +241,13 @@ class UrDriver(Base):
         # commands of the last LAG_WINDOWS lookaheads (and two periods)
         span = LAG_WINDOWS * servo.lookahead + 2 * self.servo_period
         window = max(1, int(np.ceil(span / self.servo_period)))
-        deadline = traj.duration * self.config.overrun_scale + self.config.overrun_margin
+        expected = traj.duration + len(lead) * self.servo_period
+        deadline = expected * self.config.overrun_scale + self.config.overrun_margin
         wall0 = time.perf_counter()
         last = wall0
         fault: Fault | None = None
         k = 0
-        for k, t in enumerate(ticks):
+        for k, t in enumerate(times):
             try:
                 starts = {arm: ctl.initPeriod() for arm, ctl in self._ctl.items()}
                 for arm, s in self.layout.slices.items():
@@ -254,7 +259,7 @@ class UrDriver(Base):
                 fault = self._watch(float(t), k, commanded, measured, window)
                 if fault is None and time.perf_counter() - wall0 > deadline:
                     fault = self._overrun(float(t), traj.duration, deadline)
-                if fault is None:
+                if fault is None and k >= len(lead):
                     fault = self._apply_due(float(t), pending, applied)
                 if fault is None:
                     first = next(iter(self._ctl))
@@ -266,36 +271,58 @@ class UrDriver(Base):
             now = time.perf_counter()
             self.periods.append(now - last)
             last = now
-        m = k + 1
         if fault is None:
             try:
-                fault = self._settle(commanded[-1], float(ticks[-1]))
+                fault = self._settle(commanded[max(0, k - window) :], float(ticks[-1]))
             except Exception as e:
                 fault = self._lost(float(ticks[-1]), e)
         if fault is not None:
-            self.stop_latencies.append(self._stop_all())
-            details = {**fault.details, "stop_commands_s": round(self.stop_latencies[-1], 6)}
-            fault = dataclasses.replace(fault, details=details)
+            fault = self._stopped(fault)
         else:
             for ctl in self._ctl.values():
                 ctl.servoStop(STOP_DECELERATION)
+        # the record is the segment's: the lead-in's rows left out (but one kept, if a
+        # fault came before the segment began)
+        n = max(1, k + 1 - len(lead))
+        rows = slice(k + 1 - n, k + 1)
         return Played(
             segment.segment.step,
             segment.segment.label,
             self.joint_names,
-            ticks[:m],
-            commanded[:m],
-            measured[:m],
+            ticks[:n],
+            planned[:n],
+            measured[rows],
             tuple(applied),
             fault,
             None,
         )
 
-    def _settle(self, q_end: FloatArray, t: float) -> Fault | None:
+    def _lead_in(self, segment: CompiledSegment, first: FloatArray) -> FloatArray:
+        """The servo targets from where the arms stand onto the segment's first point
+        (lead_in.py), computed before anything is sent."""
+        try:
+            return lead_in(self._read_joints(), first, self.servo_period)
+        except RuntimeError as e:
+            raise Refused(self.kind, f"segment '{segment.segment.label}' not sent: {e}") from None
+
+    def _stopped(self, fault: Fault) -> Fault:
+        """Stop every arm; the fault with the time from its detection to every arm's stop
+        command (s) in its details."""
+        detected = time.perf_counter()
+        self.detections.append(detected)
+        latency = self._stop_all() - detected
+        self.stop_latencies.append(latency)
+        details = {**fault.details, "stop_commands_s": round(latency, 6)}
+        return dataclasses.replace(fault, details=details)
+
+    def _settle(self, recent: FloatArray, t: float) -> Fault | None:
         """Hold the last point until every joint is there: servoJ trails its target, and a
         segment that ends before the arm does would leave it short of the next one's start.
-        A fault when it does not settle within SETTLE_TIME."""
+        Watched as the stream is (``recent``: its last lookaheads' commands); a fault when
+        the arms do not settle within SETTLE_TIME."""
         servo = self.config.servo
+        q_end = recent[-1]
+        window = len(recent)
         tolerance = self.start_tolerance * SETTLE_SHARE
         deadline = time.perf_counter() + SETTLE_TIME
         while True:
@@ -312,6 +339,10 @@ class UrDriver(Base):
                     fault = self._watch(t, 0, q_end[None, :], q[None, :], 0)
                     if fault is not None:  # else it cleared between two readings
                         return fault
+            recent = np.vstack([recent[1:], q_end]) if window > 1 else recent
+            fault = self._tracking(t, q, recent)
+            if fault is not None:
+                return fault
             j = int(np.argmax(np.abs(q - q_end)))
             still = all(
                 float(np.max(np.abs(self._rcv[arm].getActualQd()))) <= SETTLE_SPEED
@@ -360,22 +391,26 @@ class UrDriver(Base):
                     details={"safety_status_bits": bits, "set": names},
                 )
             measured[k, s] = self._last_q[s] = rcv.getActualQ()
-        recent = commanded[max(0, k - window) : k + 1]
-        j, d = tracking_deviation(measured[k], recent)
-        if d > self.config.tracking_tolerance:
-            arm, joint = self.layout.arm_of(j), self.joint_names[j]
-            return Fault(
-                "tracking",
-                f"arm '{arm}' joint '{joint}' does not follow at t = {t:.3f} s: measured "
-                f"{measured[k, j]:.4f}, {d:.4f} rad from every command of the last "
-                f"{LAG_WINDOWS * self.config.servo.lookahead:g} s (tolerance "
-                f"{self.config.tracking_tolerance:g}); {STOPPED}",
-                arm,
-                joint,
-                t,
-                d,
-            )
-        return None
+        return self._tracking(t, measured[k], commanded[max(0, k - window) : k + 1])
+
+    def _tracking(self, t: float, q: FloatArray, recent: FloatArray) -> Fault | None:
+        """A fault when a joint of ``q`` is farther than the tolerance from every command of
+        ``recent`` (the last lookaheads' worth)."""
+        j, d = tracking_deviation(q, recent)
+        if d <= self.config.tracking_tolerance:
+            return None
+        arm, joint = self.layout.arm_of(j), self.joint_names[j]
+        return Fault(
+            "tracking",
+            f"arm '{arm}' joint '{joint}' does not follow at t = {t:.3f} s: measured "
+            f"{q[j]:.4f}, {d:.4f} rad from every command of the last "
+            f"{LAG_WINDOWS * self.config.servo.lookahead:g} s (tolerance "
+            f"{self.config.tracking_tolerance:g}); {STOPPED}",
+            arm,
+            joint,
+            t,
+            d,
+        )
 
     def _lost(self, t: float, error: Exception) -> Fault:
         """A client call raised mid-segment: the arm whose connection is gone (the first
@@ -421,17 +456,35 @@ class UrDriver(Base):
 
     # -- helpers ------------------------------------------------------------------------
 
+    def _live(self, clients: Mapping[str, Any]) -> dict[str, Any]:
+        """The clients of the arms whose connections are all up (the receive interface often
+        sees a drop before the control interface's flag does) and that no call is stuck in."""
+        return {
+            arm: c
+            for arm, c in clients.items()
+            if id(c) not in self._stuck and _connected(c, self._rcv[arm], self._ctl[arm])
+        }
+
+    def _on_each(
+        self, clients: Mapping[str, Any], call: Callable[[Any], object], timeout: float
+    ) -> None:
+        """``call`` on each live client at once (_each); a client whose call is stuck is
+        never called again, nor destroyed (a second call or its destruction would crash)."""
+        live = self._live(clients)
+        for arm in _each(live, call, timeout):
+            self._stuck.add(id(live[arm]))
+            _never_destroyed(live[arm])
+
     def _stop_all(self) -> float:
         """Every arm stopped, best effort, each on its own thread (one failing or hanging must
         not spare the others): first an asynchronous stopJ to every arm at once, then
         servoStop on each (which returns when it stands). An arm whose connection is gone is
         left alone: its client would block trying to reconnect, and its controller stops it
-        when the watchdog is no longer kicked. The seconds until every arm had its stop
-        command."""
-        t0 = time.perf_counter()
-        _each(self._ctl, lambda ctl: ctl.stopJ(STOP_DECELERATION, True), STOP_TIMEOUT)
-        sent = time.perf_counter() - t0
-        _each(self._ctl, lambda ctl: ctl.servoStop(STOP_DECELERATION), SETTLE_TIME)
+        when the watchdog is no longer kicked. When every arm had its stop command
+        (perf_counter)."""
+        self._on_each(self._ctl, lambda ctl: ctl.stopJ(STOP_DECELERATION, True), STOP_TIMEOUT)
+        sent = time.perf_counter()
+        self._on_each(self._ctl, lambda ctl: ctl.servoStop(STOP_DECELERATION), SETTLE_TIME)
         return sent
 
     def _connect(self, arm: str, ip: str, what: str, make: Callable[[str], T]) -> T:

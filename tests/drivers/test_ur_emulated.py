@@ -7,6 +7,7 @@ block without one), killed at the end whatever happens."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -34,6 +35,13 @@ def test_the_four_guide_plan_runs_on_two_emulated_arms(
     # where the controllers said the arms were after each segment: where it ends
     for e, seg in zip(finished, program.segments, strict=True):
         assert np.allclose(e["q"], seg.trajectory.q[-1], atol=0.005), seg.segment.label
+    # the servo loop's timing: journaled and in the report, every tick of the motion counted
+    servo = json.loads((run / "report.json").read_text())["run"]["servo"]
+    assert servo == next(e for e in entries if e["entry"] == "timing")["servo"]
+    assert servo["ticks"] >= program.duration / 0.002
+    e = servo["period_error_ms"]
+    assert 0 <= e["p50"] <= e["p99"] <= e["p99.9"] <= e["max"]
+    assert servo["stop_commands_ms"] == []
 
 
 def test_a_protective_stop_stops_the_run_and_resume_completes_it(
