@@ -516,12 +516,22 @@ class UrDriver(Base):
             )
 
 
+_LEFT_BEHIND: list[Any] = []
+
+
+def clients_left_behind() -> bool:
+    """Whether a client was left behind (_never_destroyed): the process must then end with
+    os._exit, as its native threads would crash the interpreter's teardown."""
+    return bool(_LEFT_BEHIND)
+
+
 def _never_destroyed(client: Any) -> None:
     """ur-rtde's clients abort the process when destroyed in some states (RTDEIOInterface
     throws from its destructor once its controller has gone; any client whose threads
     still run, stuck in a call): such a client is leaked on purpose (one reference never
     released), and the operating system closes its sockets when the process ends."""
     ctypes.pythonapi.Py_IncRef(ctypes.py_object(client))
+    _LEFT_BEHIND.append(client)
 
 
 def _each(clients: Mapping[str, Any], call: Callable[[Any], object], timeout: float) -> list[str]:
