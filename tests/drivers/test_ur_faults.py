@@ -37,8 +37,9 @@ CASES = [
 ]
 # Not in the suite yet: ("drop", "left" / "right", "connection", "connection to arm ..."),
 # ("kill", "right", ...). They pass in most runs, but ur-rtde 1.6.5's control client
-# crashes the run process (SIGSEGV) now and then while it reconnects after its controller
-# has gone (2 of 15 runs here): the clients must move into a process of their own first.
+# crashed the run process (SIGSEGV) in 2 of about 20 such runs, while it reconnects after
+# its controller has gone (one at teardown, which os._exit now avoids; one mid-run): the
+# clients must move into a process of their own first.
 
 
 @pytest.mark.parametrize(("inject", "arm", "kind", "says"), CASES)
