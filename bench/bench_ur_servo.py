@@ -13,7 +13,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
-import shutil
 import sys
 import tempfile
 import threading
@@ -30,6 +29,7 @@ from cellengine.drivers.ur_rtde import UrDriver  # noqa: E402
 from cellengine.info.load import load_cell  # noqa: E402
 from cellengine.motion.trajectory import Trajectory  # noqa: E402
 from cellengine.program import CompiledSegment, Segment  # noqa: E402
+from tests.drivers.urcell import ur_cell  # noqa: E402
 from tests.emulate.harness import Emulator, free_hosts  # noqa: E402
 
 HOME = np.array([0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0])
@@ -68,12 +68,7 @@ def main() -> None:
 
 
 def _cell(hosts: list[str]) -> Path:
-    folder = Path(tempfile.mkdtemp()) / "cell"
-    shutil.copytree(ROOT / "cells" / "cable_routing", folder)
-    path = folder / "cell.yaml"
-    driver_yaml = f"{{kind: ur_rtde, arms: {{left: {hosts[0]}, right: {hosts[1]}}}}}"
-    path.write_text(path.read_text().replace("driver: {kind: sim}", f"driver: {driver_yaml}"))
-    return path
+    return ur_cell(Path(tempfile.mkdtemp()), hosts) / "cell.yaml"
 
 
 JOINTS = {"left": [f"left_j{i}" for i in range(6)], "right": [f"right_j{i}" for i in range(6)]}
