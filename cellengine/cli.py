@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from collections.abc import Sequence
 
@@ -46,16 +45,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def entry() -> None:
-    """The `cellengine` program: main(), then exit. A process that had to leave a vendor
-    client behind (a UR controller that went away mid-call) ends at once, its output
-    flushed: the client's threads would crash the interpreter's teardown."""
-    code = main()
-    left = sys.modules.get("cellengine.drivers.ur_rtde")
-    if left is not None and left.clients_left_behind():
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(code)
-    sys.exit(code)
+    """The `cellengine` program."""
+    sys.exit(main())
 
 
 if __name__ == "__main__":

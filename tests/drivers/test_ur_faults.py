@@ -34,12 +34,10 @@ AT = 5.0  # s after the first RTDE connection: a second or two into the motion
 CASES = [
     ("emergency_stop", "left", "emergency_stop", "emergency stop"),
     ("frozen", "right", "tracking", "does not follow"),
+    ("drop", "left", "connection", "connection to arm 'left'"),
+    ("drop", "right", "connection", "connection to arm 'right'"),
+    ("kill", "right", "connection", "connection to arm 'right'"),
 ]
-# Not in the suite yet: ("drop", "left" / "right", "connection", "connection to arm ..."),
-# ("kill", "right", ...). They pass in most runs, but ur-rtde 1.6.5's control client
-# crashed the run process (SIGSEGV) in 2 of about 20 such runs, while it reconnects after
-# its controller has gone (one at teardown, which os._exit now avoids; one mid-run): the
-# clients must move into a process of their own first.
 
 
 @pytest.mark.parametrize(("inject", "arm", "kind", "says"), CASES)
