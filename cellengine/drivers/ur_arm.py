@@ -124,6 +124,8 @@ class Arm:
     def _check(self) -> None:
         """Lost unless every connection is up (the receive client often sees a drop before
         the control client's flag does)."""
+        if self.rcv is None or self.ctl is None:
+            raise RuntimeError(f"not connected to {self.ip} yet")
         for name, client in (("receive", self.rcv), ("control", self.ctl), ("IO", self.io)):
             if client is not None and not client.isConnected():
                 raise Lost(f"the RTDE {name} connection to {self.ip} is down")

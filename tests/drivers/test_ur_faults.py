@@ -30,13 +30,20 @@ steps:
 """
 AT = 5.0  # s after the first RTDE connection: a second or two into the motion
 
-# (emulated fault, arm that has it, the driver's fault kind, what the message says)
+# (emulated fault, the driver's fault kind, what the message says), each on either arm; the
+# protective stop on the right arm is in test_ur_emulated.py
+FAULTS = [
+    ("protective_stop", "protective_stop", "protective stop"),
+    ("emergency_stop", "emergency_stop", "emergency stop"),
+    ("frozen", "tracking", "does not follow"),
+    ("drop", "connection", "connection to arm '{arm}'"),
+    ("kill", "connection", "connection to arm '{arm}'"),
+]
 CASES = [
-    ("emergency_stop", "left", "emergency_stop", "emergency stop"),
-    ("frozen", "right", "tracking", "does not follow"),
-    ("drop", "left", "connection", "connection to arm 'left'"),
-    ("drop", "right", "connection", "connection to arm 'right'"),
-    ("kill", "right", "connection", "connection to arm 'right'"),
+    (inject, arm, kind, says.format(arm=arm))
+    for inject, kind, says in FAULTS
+    for arm in ("left", "right")
+    if (inject, arm) != ("protective_stop", "right")
 ]
 
 
