@@ -1,7 +1,8 @@
 """Each fault the issue names, injected mid-run on one arm of two emulated UR controllers:
 the run stops both arms (the healthy one is told to stop too), exits 3 naming the fault,
 journals it, and `--resume` completes the plan once the fault is cleared, every segment run
-once. (The protective stop is in test_ur_emulated.py, on the whole straight plan.)
+once. (The protective stop on the right arm is in test_ur_emulated.py, on the whole
+straight plan.)
 
 A short plan (pick the cable, place its connector: 10 s of motion) keeps each case brief."""
 
