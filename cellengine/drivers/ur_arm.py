@@ -108,7 +108,9 @@ class Arm:
         self.kicking = idle_after
 
     def dout(self, outputs: list[tuple[int, bool]]) -> int | None:
-        """Set the digital outputs; the first one the controller refused, or None."""
+        """Set the standard digital outputs in the order given (ur-rtde sets one per call:
+        a change of two pins passes through a state with one); the first output the
+        controller refused, or None."""
         self._check()
         for pin, high in outputs:
             if not self.io.setStandardDigitalOut(pin, high):

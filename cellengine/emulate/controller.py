@@ -157,10 +157,13 @@ class Controller:
             v = values.get(name, default)
             return float(v[0] if isinstance(v, tuple) else v)
 
+        before = self.digital_out
         for prefix, shift in (("standard", 0), ("configurable", 8), ("tool", 16)):
             mask = int(num(f"{prefix}_digital_output_mask"))
             bits = int(num(f"{prefix}_digital_output"))
             self.digital_out = (self.digital_out & ~(mask << shift)) | (bits & mask) << shift
+        if self.digital_out != before:  # tests read the sequence of outputs from the log
+            self.log(f"digital outputs {self.digital_out:#x} at tick {self.tick_count}")
         if int(num("speed_slider_mask")) & 1:
             self.speed_fraction = max(0.0, min(1.0, num("speed_slider_fraction", 1.0)))
         mask = int(num("standard_analog_output_mask"))

@@ -7,14 +7,16 @@ block without one), killed at the end whatever happens."""
 
 from __future__ import annotations
 
+import itertools
 import json
+import re
 from pathlib import Path
 
 import numpy as np
 
 import skills.cable  # noqa: F401  (registers the cable skills)
 from cellengine.pipeline import compile_plan
-from tests.drivers.urcell import journal, run_cli, start
+from tests.drivers.urcell import journal, run_cli, start, ur_cell
 from tests.emulate.harness import Emulator
 
 
@@ -136,3 +138,41 @@ def test_arms_farther_than_the_start_move_limit_are_refused_before_motion(
     ) in result.stderr
     kinds = [e["entry"] for e in journal(run)]
     assert "recovery" not in kinds and "sent" not in kinds
+
+
+def test_grippers_on_digital_outputs_follow_the_programs_events(
+    tmp_path: Path, emulated: tuple[Path, list[str], list[Emulator]]
+) -> None:
+    """With ``gripper_io`` each gripper event sets the arm's standard digital outputs
+    through the real RTDEIOInterface: each controller's outputs go through the program's
+    jaw modes in order, each arm its own, one pin at a time (ur-rtde sets one output per
+    call), with no change that a mode does not need."""
+    _, hosts, started = emulated
+    pins = {"open": [], "slide": [0], "grasp": [0, 1]}
+    folder = ur_cell(tmp_path, hosts, f", gripper_io: {pins}".replace("'", ""))
+    plan = folder / "plan_short.yaml"
+    plan.write_text(
+        "cell: cell.yaml\nobjects: objects.yaml\nexecution: split\nsteps:\n"
+        "  - {skill: PickCable, cable: cable1, from: [holder.comb_a, holder.comb_b]}\n"
+        "  - {skill: PlaceConnector, cable: cable1, guide: routing.connector}\n"
+    )
+    program = compile_plan(plan).program
+    emulator = start(hosts, program.segments[0].trajectory.q[0], started)
+    result = run_cli(str(plan), "--out", str(tmp_path / "run"), timeout=300)
+    assert result.returncode == 0, result.stderr[-2000:]
+    log = emulator.stderr()
+    for arm, host in zip(("left", "right"), hosts, strict=True):
+        modes = [
+            sum(1 << p for p in pins[e.event.mode]) for e in program.events if e.event.arm == arm
+        ]
+        assert len(set(modes)) > 1, f"arm {arm}: no gripper change"  # the plan uses both
+        seen = [0] + [
+            int(v, 16) for v in re.findall(rf"{re.escape(host)}: digital outputs (0x\w+)", log)
+        ]
+        # one pin per change, and every mode passed through in order
+        assert all(bin(a ^ b).count("1") == 1 for a, b in itertools.pairwise(seen)), seen
+        flips = sum(bin(a ^ b).count("1") for a, b in itertools.pairwise([0, *modes]))
+        assert len(seen) - 1 == flips, (seen, modes)
+        rest = iter(seen)
+        assert all(m in rest for m in modes), (seen, modes)  # a subsequence
+        assert seen[-1] == modes[-1]

@@ -17,13 +17,13 @@ from tests.conftest import CELLS, ROOT
 from tests.emulate.harness import Emulator
 
 
-def ur_cell(tmp_path: Path, hosts: list[str]) -> Path:
+def ur_cell(tmp_path: Path, hosts: list[str], options: str = "") -> Path:
     """The cable cell in ``tmp_path/cell`` with driver ur_rtde: left at hosts[0], right at
-    hosts[1]."""
+    hosts[1], and the driver's other ``options`` (", key: value" in flow style)."""
     folder = tmp_path / "cell"
-    shutil.copytree(CELLS / "cable_routing", folder)
+    shutil.copytree(CELLS / "cable_routing", folder, dirs_exist_ok=True)
     path = folder / "cell.yaml"
-    driver = f"{{kind: ur_rtde, arms: {{left: {hosts[0]}, right: {hosts[1]}}}}}"
+    driver = f"{{kind: ur_rtde, arms: {{left: {hosts[0]}, right: {hosts[1]}}}{options}}}"
     path.write_text(path.read_text().replace("driver: {kind: sim}", f"driver: {driver}"))
     return folder
 
