@@ -36,6 +36,15 @@ class Progress:
         return len(self.labels)
 
 
+def drop_torn_tail(path: Path) -> None:
+    """Cut a torn last line off (a kill while it was written): it never happened, and an
+    entry appended to it would make one unreadable line of both."""
+    data = path.read_bytes()
+    if data and not data.endswith(b"\n"):
+        with path.open("r+b") as f:
+            f.truncate(data.rfind(b"\n") + 1)
+
+
 def read_progress(path: Path) -> Progress:
     if not path.is_file():
         raise InputError(Problem("no journal.jsonl here: is this a run directory?", str(path)))

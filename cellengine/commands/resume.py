@@ -26,7 +26,7 @@ from cellengine.errors import EXIT_OK, InputError, Problem, display_path
 
 
 def resume(args: argparse.Namespace) -> int:
-    from cellengine.journal import read_progress
+    from cellengine.journal import drop_torn_tail, read_progress
     from cellengine.pipeline import compile_loaded, write_plan_outputs
 
     run_dir = args.resume
@@ -64,6 +64,7 @@ def resume(args: argparse.Namespace) -> int:
     driver = _driver(compiled, args, q0=q0, grippers=grippers)
     _confirm(driver, args.yes)
     nxt = compiled.program.segments[progress.done]
+    drop_torn_tail(journal_path)
     with journal_path.open("a") as journal, driver:
         _entry(journal, "resume", from_segment=progress.done, label=nxt.segment.label)
 

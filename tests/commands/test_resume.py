@@ -15,7 +15,7 @@ from cellengine.commands.run import _play, journaled
 from cellengine.drivers.fault import DriverFault
 from cellengine.drivers.sim import SimDriver
 from cellengine.journal import read_progress
-from cellengine.pipeline import compile_plan, write_plan_outputs
+from cellengine.pipeline import Compiled, compile_plan, write_plan_outputs
 from tests.conftest import CELLS
 
 PLAN = CELLS / "cable_routing" / "plan_straight.yaml"
@@ -25,20 +25,18 @@ def _entries(run: Path) -> list[dict]:
     return [json.loads(line) for line in (run / "journal.jsonl").read_text().splitlines()]
 
 
-def test_a_faulted_run_resumes_where_it_stopped(tmp_path: Path) -> None:
+STOP_AT = 12  # a segment in the middle of the pick
+
+
+def _faulted_run(tmp_path: Path) -> Compiled:
+    """The straight plan run on the simulated cell into ``tmp_path`` until a frozen joint
+    stops it in segment STOP_AT."""
     c = compile_plan(PLAN)
     write_plan_outputs(c, tmp_path)
     joints = {name: arm.joint_names for name, arm in c.cell.arms.items()}
     q0 = c.program.segments[0].trajectory.q[0]
-    stop_at = 12  # a segment in the middle of the pick
-    t_fault = float(
-        np.mean(
-            [
-                c.program.segments[stop_at].trajectory.start_time,
-                c.program.segments[stop_at].trajectory.end_time,
-            ]
-        )
-    )
+    segment = c.program.segments[STOP_AT].trajectory
+    t_fault = float(np.mean([segment.start_time, segment.end_time]))
     with (tmp_path / "journal.jsonl").open("a") as journal:
         driver = SimDriver(c.world.cell, joints, objects=c.world.objects, q0=q0)
         driver.configure()
@@ -46,6 +44,13 @@ def test_a_faulted_run_resumes_where_it_stopped(tmp_path: Path) -> None:
         driver.freeze_joint(c.cell.joint_names[1], at=t_fault)  # the left shoulder lift
         with pytest.raises(DriverFault):
             journaled(journal, driver, lambda: _play(c, driver, journal, True, tmp_path))
+    return c
+
+
+def test_a_faulted_run_resumes_where_it_stopped(tmp_path: Path) -> None:
+    c = _faulted_run(tmp_path)
+    q0 = c.program.segments[0].trajectory.q[0]
+    stop_at = STOP_AT
     progress = read_progress(tmp_path / "journal.jsonl")
     assert progress.done == stop_at and progress.fault is not None
     assert progress.fault["kind"] == "tracking" and len(progress.fault["q"]) == len(q0)
@@ -63,6 +68,19 @@ def test_a_faulted_run_resumes_where_it_stopped(tmp_path: Path) -> None:
     # resuming a complete run does nothing
     assert main(["run", str(PLAN), "--resume", str(tmp_path), "-q"]) == 0
     assert _entries(tmp_path) == entries
+
+
+def test_a_torn_last_line_is_dropped_before_the_resumed_run_appends(tmp_path: Path) -> None:
+    """A kill in the middle of writing an entry leaves a line without its end: resume
+    drops it, so that its own entries start on a line of their own and the journal stays
+    readable to the end."""
+    c = _faulted_run(tmp_path)
+    path = tmp_path / "journal.jsonl"
+    with path.open("a") as journal:
+        journal.write('{"entry": "sent", "seg')
+    assert main(["run", str(PLAN), "--resume", str(tmp_path), "-q"]) == 0
+    entries = _entries(tmp_path)  # every line an entry
+    assert entries[-1]["entry"] == "end" and read_progress(path).done == len(c.program.segments)
 
 
 def test_a_torn_last_line_is_ignored_and_a_bad_one_is_an_error(tmp_path: Path) -> None:
