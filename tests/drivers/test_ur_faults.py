@@ -8,13 +8,18 @@ A short plan (pick the cable, place its connector: 10 s of motion) keeps each ca
 
 from __future__ import annotations
 
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import skills.cable  # noqa: F401  (registers the cable skills)
+from cellengine.journal import read_progress
 from cellengine.pipeline import compile_plan
+from tests.conftest import ROOT
 from tests.drivers.urcell import journal, run_cli, start
 from tests.emulate.harness import Emulator, dashboard, wait_for
 
@@ -103,3 +108,72 @@ def test_a_fault_stops_both_arms_and_resume_completes_the_plan(
     assert entries[-1]["entry"] == "end"
     last = next(e for e in reversed(entries) if e["entry"] == "finished")
     assert np.allclose(last["q"], program.segments[-1].trajectory.q[-1], atol=0.005)
+
+
+def test_a_run_killed_mid_segment_leaves_a_journal_that_resume_completes(
+    tmp_path: Path, emulated: tuple[Path, list[str], list[Emulator]]
+) -> None:
+    """SIGKILL on `cellengine run` mid-segment: the journal is whole (every line an entry)
+    and names the last finished segment; the arms' processes end with it and each
+    controller's watchdog stops its arm; `--resume` plans a move back from where the arms
+    stopped and completes the plan, no segment finished twice."""
+    folder, hosts, started = emulated
+    plan = folder / "plan_short.yaml"
+    plan.write_text(SHORT)
+    program = compile_plan(plan).program
+    emulator = start(hosts, program.segments[0].trajectory.q[0], started)
+    run = tmp_path / "run"
+    cmd = [sys.executable, "-m", "cellengine.cli", "run", str(plan), "--out", str(run)]
+    proc = subprocess.Popen([*cmd, "--yes", "-q"], cwd=ROOT, stderr=subprocess.DEVNULL)
+    # killed a third into the longest segment after the first (in its motion, not between)
+    durations = [s.trajectory.duration for s in program.segments]
+    k = 1 + int(np.argmax(durations[1:]))
+    try:
+        wait_for(lambda: _finished(run) >= k, timeout=120, what=f"segment {k} sent")
+        time.sleep(durations[k] / 3)
+        proc.kill()
+        proc.wait(10)
+    finally:
+        proc.kill()
+    progress = read_progress(run / "journal.jsonl")
+    assert progress.done == k
+    assert progress.fault is None and not progress.ended  # killed: nothing more journaled
+    wait_for(lambda: not _arm_processes(hosts), timeout=5, what="the arms' processes ended")
+    for host in hosts:
+        wait_for(
+            lambda h=host: (
+                f"{h}: program 'rtde_control' stopped: RTDE watchdog" in emulator.stderr()
+            ),
+            timeout=5,
+            what=f"{host}'s watchdog",
+        )
+    again = run_cli(str(plan), "--resume", str(run), timeout=120)
+    assert again.returncode == 0, again.stderr[-2000:]
+    entries = journal(run)
+    finished = [e["segment"] for e in entries if e["entry"] == "finished"]
+    assert finished == list(range(len(program.segments)))  # each once, in order
+    resumed = [e["entry"] for e in entries[[e["entry"] for e in entries].index("resume") :]]
+    assert resumed.index("recovery") < resumed.index("sent")  # a move back first
+    assert entries[-1]["entry"] == "end"
+
+
+def _finished(run: Path) -> int:
+    """How many segments the journal says were finished (its reader ignores a torn last
+    line, as resume does)."""
+    path = run / "journal.jsonl"
+    return read_progress(path).done if path.exists() else 0
+
+
+def _arm_processes(hosts: list[str]) -> list[int]:
+    """The pids of the arm processes (ur_arm.py) serving ``hosts`` still running."""
+    pids = []
+    for proc in Path("/proc").glob("[0-9]*"):
+        try:
+            args = (proc / "cmdline").read_bytes().split(b"\0")
+            zombie = (proc / "stat").read_text().split(") ")[-1].startswith("Z")
+        except OSError:
+            continue
+        ours = any(a.endswith(b"ur_arm.py") for a in args)
+        if ours and not zombie and any(h.encode() in args for h in hosts):
+            pids.append(int(proc.name))
+    return pids
