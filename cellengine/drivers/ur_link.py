@@ -88,8 +88,8 @@ class ArmLink:
         raise LinkError(self.arm, str(value), False)
 
     def close(self, timeout: float) -> None:
-        """The process ended: given ``timeout`` (s) to end by itself (after a
-        ``disconnect``), else killed."""
+        """End the process: ``timeout`` (s) to end by itself (after a ``disconnect``),
+        else killed."""
         if self.lost is None:
             self.lost = "closed"
             with contextlib.suppress(subprocess.TimeoutExpired):
