@@ -14,7 +14,7 @@ import heapq
 import itertools
 import math
 import random
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 from cellengine.allocation.model import Loc, distance
@@ -113,6 +113,22 @@ def _step(c: Compiled, o: Opt, pos: tuple[int, ...]) -> tuple[float, tuple[int, 
 # --- heuristic -------------------------------------------------------------------------
 
 
+def _moves(
+    c: Compiled, done: int, spots: int, pos: tuple[int, ...]
+) -> Iterator[tuple[int, int, Opt, float, tuple[int, ...]]]:
+    """Each task ready after ``done`` (its predecessors done) in each of its options whose
+    spot is free in ``spots``: (task, option index, option, its cost from ``pos``, the
+    robots' positions after it)."""
+    for t in range(len(c.ids)):
+        if done >> t & 1 or c.pred[t] & ~done:
+            continue
+        for k, o in enumerate(c.opts[t]):
+            if o.spot >= 0 and spots >> o.spot & 1:
+                continue
+            cost, new = _step(c, o, pos)
+            yield t, k, o, cost, new
+
+
 def greedy(c: Compiled) -> Solution:
     """Repeatedly the ready task and option that adds least travel (first on ties), never
     taking a spot that another relocation left to do would then lack."""
@@ -126,17 +142,11 @@ def greedy(c: Compiled) -> Solution:
     choice = [0] * n
     while len(order) < n:
         best: tuple[float, int, int, tuple[int, ...]] | None = None
-        for t in range(n):
-            if done >> t & 1 or c.pred[t] & ~done:
+        for t, k, o, cost, new in _moves(c, done, spots, pos):
+            if best is not None and cost >= best[0] - EPS:
                 continue
-            for k, o in enumerate(c.opts[t]):
-                if o.spot >= 0 and spots >> o.spot & 1:
-                    continue
-                cost, new = _step(c, o, pos)
-                if best is not None and cost >= best[0] - EPS:
-                    continue
-                if o.spot < 0 or _spots_fit(c, done | 1 << t, spots | 1 << o.spot):
-                    best = (cost, t, k, new)
+            if o.spot < 0 or _spots_fit(c, done | 1 << t, spots | 1 << o.spot):
+                best = (cost, t, k, new)
         assert best is not None  # some task is ready (no cycle) and spots still fit
         _, t, k, pos = best
         o = c.opts[t][k]
@@ -295,23 +305,17 @@ def exact(c: Compiled, bound: Solution, max_expansions: int) -> Solution | None:
         expansions += 1
         if expansions > max_expansions:
             return None
-        for t in range(n):
-            if done >> t & 1 or c.pred[t] & ~done:
+        for t, k, o, cost, new in _moves(c, done, spots, pos):
+            nxt: Key = (done | 1 << t, new, spots | ((1 << o.spot) if o.spot >= 0 else 0))
+            g2 = g + cost + (_home(c, new) if nxt[0] == full else 0.0)
+            if g2 >= best_g.get(nxt, float("inf")) - EPS:
                 continue
-            for k, o in enumerate(c.opts[t]):
-                if o.spot >= 0 and spots >> o.spot & 1:
-                    continue
-                cost, new = _step(c, o, pos)
-                nxt: Key = (done | 1 << t, new, spots | ((1 << o.spot) if o.spot >= 0 else 0))
-                g2 = g + cost + (_home(c, new) if nxt[0] == full else 0.0)
-                if g2 >= best_g.get(nxt, float("inf")) - EPS:
-                    continue
-                f2 = g2 + bound_of(nxt[0], new)
-                if f2 >= bound.cost - EPS:
-                    continue  # cannot beat the known solution
-                best_g[nxt] = g2
-                parent[nxt] = (key, t, k)
-                heapq.heappush(heap, (f2, next(tie), g2, nxt))
+            f2 = g2 + bound_of(nxt[0], new)
+            if f2 >= bound.cost - EPS:
+                continue  # cannot beat the known solution
+            best_g[nxt] = g2
+            parent[nxt] = (key, t, k)
+            heapq.heappush(heap, (f2, next(tie), g2, nxt))
     return bound
 
 
