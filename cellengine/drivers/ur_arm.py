@@ -21,6 +21,7 @@ from __future__ import annotations
 import os
 import signal
 import sys
+import time
 from multiprocessing.connection import Connection
 from typing import Any
 
@@ -136,13 +137,19 @@ class Arm:
 def serve(conn: Connection, arm: Arm) -> None:
     """Answer requests until the driver says ``disconnect``, a connection is lost, or the
     driver's end closes."""
+    due = 0.0  # when the next idle kick is due (time.monotonic), however busy the link
     while True:
-        if arm.kicking and not conn.poll(KICK_PERIOD):
-            try:
-                arm.kick()
-            except Exception:  # the watchdog stops the arm; the next request finds out why
-                arm.kicking = False
-            continue
+        if arm.kicking:
+            now = time.monotonic()
+            if now >= due:
+                try:
+                    arm.kick()
+                except Exception:  # the watchdog stops the arm; the next request says why
+                    arm.kicking = False
+                due = now + KICK_PERIOD
+                continue
+            if not conn.poll(due - now):
+                continue
         try:
             op, *args = conn.recv()
         except (EOFError, OSError):

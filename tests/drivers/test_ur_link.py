@@ -1,7 +1,7 @@
 """An arm's process (ur_arm.py) through its link: whatever happens to the process (a crash,
 a hang, an error in the vendor library), the driver's process gets a LinkError in time and
-is never itself crashed or blocked. Real processes; no controller needed (an address where
-none answers)."""
+is never itself crashed or blocked. Real processes: mostly without a controller (an
+address where none answers); the watchdog's kicks against an emulated one."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ import pytest
 
 from cellengine.drivers.ur_link import ArmLink, LinkError, exchange
 from tests.conftest import ROOT
+from tests.emulate.harness import Emulator, free_hosts, wait_for
 
 NOWHERE = "127.0.0.9"  # no controller answers here
 
@@ -115,3 +116,27 @@ def _running(pid: int) -> bool:
             return f.read().split(") ")[-1][0] != "Z"
     except FileNotFoundError:
         return False
+
+
+def test_an_idle_arm_process_kicks_the_watchdog_however_often_it_is_asked() -> None:
+    """Between segments the arm's process kicks the RTDE watchdog every KICK_PERIOD, also
+    while requests come back to back (they leave it no quiet moment); once told to stop
+    kicking, the emulated controller's watchdog stops the control script."""
+    (host,) = free_hosts(1)
+    emulator = Emulator([host])
+    link = ArmLink("left", host)
+    try:
+        link.call("connect_receive", timeout=10.0)
+        link.call("connect_control", timeout=10.0)
+        assert link.call("watchdog", 10.0, timeout=5.0) is True
+        end = time.monotonic() + 1.0
+        while time.monotonic() < end:
+            link.call("read", timeout=1.0)
+        time.sleep(0.3)
+        assert "RTDE watchdog" not in emulator.stderr(), emulator.stderr()[-2000:]
+        link.call("idle", False, timeout=1.0)
+        wait_for(lambda: "RTDE watchdog" in emulator.stderr(), timeout=2.0, what="watchdog")
+        link.call("disconnect", timeout=5.0)
+    finally:
+        link.close(5.0)
+        emulator.close()
