@@ -139,6 +139,20 @@ def test_movej_takes_a_trapezoid_and_stopj_stops_it(emulate: Any, worker: Worker
     assert worker.call("r", "getActualQ") == stopped
 
 
+# 1 s of servoJ on joint 0: a 0.2 rad, 0.5 Hz sine about HOME, lookahead 0.1 s, gain 300
+SINE: dict[str, Any] = {
+    "control": "c",
+    "receive": "r",
+    "q0": HOME,
+    "joint": 0,
+    "amplitude": 0.2,
+    "frequency": 0.5,
+    "seconds": 1.0,
+    "lookahead": 0.1,
+    "gain": 300,
+}
+
+
 def test_servoj_at_500_hz_follows_a_sine(emulate: Any, worker: Worker) -> None:
     """servoJ streamed for 1 s with initPeriod / waitPeriod: the arm follows the commanded
     sine (0.2 rad, 0.5 Hz) delayed by about lookahead / 2 + 1 / gain (53 ms at 0.1 s and
@@ -146,18 +160,7 @@ def test_servoj_at_500_hz_follows_a_sine(emulate: Any, worker: Worker) -> None:
     packages a second."""
     _, (host,) = emulate(1, q0_flag(HOME))
     connect(worker, host)
-    worker.send(
-        op="servo_sine",
-        control="c",
-        receive="r",
-        q0=HOME,
-        joint=0,
-        amplitude=0.2,
-        frequency=0.5,
-        seconds=1.0,
-        lookahead=0.1,
-        gain=300,
-    )
+    worker.send(op="servo_sine", **SINE)
     packages = rtde_packages(host, "timestamp,actual_q", 0.8)
     run = Worker.check(worker.answer(timeout=15))
     cmd, actual = run["commanded"], run["actual"]
@@ -189,16 +192,7 @@ def test_servoj_alone_feeds_the_watchdog(emulate: Any, worker: Worker) -> None:
     connect(worker, host)
     assert worker.call("c", "setWatchdog", 2.0) is True
     run = worker.loop(
-        "servo_sine",
-        control="c",
-        receive="r",
-        q0=HOME,
-        joint=0,
-        amplitude=0.2,
-        frequency=0.5,
-        seconds=1.0,
-        lookahead=0.1,
-        gain=300,
+        "servo_sine", **SINE
     )  # fails if a servoJ returns False: the script would have been stopped
     assert run["stopped"] is True
     time.sleep(0.7)  # and with nothing written for more than 0.5 s, it is stopped
