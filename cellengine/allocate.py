@@ -1,8 +1,9 @@
 """Which robot does what: the task allocator of the cooperative lab platform, generalised.
 
-Build a ``Problem`` (robots with skills, starts and reach; zones; handover positions; tasks
-made of motion primitives, with precedence and blockers), then ``allocate`` it. Building the
-options (``expand``) is separate from searching them, so both can be inspected.
+Build an ``AllocationProblem`` (robots with skills, starts and reach; zones; handover
+positions; tasks made of motion primitives, with precedence and blockers), then ``allocate``
+it. Building the options (``expand``) is separate from searching them, so both can be
+inspected.
 
 The mission minimises the distance the robots travel, summed: between tasks (the paper's
 cost) and within them, where handovers and alliances make it differ. Up to
@@ -16,20 +17,21 @@ from __future__ import annotations
 
 from cellengine.allocation.mission import Entry, Mission, build_mission
 from cellengine.allocation.model import (
+    AllocationProblem,
     AnyOf,
     Blocker,
     Point,
     Primitive,
-    Problem,
     Robot,
     Task,
     Zone,
 )
-from cellengine.allocation.options import Action, Expanded, Option, Segment, expand
+from cellengine.allocation.options import Action, Expanded, Option, Stint, expand
 from cellengine.allocation.search import compile_problem, exact, heuristic
 
 __all__ = [
     "Action",
+    "AllocationProblem",
     "AnyOf",
     "Blocker",
     "Entry",
@@ -38,9 +40,8 @@ __all__ = [
     "Option",
     "Point",
     "Primitive",
-    "Problem",
     "Robot",
-    "Segment",
+    "Stint",
     "Task",
     "Zone",
     "allocate",
@@ -52,7 +53,10 @@ MAX_EXPANSIONS = 30_000  # about 3 s at worst on a 2-core laptop
 
 
 def allocate(
-    problem: Problem, *, exact_limit: int = EXACT_LIMIT, max_expansions: int = MAX_EXPANSIONS
+    problem: AllocationProblem,
+    *,
+    exact_limit: int = EXACT_LIMIT,
+    max_expansions: int = MAX_EXPANSIONS,
 ) -> Mission:
     """The mission of least travel (provably, when ``optimal``). Raises ValueError naming the
     task and what is missing when no alliance can do a task."""

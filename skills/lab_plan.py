@@ -31,19 +31,18 @@ import numpy as np
 
 from cellengine import geometry as g
 from cellengine.allocate import (
+    AllocationProblem,
     AnyOf,
     Blocker,
     Mission,
     Primitive,
-    Problem,
     Robot,
     Task,
     Zone,
     allocate,
 )
 from cellengine.allocation.options import Action
-from cellengine.errors import InputError
-from cellengine.errors import Problem as Complaint
+from cellengine.errors import InputError, Problem
 from cellengine.execute import home_configuration
 from cellengine.geometry import Mat
 from cellengine.motion.collision import CollisionChecker
@@ -79,7 +78,7 @@ DURATION = {
 
 @dataclass(frozen=True)
 class LabPlan:
-    problem: Problem
+    problem: AllocationProblem
     mission: Mission
     segments: list[Segment]
     state: LabState
@@ -100,7 +99,7 @@ def plan_lab_steps(
     try:
         mission = allocate(problem)
     except ValueError as e:
-        raise InputError(Complaint(str(e))) from None
+        raise InputError(Problem(str(e))) from None
     tcp = {
         name: arm.fk(arm.home if arm.home is not None else np.zeros(arm.nq))
         for name, arm in cell.arms.items()
@@ -154,7 +153,7 @@ def plan_lab_steps(
 
 def build_problem(
     world: World, cell: CellModel, steps: Sequence[Skill], reach: lm.Solver
-) -> Problem:
+) -> AllocationProblem:
     skills = robot_skills(world, cell)
     robots = tuple(
         Robot(
@@ -169,7 +168,7 @@ def build_problem(
     handovers = tuple(
         _point(world.pose(ref)[:3, 3]) for z in world.cell.zones.values() for ref in z.handovers
     )
-    return Problem(robots, tuple(_tasks(world, cell, steps)), zones, handovers)
+    return AllocationProblem(robots, tuple(_tasks(world, cell, steps)), zones, handovers)
 
 
 def _tasks(world: World, cell: CellModel, steps: Sequence[Skill]) -> list[Task]:
@@ -189,12 +188,12 @@ def _tasks(world: World, cell: CellModel, steps: Sequence[Skill]) -> list[Task]:
     out = []
     for i, step in enumerate(steps):
         if not isinstance(step, LabSkill):
-            raise InputError(Complaint(f"steps[{i}]: {step.skill} is not a lab skill"))
+            raise InputError(Problem(f"steps[{i}]: {step.skill} is not a lab skill"))
         names = _candidates(step.object)
         for n in names:
             if n not in where:
                 raise InputError(
-                    Complaint(
+                    Problem(
                         f"steps[{i}] {step.skill}: '{n}' stands nowhere: the lab skills move "
                         "containers, each given where it stands ('at') in objects.yaml"
                     )
@@ -376,7 +375,7 @@ def _do(
         assert isinstance(step, Pour)
         lm.pour(b, reach, world, arm, name, _resolve(step.into, masses), step.angle, where)
     else:
-        raise InputError(Complaint(f"{where}: no motion for '{a.kind}'"))
+        raise InputError(Problem(f"{where}: no motion for '{a.kind}'"))
 
 
 def _clear(
@@ -389,7 +388,7 @@ def _clear(
         elif a.kind in ("place", "handover_place"):
             lm.place(b, reach, a.robot, _pose_at(a.end[0]), where)
         else:
-            raise InputError(Complaint(f"{where}: no motion for '{a.kind}'"))
+            raise InputError(Problem(f"{where}: no motion for '{a.kind}'"))
 
 
 def _cap_place(world: World, b: lm.Builder, reach: lm.Solver, arm: str) -> Mat:
@@ -408,7 +407,7 @@ def _cap_place(world: World, b: lm.Builder, reach: lm.Solver, arm: str) -> Mat:
         if free and reach(arm, lg.top_grasp(T[:3, 3] + CAP_REACH * lg.UP, 0.0)):
             return T
     raise InputError(
-        Complaint(
+        Problem(
             f"no free place within reach of arm '{arm}' to put a cap down: list some in a "
             "zone's 'free' (or 'handovers')"
         )
@@ -496,7 +495,7 @@ def _cooperation(world: World) -> Point:
         if z.cooperation:
             return _point(world.pose(z.cooperation[0])[:3, 3])
     raise InputError(
-        Complaint("Unscrew needs a cooperation place: give a shared zone 'cooperation: [keypoint]'")
+        Problem("Unscrew needs a cooperation place: give a shared zone 'cooperation: [keypoint]'")
     )
 
 
@@ -539,7 +538,7 @@ def _resolve(ref: ObjectRef, masses: Mapping[str, float]) -> str:
     missing = [n for n in names if n not in masses]
     if missing:
         raise InputError(
-            Complaint(
+            Problem(
                 f"the mass of {', '.join(missing)} is not known: weigh it first or give it "
                 "in objects.yaml"
             )

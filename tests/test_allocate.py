@@ -11,12 +11,12 @@ from dataclasses import replace
 import pytest
 
 from cellengine.allocate import (
+    AllocationProblem,
     AnyOf,
     Blocker,
     Mission,
     Point,
     Primitive,
-    Problem,
     Robot,
     Task,
     Zone,
@@ -40,8 +40,8 @@ R1 = Robot("r1", frozenset({"pick", "place", "weigh", "hold", "pour"}), R1_START
 R2 = Robot("r2", frozenset({"pick", "place", "turn_cap"}), R2_START)
 
 
-def problem(*tasks: Task, robots: tuple[Robot, ...] = (R1, R2)) -> Problem:
-    return Problem(robots, tasks, ZONES, (HANDOVER,))
+def problem(*tasks: Task, robots: tuple[Robot, ...] = (R1, R2)) -> AllocationProblem:
+    return AllocationProblem(robots, tasks, ZONES, (HANDOVER,))
 
 
 def pick(at: Point | AnyOf) -> Primitive:
@@ -66,7 +66,7 @@ def unscrew_prims(at: Point | AnyOf) -> tuple[Primitive, ...]:
     )
 
 
-def random_problem(n: int, seed: int, p_after: float = 0.25) -> Problem:
+def random_problem(n: int, seed: int, p_after: float = 0.25) -> AllocationProblem:
     """n tasks (relocations, weighings, unscrews) at random places, half of them in the
     shared zone (where both robots can do them), random precedence."""
     rng = random.Random(seed)
@@ -93,7 +93,7 @@ def random_problem(n: int, seed: int, p_after: float = 0.25) -> Problem:
 # --- checks every mission must pass -------------------------------------------------------
 
 
-def check_valid(p: Problem, m: Mission) -> None:
+def check_valid(p: AllocationProblem, m: Mission) -> None:
     ex = expand(p)
     assert sorted(m.order) == sorted(t.id for t in ex.tasks)
     entries = {t: [e for e in m.schedule if e.step == t] for t in m.order}
@@ -114,7 +114,7 @@ def check_valid(p: Problem, m: Mission) -> None:
     assert m.cost == pytest.approx(path_cost(p, m))
 
 
-def path_cost(p: Problem, m: Mission) -> float:
+def path_cost(p: AllocationProblem, m: Mission) -> float:
     """Every robot's path through its actions, from its start (farthest candidates)."""
     total = 0.0
     for robot, actions in m.actions.items():
@@ -222,7 +222,7 @@ def test_private_zones_in_parallel_shared_zone_in_turn() -> None:
 # --- exactness ----------------------------------------------------------------------------
 
 
-def brute_force(p: Problem) -> float:
+def brute_force(p: AllocationProblem) -> float:
     """Every order that respects precedence, every option of every task: the least cost."""
     c = compile_problem(expand(p))
     n = len(c.ids)
@@ -394,7 +394,7 @@ def test_reach_predicate_without_zones() -> None:
     """No zones: a robot's reach test decides; a point it fails needs the other robot."""
     left, right = replace(R1, reach=lambda q: q[0] <= 0.8), replace(R2, reach=lambda q: q[0] >= 0.7)
     far = (1.0, 0.45, 0.0)
-    p = Problem(
+    p = AllocationProblem(
         (left, right), (Task("move", (pick(far), place((0.5, 0.45, 0.0)))),), (), (HANDOVER,)
     )
     m = allocate(p)
@@ -421,7 +421,7 @@ def test_exact_gives_up_to_the_heuristic_past_its_budget() -> None:
 # --- errors -------------------------------------------------------------------------------
 
 
-def _error(p: Problem) -> str:
+def _error(p: AllocationProblem) -> str:
     with pytest.raises(ValueError) as e:
         allocate(p)
     return str(e.value)
@@ -454,7 +454,7 @@ def test_error_unreachable_location() -> None:
 
 
 def test_error_no_handover_position() -> None:
-    p = Problem((R1, R2), (Task("weigh", (pick((1.2, 0.3, 0.0)), weigh())),), ZONES, ())
+    p = AllocationProblem((R1, R2), (Task("weigh", (pick((1.2, 0.3, 0.0)), weigh())),), ZONES, ())
     assert _error(p) == (
         "task 'weigh': no alliance of r1, r2 can do its primitives in order: "
         "no handover position reachable by both r2 and r1"

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from cellengine.allocation.model import Inserted, Loc, distance
-from cellengine.allocation.options import Action, Expanded, Option, Segment
+from cellengine.allocation.options import Action, Expanded, Option, Stint
 
 
 @dataclass(frozen=True)
@@ -102,7 +102,7 @@ def _schedule(
     return tuple(sorted(entries, key=lambda e: (e.start, e.end)))
 
 
-def _zone_fit(entries: Sequence[Entry], seg: Segment, start: float) -> float:
+def _zone_fit(entries: Sequence[Entry], seg: Stint, start: float) -> float:
     """The earliest time from ``start`` when the segment's shared zones are free of others
     for its whole duration."""
     busy = sorted((e.start, e.end) for e in entries if e.zones & seg.zones)

@@ -105,7 +105,7 @@ class Zone:
 
 
 @dataclass(frozen=True)
-class Problem:
+class AllocationProblem:
     """Robots, tasks, zones and the handover positions of the cooperation area (mode 1)."""
 
     robots: tuple[Robot, ...]

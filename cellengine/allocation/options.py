@@ -14,12 +14,12 @@ from dataclasses import dataclass, replace
 from graphlib import CycleError, TopologicalSorter
 
 from cellengine.allocation.model import (
+    AllocationProblem,
     Blocker,
     Inserted,
     Loc,
     Point,
     Primitive,
-    Problem,
     Robot,
     Task,
     distance,
@@ -45,7 +45,7 @@ class Action:
 
 
 @dataclass(frozen=True)
-class Segment:
+class Stint:
     """Actions of one task that run as one schedule entry: one robot's run, a cooperation
     (several robots at once), or one side of a handover."""
 
@@ -65,7 +65,7 @@ class Option:
 
     task: str
     alliance: tuple[str, ...]
-    segments: tuple[Segment, ...]
+    segments: tuple[Stint, ...]
     spot: Point | None = None  # a relocation's chosen free spot
 
     def actions(self, robot: str) -> tuple[Action, ...]:
@@ -89,7 +89,7 @@ class Expanded:
     """The built problem: the plan's tasks (blocked ones now after their relocations), then
     one relocation task per blocker, and every option of each."""
 
-    problem: Problem
+    problem: AllocationProblem
     tasks: tuple[Task, ...]
     options: dict[str, tuple[Option, ...]]
     relocations: dict[str, Blocker]  # relocation task id -> its blocker
@@ -99,14 +99,14 @@ def relocation_id(blocker: str) -> str:
     return f"clear:{blocker}"
 
 
-def expand(problem: Problem) -> Expanded:
+def expand(problem: AllocationProblem) -> Expanded:
     tasks, relocations = _with_relocations(problem)
     _check_graph(problem, tasks)
     options = {t.id: _options(problem, t, relocations.get(t.id)) for t in tasks}
     return Expanded(problem, tasks, options, relocations)
 
 
-def _with_relocations(problem: Problem) -> tuple[tuple[Task, ...], dict[str, Blocker]]:
+def _with_relocations(problem: AllocationProblem) -> tuple[tuple[Task, ...], dict[str, Blocker]]:
     """A blocker named by several tasks is moved once, before all of them."""
     blockers: dict[str, Blocker] = {}
     tasks = []
@@ -123,7 +123,7 @@ def _with_relocations(problem: Problem) -> tuple[tuple[Task, ...], dict[str, Blo
     return tuple(tasks), relocations
 
 
-def _check_graph(problem: Problem, tasks: Sequence[Task]) -> None:
+def _check_graph(problem: AllocationProblem, tasks: Sequence[Task]) -> None:
     ids = [t.id for t in tasks]
     dup = sorted({i for i in ids if ids.count(i) > 1})
     if dup:
@@ -144,7 +144,7 @@ def _check_graph(problem: Problem, tasks: Sequence[Task]) -> None:
         raise ValueError(f"precedence cycle: {' -> '.join(e.args[1])}") from None
 
 
-def _options(problem: Problem, task: Task, blocker: Blocker | None) -> tuple[Option, ...]:
+def _options(problem: AllocationProblem, task: Task, blocker: Blocker | None) -> tuple[Option, ...]:
     if blocker is not None and not blocker.spots:
         raise ValueError(f"task '{task.id}': blocker '{blocker.name}' has no free spot")
     variants = (
@@ -174,7 +174,7 @@ class _Walker:
     wherever the robot holding the object changes. ``reasons`` keeps why branches died,
     with how far they got, for the error message."""
 
-    def __init__(self, problem: Problem, task: Task, base: Inserted) -> None:
+    def __init__(self, problem: AllocationProblem, task: Task, base: Inserted) -> None:
         self.problem, self.task, self.base = problem, task, base
         self.robots = _robots(problem, task)
         self.groups = _groups(task)
@@ -256,7 +256,7 @@ class _Walker:
         return actions[0].end, (tuple(r.name for r in team), tuple(actions), inserted)
 
 
-def _robots(problem: Problem, task: Task) -> tuple[Robot, ...]:
+def _robots(problem: AllocationProblem, task: Task) -> tuple[Robot, ...]:
     if task.arms is None:
         return problem.robots
     return tuple(r for r in problem.robots if r.name in task.arms)
@@ -276,7 +276,7 @@ def _groups(task: Task) -> list[list[tuple[int, Primitive]]]:
     return groups
 
 
-def _segments(problem: Problem, blocks: Sequence[Block]) -> tuple[Segment, ...]:
+def _segments(problem: AllocationProblem, blocks: Sequence[Block]) -> tuple[Stint, ...]:
     """Consecutive blocks of the same robots and kind become one segment."""
     merged: list[Block] = []
     for robots, acts, inserted in blocks:
@@ -285,10 +285,10 @@ def _segments(problem: Problem, blocks: Sequence[Block]) -> tuple[Segment, ...]:
             merged[-1] = (robots, last[1] + acts, inserted)
         else:
             merged.append((robots, acts, inserted))
-    return tuple(Segment(robots, acts, ins, _zones(problem, acts)) for robots, acts, ins in merged)
+    return tuple(Stint(robots, acts, ins, _zones(problem, acts)) for robots, acts, ins in merged)
 
 
-def _zones(problem: Problem, actions: Sequence[Action]) -> frozenset[str]:
+def _zones(problem: AllocationProblem, actions: Sequence[Action]) -> frozenset[str]:
     return frozenset().union(*(problem.shared_zones(a.start + a.end) for a in actions))
 
 
@@ -304,7 +304,7 @@ def _cheapest_per_signature(options: Sequence[Option]) -> tuple[Option, ...]:
     return tuple(o for _, o in best.values())
 
 
-def _diagnose(problem: Problem, task: Task, reasons: Sequence[tuple[int, str]]) -> str:
+def _diagnose(problem: AllocationProblem, task: Task, reasons: Sequence[tuple[int, str]]) -> str:
     """Why no alliance can do the task: a skill no robot has, a location no robot with the
     skill reaches, or why the assignments that got furthest stopped."""
     robots = _robots(problem, task)

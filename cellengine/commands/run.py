@@ -139,7 +139,7 @@ def _check_move_limit(driver: Driver, q_now: Any, expected: Any, where: str) -> 
     """Arms far from every place the run expects them (rows of ``expected``) were put there
     on purpose, or by someone who does not know this run: they are not moved on their own
     (the driver's ``start_move_limit``)."""
-    from cellengine.drivers.fault import Refused
+    from cellengine.drivers.fault import DriverRefused
 
     offs = np.abs(q_now[None, :] - expected)
     nearest = int(np.argmin(offs.max(axis=1)))
@@ -148,7 +148,7 @@ def _check_move_limit(driver: Driver, q_now: Any, expected: Any, where: str) -> 
     if off[j] <= driver.start_move_limit:
         return
     arm, joint = driver.layout.arm_of(j), driver.joint_names[j]
-    raise Refused(
+    raise DriverRefused(
         driver.kind,
         f"arm '{arm}' joint '{joint}' is at {q_now[j]:.4f}, {off[j]:.4f} rad from where "
         f"{where} ({target[j]:.4f}): farther than start_move_limit "

@@ -9,7 +9,7 @@
 """
 
 from cellengine.drivers.base import Driver, GripperState
-from cellengine.drivers.fault import DriverFault, Fault, Refused
+from cellengine.drivers.fault import DriverFault, DriverRefused, Fault
 from cellengine.drivers.layout import CellLayout
 from cellengine.drivers.lifecycle import LifecycleError, State
 from cellengine.drivers.play import play, segment_events
@@ -22,12 +22,12 @@ __all__ = [
     "CellLayout",
     "Driver",
     "DriverFault",
+    "DriverRefused",
     "Fault",
     "GripperState",
     "LifecycleError",
     "Played",
     "Recorder",
-    "Refused",
     "SimDriver",
     "State",
     "make_driver",

@@ -14,7 +14,7 @@ This class owns the lifecycle (:mod:`cellengine.drivers.lifecycle`), the recorde
 checks made before anything is sent (joint names, events, the arms at the segment's first
 point); a concrete driver implements the ``_on_*`` hooks and the readings. Everything a hook
 raises is a fault (the arms are stopped, the driver goes to ``error``) except a
-:class:`Refused`, which leaves the state alone. A hook that finds a fault while executing
+:class:`DriverRefused`, which leaves the state alone. A hook that finds a fault while executing
 returns the :class:`Played` record with ``fault`` set, after stopping both arms; this
 class then moves to ``error`` and raises :class:`DriverFault`.
 """
@@ -30,7 +30,7 @@ from typing import Any, ClassVar, NamedTuple, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-from cellengine.drivers.fault import DriverFault, Fault, Refused
+from cellengine.drivers.fault import DriverFault, DriverRefused, Fault
 from cellengine.drivers.layout import CellLayout
 from cellengine.drivers.lifecycle import Lifecycle, LifecycleError, State
 from cellengine.drivers.record import FaultRecord, Played, Recorder, Sent, Transition
@@ -112,7 +112,7 @@ class Driver(ABC):
     def recover(self) -> None:
         """Leave the error state after checking that the fault is gone (a reconnect, a joint
         that follows again); the driver is then inactive (unconfigured if the fault came
-        before configuration) and must be activated again. Raises :class:`Refused` and
+        before configuration) and must be activated again. Raises :class:`DriverRefused` and
         stays in error if the fault persists."""
         target = self._life.check_transition("recover")
         self._on_recover()
@@ -131,7 +131,7 @@ class Driver(ABC):
 
     def execute(self, segment: CompiledSegment, events: Sequence[TimedEvent] = ()) -> Played:
         """Play one segment and the gripper events that happen during it (times within the
-        segment's span; applied in time order, ties in the given order). Refused, with
+        segment's span; applied in time order, ties in the given order). DriverRefused, with
         nothing sent, unless the arms are at the segment's first point within
         ``start_tolerance``. A fault stops both arms and raises :class:`DriverFault`."""
         self._life.check_operation("execute")
@@ -191,7 +191,7 @@ class Driver(ABC):
 
     @abstractmethod
     def _on_recover(self) -> None:
-        """Check the fault is gone and restore a configured, stopped state; raise Refused
+        """Check the fault is gone and restore a configured, stopped state; raise DriverRefused
         if it is not."""
 
     @abstractmethod
@@ -213,7 +213,7 @@ class Driver(ABC):
         """The arms' q and the grippers as last known, without talking to anything."""
 
     def _read_mass(self, arm: str) -> float:
-        raise Refused(self.kind, f"arm '{arm}': the {self.kind} driver has no load cell")
+        raise DriverRefused(self.kind, f"arm '{arm}': the {self.kind} driver has no load cell")
 
     # -- internals ------------------------------------------------------------------------
 
@@ -233,7 +233,7 @@ class Driver(ABC):
         """Run a hook; anything but a refusal is a fault: stop, go to error, re-raise."""
         try:
             return fn()
-        except (Refused, LifecycleError):
+        except (DriverRefused, LifecycleError):
             raise
         except DriverFault as e:
             if self.state is State.ERROR and e.fault == self.fault:
@@ -267,12 +267,12 @@ class Driver(ABC):
     def _check_arm(self, arm: str) -> None:
         why = self.layout.unknown_arm(arm)
         if why is not None:
-            raise Refused(self.kind, why)
+            raise DriverRefused(self.kind, why)
 
     def _check_joints(self, segment: CompiledSegment) -> None:
         names = segment.trajectory.joint_names
         if names != self.layout.joint_names:
-            raise Refused(
+            raise DriverRefused(
                 self.kind,
                 f"segment '{segment.segment.label}' (step {segment.segment.step}) moves "
                 f"{list(names)}; the cell's joints are {list(self.layout.joint_names)}",
@@ -286,16 +286,18 @@ class Driver(ABC):
             arm, mode = ev.event.arm, ev.event.mode
             self._check_arm(arm)
             if not lo <= ev.time <= hi:
-                raise Refused(
+                raise DriverRefused(
                     self.kind,
                     f"{where}: event '{mode}' of arm '{arm}' at t = {ev.time:.3f} s is outside "
                     f"the segment ({traj.start_time:.3f} to {traj.end_time:.3f} s)",
                 )
             tool = self.layout.tools[arm]
             if tool is None:
-                raise Refused(self.kind, f"{where}: arm '{arm}' has no tool to set to '{mode}'")
+                raise DriverRefused(
+                    self.kind, f"{where}: arm '{arm}' has no tool to set to '{mode}'"
+                )
             if mode not in tool.jaw:
-                raise Refused(
+                raise DriverRefused(
                     self.kind,
                     f"{where}: arm '{arm}' has no gripper mode '{mode}'" + known(tool.jaw),
                 )
@@ -307,7 +309,7 @@ class Driver(ABC):
         if deviation[j] <= self.start_tolerance:
             return
         arm = self.layout.arm_of(j)
-        raise Refused(
+        raise DriverRefused(
             self.kind,
             f"segment '{segment.segment.label}' (step {segment.segment.step}) not sent: "
             f"arm '{arm}' joint '{self.layout.joint_names[j]}' is at {q[j]:.4f}, the segment "

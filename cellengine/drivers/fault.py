@@ -3,7 +3,7 @@
 - :class:`DriverFault`: something failed while the driver was working (an arm stopped
   following, a gripper did not reach its mode, a connection dropped). Both arms are
   stopped and the driver is in its error state; it carries the :class:`Fault`.
-- :class:`Refused`: a request was turned down before anything was sent (the arms are not
+- :class:`DriverRefused`: a request was turned down before anything was sent (the arms are not
   where the segment starts, an event names an unknown gripper mode). Nothing moved and the
   driver's state is unchanged.
 
@@ -69,7 +69,7 @@ class DriverFault(DriverError):
         super().__init__(Problem(fault.message, f"{kind} driver"))
 
 
-class Refused(DriverError):
+class DriverRefused(DriverError):
     """A request refused before anything was sent; the driver's state is unchanged."""
 
     def __init__(self, kind: str, message: str) -> None:

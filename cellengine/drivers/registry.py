@@ -9,7 +9,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from cellengine.drivers.base import Driver
-from cellengine.drivers.fault import Refused
+from cellengine.drivers.fault import DriverRefused
 from cellengine.drivers.sim import SimDriver
 from cellengine.drivers.ur_rtde import UrDriver
 from cellengine.errors import known
@@ -36,7 +36,7 @@ def make_driver(
     name = kind if kind is not None else cell.driver.kind
     cls = DRIVERS.get(name)
     if cls is None:
-        raise Refused(name, f"no driver '{name}' is available" + known(DRIVERS))
+        raise DriverRefused(name, f"no driver '{name}' is available" + known(DRIVERS))
     if name == "sim" and cell.driver.kind == "sim":
         options = {"mass_noise": cell.driver.mass_noise, **options}
     return cls(cell, joints, objects=objects, **options)

@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike
 
 from cellengine.drivers.base import START_TOLERANCE, Driver, FloatArray, GripperState
 from cellengine.drivers.clock import Clock, RealClock, SimulatedClock
-from cellengine.drivers.fault import DriverFault, Fault, Refused
+from cellengine.drivers.fault import DriverFault, DriverRefused, Fault
 from cellengine.drivers.injection import Injection, Injections
 from cellengine.drivers.record import AppliedEvent, Played
 from cellengine.drivers.sim_arms import SimArms
@@ -156,7 +156,7 @@ class SimDriver(Driver):
         now = self.now if self.now is not None else -math.inf
         persisting = [_describe(i, self.joint_names) for i in self.injections.active(now)]
         if persisting:
-            raise Refused(
+            raise DriverRefused(
                 self.kind,
                 "cannot recover: " + "; ".join(persisting) + " (clear the fault first)",
             )
@@ -289,9 +289,11 @@ class SimDriver(Driver):
         if objects is not None:
             thing = objects.cables.get(name) or objects.containers.get(name)
         if thing is None:
-            raise Refused(self.kind, f"arm '{arm}' holds '{name}', which is not in the objects")
+            raise DriverRefused(
+                self.kind, f"arm '{arm}' holds '{name}', which is not in the objects"
+            )
         if thing.mass is None:
-            raise Refused(self.kind, f"arm '{arm}' holds '{name}', whose mass is not given")
+            raise DriverRefused(self.kind, f"arm '{arm}' holds '{name}', whose mass is not given")
         return float(thing.mass)
 
     def _initial_q(self, q0: ArrayLike | Mapping[str, ArrayLike] | None) -> FloatArray:

@@ -35,7 +35,7 @@ import numpy as np
 from cellengine.drivers.base import Driver as Base
 from cellengine.drivers.base import GripperState
 from cellengine.drivers.clock import sleep_until
-from cellengine.drivers.fault import Fault, Refused
+from cellengine.drivers.fault import DriverRefused, Fault
 from cellengine.drivers.lead_in import lead_in
 from cellengine.drivers.record import AppliedEvent, Played
 from cellengine.drivers.servo_timing import servo_timing
@@ -82,7 +82,9 @@ class UrDriver(Base):
         servo_period: float = SERVO_PERIOD,
     ) -> None:
         if not isinstance(cell.driver, Config):
-            raise Refused("ur_rtde", f"the cell's driver is '{cell.driver.kind}', not ur_rtde")
+            raise DriverRefused(
+                "ur_rtde", f"the cell's driver is '{cell.driver.kind}', not ur_rtde"
+            )
         self.config: Config = cell.driver
         super().__init__(cell, joints, objects=objects, start_tolerance=self.config.start_tolerance)
         self.addresses = {arm: str(ip) for arm, ip in self.config.arms.items()}
@@ -107,7 +109,9 @@ class UrDriver(Base):
     def _on_configure(self) -> None:
         missing = [m for m in VENDOR_MODULES if importlib.util.find_spec(m) is None]
         if missing:  # pragma: no cover - a dependency
-            raise Refused(self.kind, f"the ur-rtde library is not installed ({', '.join(missing)})")
+            raise DriverRefused(
+                self.kind, f"the ur-rtde library is not installed ({', '.join(missing)})"
+            )
         try:
             for arm, ip in self.addresses.items():
                 self._links[arm] = ArmLink(arm, ip)
@@ -123,7 +127,7 @@ class UrDriver(Base):
         want = MODEL_NAMES.get(model) if isinstance(model, str) else None
         got = self._ask(arm, f"dashboard at {ip}", "model").strip()
         if want is not None and got.upper() != want:
-            raise Refused(
+            raise DriverRefused(
                 self.kind,
                 f"arm '{arm}' at {ip} reports robot model '{got}', but the cell says "
                 f"'{model}' ({want})",
@@ -131,11 +135,13 @@ class UrDriver(Base):
         answers = f"no UR controller answers at {ip}"
         mode, safety, bits = self._ask(arm, f"{answers} (RTDE receive)", "connect_receive")
         if safety != SAFETY_NORMAL:
-            raise Refused(
+            raise DriverRefused(
                 self.kind, f"arm '{arm}' at {ip}: safety status {', '.join(set_bits(bits))}"
             )
         if mode != ROBOT_RUNNING:
-            raise Refused(self.kind, f"arm '{arm}' at {ip}: robot mode {mode}, not running (7)")
+            raise DriverRefused(
+                self.kind, f"arm '{arm}' at {ip}: robot mode {mode}, not running (7)"
+            )
         self._ask(arm, f"{answers} (RTDE control)", "connect_control")
         if self.config.gripper_io:  # the grippers' digital outputs
             self._ask(arm, f"{answers} (RTDE IO)", "connect_io")
@@ -144,7 +150,7 @@ class UrDriver(Base):
         try:
             return self._links[arm].call(op, timeout=self.connect_timeout)
         except LinkError as e:
-            raise Refused(self.kind, f"arm '{arm}': {what}: {e.why}") from None
+            raise DriverRefused(self.kind, f"arm '{arm}': {what}: {e.why}") from None
 
     def _on_activate(self) -> None:
         """The RTDE watchdog armed on every arm; each arm's process kicks it while nothing
@@ -154,7 +160,9 @@ class UrDriver(Base):
         for arm, ok in answers.items():
             if ok is not True:
                 why = f": {ok.why}" if isinstance(ok, LinkError) else ""
-                raise Refused(self.kind, f"arm '{arm}': the controller refused the watchdog{why}")
+                raise DriverRefused(
+                    self.kind, f"arm '{arm}': the controller refused the watchdog{why}"
+                )
 
     def _on_deactivate(self) -> None:
         self._stop_all()
@@ -165,10 +173,12 @@ class UrDriver(Base):
     def _on_recover(self) -> None:
         for arm, state in self._read().items():
             if isinstance(state, LinkError):
-                raise Refused(self.kind, f"cannot recover: arm '{arm}' is not connected ({state})")
+                raise DriverRefused(
+                    self.kind, f"cannot recover: arm '{arm}' is not connected ({state})"
+                )
             bits = state[2]
             if safety_stop(bits) is not None:
-                raise Refused(
+                raise DriverRefused(
                     self.kind,
                     f"cannot recover: arm '{arm}' reports {', '.join(set_bits(bits))} "
                     "(clear it on the teach pendant first)",
@@ -190,7 +200,7 @@ class UrDriver(Base):
             state = states[arm]
             if isinstance(state, LinkError):
                 why = f"arm '{arm}' at {self.addresses[arm]} is not connected ({state})"
-                raise Refused(self.kind, why)
+                raise DriverRefused(self.kind, why)
             q[s] = self._last_q[s] = state[0]
         return q
 
@@ -282,7 +292,9 @@ class UrDriver(Base):
         try:
             return lead_in(self._read_joints(), first, self.servo_period)
         except RuntimeError as e:
-            raise Refused(self.kind, f"segment '{segment.segment.label}' not sent: {e}") from None
+            raise DriverRefused(
+                self.kind, f"segment '{segment.segment.label}' not sent: {e}"
+            ) from None
 
     def _settle(self, recent: FloatArray, t: float) -> Fault | None:
         """Hold the last point until every joint is there: servoJ trails its target, and a

@@ -13,7 +13,7 @@ from collections.abc import Mapping
 import numpy as np
 from numpy.typing import NDArray
 
-from cellengine.drivers.fault import Refused
+from cellengine.drivers.fault import DriverRefused
 from cellengine.execute.held import Holding
 from cellengine.execute.retime import timed
 from cellengine.motion.gate import check_cell_trajectory
@@ -37,7 +37,7 @@ def recovery_segment(
     step: int,
 ) -> CompiledSegment | None:
     """The move from ``q_now`` to ``q_target`` for the arms more than ``tolerance`` off (None
-    when none is); Refused when no safe move is found."""
+    when none is); DriverRefused when no safe move is found."""
     off = [
         arm
         for arm, s in cell.slices.items()
@@ -51,11 +51,11 @@ def recovery_segment(
             holding.set(arm, obj, cell.arms[arm].fk(cell.split(q_now)[arm]))
     result = plan_for_arms(cell, holding.checker, off, q_now, q_target[None, :])
     if result.path is None:
-        raise Refused("recovery", f"no safe move back for {', '.join(off)}: {result.reason}")
+        raise DriverRefused("recovery", f"no safe move back for {', '.join(off)}: {result.reason}")
     traj = timed(result.path, cell.limits, cell.joint_names)
     gate = check_cell_trajectory(traj, cell, holding.checker)
     if not gate.ok:
-        raise Refused("recovery", f"the move back fails the gate: {gate.violations[0]}")
+        raise DriverRefused("recovery", f"the move back fails the gate: {gate.violations[0]}")
     label = f"recovery: {', '.join(off)} back to where the run goes on"
     report = {"merge": "none", "checks_passed": True, "duration_s": traj.duration}
     return CompiledSegment(Segment(step, label), "transit", traj, report)

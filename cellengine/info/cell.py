@@ -161,7 +161,7 @@ class UrRtdeDriver(Frozen):
     gripper_io: dict[Name, tuple[Annotated[int, Field(ge=0, le=7)], ...]] = {}
 
 
-Driver = Annotated[SimDriver | UrRtdeDriver, Field(discriminator="kind")]
+DriverSpec = Annotated[SimDriver | UrRtdeDriver, Field(discriminator="kind")]
 
 
 class Cell(Frozen):
@@ -172,4 +172,4 @@ class Cell(Frozen):
     platforms: dict[Name, PlatformSpec] = {}
     obstacles: dict[Name, Obstacle] = {}
     zones: dict[Name, Zone] = {}
-    driver: Driver = SimDriver(kind="sim")
+    driver: DriverSpec = SimDriver(kind="sim")

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cellengine.drivers import DriverFault, Fault, GripperState, Refused, SimDriver, State
+from cellengine.drivers import DriverFault, DriverRefused, Fault, GripperState, SimDriver, State
 from cellengine.drivers.record import FaultRecord, Played, Transition
 from cellengine.drivers.sim import servo_ticks
 from cellengine.errors import EXIT_DRIVER
@@ -73,7 +73,7 @@ def test_frozen_joint_must_be_cleared_before_recover() -> None:
     d = active()
     d.freeze_joint("left_elbow_joint", at=0.5)
     fail(d, move())
-    with pytest.raises(Refused) as info:
+    with pytest.raises(DriverRefused) as info:
         d.recover()
     assert info.value.problems[0].message == (
         "cannot recover: joint 'left_elbow_joint' is still frozen (clear the fault first)"
@@ -105,7 +105,7 @@ def test_failed_gripper_stops_both_arms() -> None:
     assert np.allclose(d.joint_state(), seg.trajectory.sample(1.0)[0])
     assert d.gripper("right") == GripperState("slide", "cable1")  # the mode it stayed in
     assert [(e.mode, e.done) for e in played.events] == [("slide", True), ("grasp", False)]
-    with pytest.raises(Refused, match="the gripper of arm 'right' still fails"):
+    with pytest.raises(DriverRefused, match="the gripper of arm 'right' still fails"):
         d.recover()
 
 
@@ -124,7 +124,7 @@ def test_lost_connection_stops_both_arms_and_readings_fail() -> None:
             read()
         assert info.value.problems[0].message == message
     assert len(d.recorder.of(FaultRecord)) == 1  # reading did not add a second fault
-    with pytest.raises(Refused, match="the connection to arm 'right' is still down"):
+    with pytest.raises(DriverRefused, match="the connection to arm 'right' is still down"):
         d.recover()
     d.clear_faults()
     d.recover()
@@ -195,7 +195,7 @@ def test_injection_names_are_checked() -> None:
     d = active()
     with pytest.raises(KeyError, match="unknown joint 'left_knee'"):
         d.freeze_joint("left_knee")
-    with pytest.raises(Refused, match="unknown arm 'middle'; known: left, right"):
+    with pytest.raises(DriverRefused, match="unknown arm 'middle'; known: left, right"):
         d.fail_gripper("middle")
 
 

@@ -11,8 +11,8 @@ import pytest
 
 from cellengine.drivers import (
     DRIVERS,
+    DriverRefused,
     GripperState,
-    Refused,
     SimDriver,
     State,
     make_driver,
@@ -200,7 +200,7 @@ def test_simulated_time_does_not_wait() -> None:
 
 def test_start_state_mismatch_is_refused_naming_the_joint() -> None:
     d = active(q0=q_with(left_elbow_joint=0.05, right_wrist_2_joint=-0.3))
-    with pytest.raises(Refused) as info:
+    with pytest.raises(DriverRefused) as info:
         d.execute(compiled(quintic(np.zeros(N), A, 1.0), "PickCable: approach", 2))
     assert info.value.problems[0].message == (
         "segment 'PickCable: approach' (step 2) not sent: arm 'right' joint "
@@ -237,7 +237,7 @@ def test_start_within_tolerance_is_accepted() -> None:
 )
 def test_bad_events_are_refused_before_anything_moves(events: list[object], message: str) -> None:
     d = active()
-    with pytest.raises(Refused) as info:
+    with pytest.raises(DriverRefused) as info:
         d.execute(compiled(quintic(np.zeros(N), A, 1.0)), events)  # type: ignore[arg-type]
     assert info.value.problems[0].message == message
     assert d.state is State.ACTIVE and not d.recorder.of(Sent)
@@ -252,7 +252,7 @@ def test_arm_without_tool_has_no_gripper_and_refuses_events() -> None:
     d.configure()
     d.activate()
     assert d.gripper("right") == GripperState(None, None)
-    with pytest.raises(Refused, match="arm 'right' has no tool to set to 'grasp'"):
+    with pytest.raises(DriverRefused, match="arm 'right' has no tool to set to 'grasp'"):
         d.execute(compiled(still(np.zeros(N))), [event(0.0, "right", "grasp")])
 
 
@@ -260,7 +260,7 @@ def test_other_joint_names_are_refused() -> None:
     d = active()
     traj = quintic(np.zeros(N), A, 1.0)
     swapped = type(traj)(NAMES[6:] + NAMES[:6], traj.t, traj.q, traj.qd, traj.qdd)
-    with pytest.raises(Refused, match="moves \\['right_shoulder_pan_joint'"):
+    with pytest.raises(DriverRefused, match="moves \\['right_shoulder_pan_joint'"):
         d.execute(compiled(swapped))
 
 
@@ -288,7 +288,7 @@ def test_read_mass_is_the_held_object_plus_seeded_noise() -> None:
 
 def test_read_mass_of_an_object_without_mass_is_refused() -> None:
     d = active(grippers={"left": GripperState("grasp", "box7")})
-    with pytest.raises(Refused, match="arm 'left' holds 'box7', which is not in the objects"):
+    with pytest.raises(DriverRefused, match="arm 'left' holds 'box7', which is not in the objects"):
         d.read_mass("left")
 
 
@@ -314,7 +314,7 @@ def test_registry_and_make_driver() -> None:
 
 def test_make_driver_names_a_missing_driver() -> None:
     ur = cell(kind="ur_rtde", arms={"left": "127.0.0.2", "right": "127.0.0.3"})
-    with pytest.raises(Refused) as info:
+    with pytest.raises(DriverRefused) as info:
         make_driver(ur, JOINTS, kind="kuka")
     assert str(info.value) == "kuka driver: no driver 'kuka' is available; known: sim, ur_rtde"
     assert isinstance(make_driver(ur, JOINTS, kind="sim"), SimDriver)

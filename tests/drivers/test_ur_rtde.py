@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from cellengine.drivers.fault import Refused
+from cellengine.drivers.fault import DriverRefused
 from cellengine.drivers.lifecycle import State
 from cellengine.drivers.registry import make_driver
 from cellengine.drivers.ur_rtde import UrDriver
@@ -32,7 +32,7 @@ def test_an_address_where_no_controller_answers_is_refused(tmp_path: Path) -> No
     driver = make_driver(cell, JOINTS, connect_timeout=2.0)
     assert isinstance(driver, UrDriver)
     assert driver.addresses == {"left": "127.0.0.9", "right": "127.0.0.10"}
-    with pytest.raises(Refused) as e:
+    with pytest.raises(DriverRefused) as e:
         driver.configure()
     assert str(e.value).startswith("ur_rtde driver: arm 'left': dashboard at 127.0.0.9: ")
     assert driver.state is State.UNCONFIGURED  # nothing half-done: still unconfigured
@@ -40,7 +40,7 @@ def test_an_address_where_no_controller_answers_is_refused(tmp_path: Path) -> No
 
 def test_the_ur_driver_needs_a_ur_rtde_cell(tmp_path: Path) -> None:
     cell, _ = load_cell(_cell(tmp_path, "{kind: sim}"))
-    with pytest.raises(Refused, match="the cell's driver is 'sim', not ur_rtde"):
+    with pytest.raises(DriverRefused, match="the cell's driver is 'sim', not ur_rtde"):
         UrDriver(cell, JOINTS)
 
 
