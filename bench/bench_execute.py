@@ -35,7 +35,7 @@ from cellengine.motion.collision import CollisionChecker  # noqa: E402
 from cellengine.motion.robot import build_cell_model  # noqa: E402
 from cellengine.motion.scene import build_scene  # noqa: E402
 from cellengine.program import CompiledSegment  # noqa: E402
-from skills.cable import plan_cable_steps  # noqa: E402
+from cellengine.skills.cable import plan_cable_steps  # noqa: E402
 from tests.execute import scenes  # noqa: E402
 
 FOUR_GUIDES = ROOT / "cells" / "cable_routing" / "plan_two_turns.yaml"
@@ -50,7 +50,7 @@ from cellengine.info.load import load_plan
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.robot import build_cell_model
 from cellengine.motion.scene import build_scene
-from skills.cable import plan_cable_steps
+from cellengine.skills.cable import plan_cable_steps
 loaded = load_plan(Path({str(FOUR_GUIDES)!r}))
 cell = build_cell_model(loaded.world)
 checker = CollisionChecker(build_scene(cell, loaded.world))

@@ -55,8 +55,8 @@ def plan_segments(
     """Every step's segments, and a lab plan's mission. A plan is all cable skills (they
     share one state through the whole plan) or all lab skills (the allocator decides which
     robots do what; ``masses``: measured masses that choose ``heavier_of`` objects)."""
-    from skills.cable import CableSkill, plan_cable_steps
-    from skills.lab_plan import LabSkill, plan_lab_steps
+    from cellengine.skills.cable import CableSkill, plan_cable_steps
+    from cellengine.skills.lab_plan import LabSkill, plan_lab_steps
 
     if all(isinstance(s, LabSkill) for s in steps):
         lab = plan_lab_steps(world, cell, steps, masses)
@@ -129,7 +129,7 @@ def compile_loaded(
     program = compiler.add_all(segments, before_each)
     mission_json = None
     if mission is not None:
-        from skills.lab_plan import mission_json as to_json
+        from cellengine.skills.lab_plan import mission_json as to_json
 
         spans = [
             (s.segment, s.trajectory.start_time, s.trajectory.end_time) for s in program.segments

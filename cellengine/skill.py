@@ -109,7 +109,7 @@ def registry() -> dict[str, type[Skill]]:
     """Built-in skills plus those declared by installed packages."""
     global _loaded
     if not _loaded:
-        import skills  # noqa: F401  (registers the built-ins)
+        import cellengine.skills  # noqa: F401  (registers the built-ins)
 
         for ep in entry_points(group="cellengine.skills"):
             ep.load()

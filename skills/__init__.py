@@ -1,5 +1,5 @@
 """The built-in skill library. Importing it registers every built-in skill."""
 
-from skills import cable, lab
+from cellengine.skills import cable, lab
 
 __all__ = ["cable", "lab"]

@@ -2,10 +2,11 @@
 
 Each skill's ``plan(world, state)`` turns its step into :class:`~cellengine.program.Segment` s
 of fingertip (TCP) poses in the cell frame, gripper events and couplings, and returns them
-with the :class:`~skills.cable_state.CableState` after them. :func:`plan_cable_steps` chains
-a plan's steps (it looks ahead so PickCable gives the connector end to the arm that will
-place it) and ends each cable with :func:`release_and_retract` (Algorithm 1, line 35).
-Frames, symbols and offsets: :mod:`skills.cable_geometry`.
+with the :class:`~cellengine.skills.cable_state.CableState` after them.
+:func:`plan_cable_steps` chains a plan's steps (it looks ahead so PickCable gives the
+connector end to the arm that will place it) and ends each cable with
+:func:`release_and_retract` (Algorithm 1, line 35).
+Frames, symbols and offsets: :mod:`cellengine.skills.cable_geometry`.
 
 Arms. PlaceConnector's ``arm`` places the connector; with ``auto`` the arm whose base is
 nearer the connector guide does (or, without a look-ahead, the arm already holding the
@@ -39,9 +40,9 @@ from cellengine.info.units import count
 from cellengine.motion import interpolate as ip
 from cellengine.program import ArmPath, GripperEvent, Segment
 from cellengine.skill import CableRef, GuideRef, KeypointRef, Skill, register
+from cellengine.skills import cable_geometry as cg
+from cellengine.skills.cable_state import CableState
 from cellengine.world import World
-from skills import cable_geometry as cg
-from skills.cable_state import CableState
 
 if TYPE_CHECKING:
     from cellengine.motion.robot import CellModel

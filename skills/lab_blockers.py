@@ -21,8 +21,8 @@ from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.ik import ArmIK, arm_ik
 from cellengine.motion.robot import TOOL_GEOMETRY, CellModel
 from cellengine.motion.scene import CollisionScene, pair_key, rearranged
+from cellengine.skills import lab_geometry as lg
 from cellengine.world import World
-from skills import lab_geometry as lg
 
 MAX_BLOCKERS = 3  # containers looked for behind one another in one grasp's way
 # checkers by (arm, containers taken out), for one target at a time: assembling a scene

@@ -23,9 +23,9 @@ from cellengine.errors import InputError, Problem
 from cellengine.geometry import Mat
 from cellengine.motion import interpolate as ip
 from cellengine.program import ArmPath, GripperEvent, Segment
+from cellengine.skills import lab_geometry as lg
+from cellengine.skills.lab_state import LabState
 from cellengine.world import World
-from skills import lab_geometry as lg
-from skills.lab_state import LabState
 
 OPEN, GRASP = "open", "grasp"
 # Unscrewing turns the cap in strokes of at most this much: a wrist with a limited range

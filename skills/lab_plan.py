@@ -51,13 +51,13 @@ from cellengine.motion.robot import CellModel
 from cellengine.motion.scene import CollisionScene, build_scene, rearranged, standing_container
 from cellengine.program import Segment
 from cellengine.skill import HeavierOf, LighterOf, ObjectRef, Skill
+from cellengine.skills import lab_geometry as lg
+from cellengine.skills import lab_motion as lm
+from cellengine.skills.lab import BimanualCarry, Handover, Pick, Place, Pour, Unscrew, Weigh
+from cellengine.skills.lab_blockers import blockers
+from cellengine.skills.lab_robots import robot_skills
+from cellengine.skills.lab_state import LabState
 from cellengine.world import World
-from skills import lab_geometry as lg
-from skills import lab_motion as lm
-from skills.lab import BimanualCarry, Handover, Pick, Place, Pour, Unscrew, Weigh
-from skills.lab_blockers import blockers
-from skills.lab_robots import robot_skills
-from skills.lab_state import LabState
 
 LabSkill = Pick | Place | Handover | Unscrew | Weigh | Pour | BimanualCarry
 Point = tuple[float, float, float]

@@ -17,12 +17,12 @@ import shutil
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
+from importlib import resources
 from pathlib import Path
 from typing import Any, TypeVar
 
 import yaml
 
-import cellengine
 from cellengine.errors import EXIT_OK, InputError, Problem, UsageError, display_path, known
 from cellengine.info.cell import UrdfModel
 from cellengine.info.load import load_cell, load_plan, load_world
@@ -491,13 +491,12 @@ def cable_connectors(inputs: Inputs, from_plan: Mapping[str, str]) -> dict[str, 
 def schema_line(kind: str, dest: Path) -> list[str]:
     """The yaml-language-server line naming this checkout's schema: relative when DEST is
     inside the checkout (so a committed cell works on any clone), absolute outside it (a
-    cell elsewhere is on this machine anyway); none if cellengine has no schemas folder."""
-    folder = Path(cellengine.__file__).resolve().parents[1] / "schemas"
-    schema = folder / f"{kind}.schema.json"
+    cell elsewhere is on this machine anyway); none if cellengine has no schemas."""
+    schema = Path(str(resources.files("cellengine.schemas") / f"{kind}.schema.json")).resolve()
     if not schema.is_file():
         return []
     target = dest.resolve()
-    inside = target.is_relative_to(folder.parent)
+    inside = target.is_relative_to(schema.parent.parent)
     ref = Path(os.path.relpath(schema, target)).as_posix() if inside else schema.as_posix()
     return [f"# yaml-language-server: $schema={ref}"]
 

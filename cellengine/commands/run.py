@@ -279,7 +279,7 @@ def _recompiled(
     ``planned`` over objects.yaml's masses) does; the segments already run must be the same
     in it."""
     from cellengine.pipeline import compile_loaded
-    from skills.lab_plan import choices
+    from cellengine.skills.lab_plan import choices
 
     world, steps = compiled.world, compiled.loaded.plan.steps
     now = choices(world, steps, measured, measured_only=True)

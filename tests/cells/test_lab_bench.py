@@ -24,8 +24,8 @@ from cellengine.motion.ik import ArmIK
 from cellengine.motion.robot import CellModel, build_cell_model
 from cellengine.motion.scene import CollisionScene, build_scene, rearranged
 from cellengine.skill import HeavierOf
+from cellengine.skills.lab import Place, Pour, Unscrew, Weigh
 from cellengine.world import World
-from skills.lab import Place, Pour, Unscrew, Weigh
 from tests.conftest import CELLS
 
 LAB = CELLS / "lab_bench"

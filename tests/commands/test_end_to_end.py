@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import skills.cable  # noqa: F401  (the real skills package registers the cable skills)
+import cellengine.skills.cable  # noqa: F401  (the real skills package registers the cable skills)
 from cellengine.cli import main
 from cellengine.drivers.play import play
 from cellengine.drivers.sim import SimDriver

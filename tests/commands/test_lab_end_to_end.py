@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import skills.lab  # noqa: F401  (registers the lab skills)
+import cellengine.skills.lab  # noqa: F401  (registers the lab skills)
 from cellengine.cli import main
 from cellengine.pipeline import Compiled, compile_plan
 from tests.conftest import CELLS

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import skills.cable  # noqa: F401  (registers the cable skills)
+import cellengine.skills.cable  # noqa: F401  (registers the cable skills)
 from cellengine.cli import main
 from cellengine.commands.run import _play, journaled
 from cellengine.drivers.fault import DriverFault

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-import skills.cable  # noqa: F401  (registers the cable skills)
+import cellengine.skills.cable  # noqa: F401  (registers the cable skills)
 from cellengine.pipeline import compile_plan
 from tests.drivers.urcell import journal, run_cli, start, ur_cell
 from tests.emulate.harness import Emulator

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import skills.cable  # noqa: F401  (registers the cable skills)
+import cellengine.skills.cable  # noqa: F401  (registers the cable skills)
 from cellengine.journal import read_progress
 from cellengine.pipeline import compile_plan
 from tests.conftest import ROOT

@@ -16,7 +16,7 @@ from cellengine.motion.gate import check_cell_trajectory
 from cellengine.motion.robot import CellModel, build_cell_model
 from cellengine.motion.scene import build_scene
 from cellengine.program import Program, Segment
-from skills.cable import plan_cable_steps
+from cellengine.skills.cable import plan_cable_steps
 from tests.conftest import CELLS
 from tests.execute.scenes import states, tcp
 

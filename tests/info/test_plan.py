@@ -6,8 +6,8 @@ from cellengine.errors import InputError
 from cellengine.info.load import check_plan
 from cellengine.info.plan import parse_plan
 from cellengine.info.yamlio import parse_yaml
-from skills.cable import PickCable, RouteCable
-from skills.lab import Pour
+from cellengine.skills.cable import PickCable, RouteCable
+from cellengine.skills.lab import Pour
 from tests.helpers import routing_world
 
 F = Path("plan.yaml")

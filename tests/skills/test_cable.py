@@ -25,10 +25,10 @@ from cellengine.errors import InputError
 from cellengine.info.load import load_plan
 from cellengine.motion import interpolate as ip
 from cellengine.program import Segment
+from cellengine.skills import cable_geometry as cg
+from cellengine.skills.cable import PickCable, PlaceConnector, RouteCable, plan_cable_steps
+from cellengine.skills.cable_state import CableState
 from cellengine.world import World
-from skills import cable_geometry as cg
-from skills.cable import PickCable, PlaceConnector, RouteCable, plan_cable_steps
-from skills.cable_state import CableState
 from tests.conftest import CELLS, REMODEL
 
 PLANS = ("plan_straight", "plan_one_turn", "plan_two_turns")

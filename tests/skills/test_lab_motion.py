@@ -15,10 +15,10 @@ from cellengine.errors import InputError
 from cellengine.info.load import load_world
 from cellengine.motion.ik import arm_ik
 from cellengine.motion.robot import build_cell_model
+from cellengine.skills import lab_geometry as lg
+from cellengine.skills import lab_motion as lm
+from cellengine.skills.lab_state import LabState
 from cellengine.world import World
-from skills import lab_geometry as lg
-from skills import lab_motion as lm
-from skills.lab_state import LabState
 from tests.conftest import CELLS
 
 OBJECTS = """
@@ -248,7 +248,7 @@ def test_two_arms_carry_a_box_as_one_closed_chain(tmp_path: Path) -> None:
     from cellengine.execute import Compiler
     from cellengine.motion.collision import CollisionChecker
     from cellengine.motion.scene import build_scene
-    from skills.lab_plan import _Reach
+    from cellengine.skills.lab_plan import _Reach
 
     folder = tmp_path / "cell"
     shutil.copytree(CELLS / "cable_routing", folder)

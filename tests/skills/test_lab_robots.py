@@ -7,7 +7,7 @@ from pathlib import Path
 
 from cellengine.info.load import load_world
 from cellengine.motion.robot import build_cell_model
-from skills.lab_robots import describe, robot_skills
+from cellengine.skills.lab_robots import describe, robot_skills
 from tests.conftest import CELLS
 
 
