@@ -29,11 +29,9 @@ from typing import Any
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))  # the hand-made segments live with the executor's tests
 
-from cellengine.execute import Compiler, compile_segments, home_configuration  # noqa: E402
+from cellengine.context import build_context  # noqa: E402
+from cellengine.execute import Compiler, compile_segments  # noqa: E402
 from cellengine.info.load import load_plan  # noqa: E402
-from cellengine.motion.collision import CollisionChecker  # noqa: E402
-from cellengine.motion.robot import build_cell_model  # noqa: E402
-from cellengine.motion.scene import build_scene  # noqa: E402
 from cellengine.program import CompiledSegment  # noqa: E402
 from cellengine.skills.cable import plan_cable_steps  # noqa: E402
 from tests.execute import scenes  # noqa: E402
@@ -45,17 +43,14 @@ PROCESS = f"""
 import sys, time
 t0 = time.perf_counter()
 from pathlib import Path
-from cellengine.execute import Compiler, home_configuration
+from cellengine.context import build_context
+from cellengine.execute import Compiler
 from cellengine.info.load import load_plan
-from cellengine.motion.collision import CollisionChecker
-from cellengine.motion.robot import build_cell_model
-from cellengine.motion.scene import build_scene
 from cellengine.skills.cable import plan_cable_steps
 loaded = load_plan(Path({str(FOUR_GUIDES)!r}))
-cell = build_cell_model(loaded.world)
-checker = CollisionChecker(build_scene(cell, loaded.world))
-segments = plan_cable_steps(loaded.world, loaded.plan.steps)[0]
-c = Compiler(loaded.world, cell, checker, home_configuration(cell), loaded.plan.execution)
+ctx = build_context(loaded.world)
+segments = plan_cable_steps(ctx, loaded.plan.steps)[0]
+c = Compiler(loaded.world, ctx.cell, ctx.checker, ctx.home, loaded.plan.execution)
 c.add_all(segments)
 print(time.perf_counter() - t0)
 """
@@ -71,10 +66,10 @@ def run() -> dict[str, float]:
 def _four_guides() -> dict[str, float]:
     loaded = load_plan(FOUR_GUIDES)
     world = loaded.world
-    cell = build_cell_model(world)
-    checker = CollisionChecker(build_scene(cell, world))
-    segments = plan_cable_steps(world, loaded.plan.steps)[0]
-    q0 = home_configuration(cell)
+    ctx = build_context(world)
+    cell, checker = ctx.cell, ctx.checker
+    segments = plan_cable_steps(ctx, loaded.plan.steps)[0]
+    q0 = ctx.home
     times = []
     for _ in range(REPEATS):
         t0 = time.perf_counter()

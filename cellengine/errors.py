@@ -7,7 +7,8 @@ the code of the error class (DESIGN section 4).
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Self
@@ -69,6 +70,39 @@ class CellError(Exception):
 
 class InputError(CellError):
     """Invalid input, or a plan that cannot run (exit 1)."""
+
+
+class StepError(InputError):
+    """A plan step that cannot be done. Carries the step's index (0-based, into the plan's
+    ``steps``); whoever knows the plan file puts the problems at that step's place in it
+    (:meth:`located`), so no message is parsed back for the step and no file read again."""
+
+    def __init__(self, problems: Problem | Iterable[Problem], step: int | None = None) -> None:
+        super().__init__(problems)
+        self.step = step  # None: not known (an error made without a plan)
+
+    @classmethod
+    def wrap(cls, step: int, error: CellError) -> StepError:
+        """``error`` as a StepError of ``step`` (kept as it is if it knows its step)."""
+        if isinstance(error, StepError) and error.step is not None:
+            return error
+        return cls(error.problems, step)
+
+    def located(self, file: str | Path, line: int | None, col: int | None) -> InputError:
+        """The problems placed at the step in its plan file (a problem placed already keeps
+        its place)."""
+        return InputError(
+            p if p.file else Problem(p.message, str(file), line, col) for p in self.problems
+        )
+
+
+@contextmanager
+def at_step(step: int) -> Iterator[None]:
+    """Input errors raised inside are errors of plan step ``step`` (a StepError)."""
+    try:
+        yield
+    except InputError as e:
+        raise StepError.wrap(step, e) from None
 
 
 class UsageError(CellError):

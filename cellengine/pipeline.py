@@ -1,32 +1,30 @@
 """From a plan file to a validated Program, and from a Program to a run directory.
 
 `cellengine plan`, `cellengine run` and `cellengine validate` share this: load and check the
-files, build the cell's robot models and collision scene, turn the steps into segments with
-the skills, compile the segments (strategy, merges, the gate) into a Program.
+files, build the planning context (robot models, collision scene, IK, home), let the plan's
+skill family offer candidates for its steps, and compile them (strategy, merges, the gate,
+the next candidate where one cannot run) into a Program.
 """
 
 from __future__ import annotations
 
 import json
-import re
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import Any, TypeVar
 
-from cellengine.errors import InputError, Problem
-from cellengine.execute.compile import Compiler, home_configuration
+from cellengine.context import PlanningContext, build_context
+from cellengine.errors import InputError, Problem, StepError
+from cellengine.execute.candidates import compile_candidates
+from cellengine.execute.compile import Compiler
+from cellengine.family import SkillFamily, families, skill_name
 from cellengine.info.load import LoadedPlan, load_plan
-from cellengine.info.yamlio import load_yaml
-from cellengine.motion.collision import CollisionChecker
-from cellengine.motion.robot import CellModel, build_cell_model
-from cellengine.motion.scene import build_scene
+from cellengine.info.plan import Plan
+from cellengine.motion.robot import CellModel
 from cellengine.program import Program, Segment
 from cellengine.skill import Skill
 from cellengine.world import World
-
-if TYPE_CHECKING:
-    from cellengine.allocate import Mission
 
 T = TypeVar("T")
 Progress = Callable[[int, int, str], None]  # (step index, number of steps, skill)
@@ -35,41 +33,47 @@ Progress = Callable[[int, int, str], None]  # (step index, number of steps, skil
 @dataclass(frozen=True)
 class Compiled:
     loaded: LoadedPlan
-    cell: CellModel
+    context: PlanningContext
     program: Program
     strategy: str
-    # a lab plan's mission: which robots do each step, when (report.json's "mission")
-    mission: list[dict[str, Any]] | None = None
+    # report.json entries the family adds (a lab plan's "mission": which robots do each
+    # step, when)
+    report: Mapping[str, Any] = field(default_factory=dict)
 
     @property
     def world(self) -> World:
         return self.loaded.world
 
+    @property
+    def cell(self) -> CellModel:
+        return self.context.cell
 
-def plan_segments(
-    world: World,
-    cell: CellModel,
-    steps: Sequence[Skill],
-    masses: Mapping[str, float] | None = None,
-) -> tuple[list[Segment], Mission | None]:
-    """Every step's segments, and a lab plan's mission. A plan is all cable skills (they
-    share one state through the whole plan) or all lab skills (the allocator decides which
-    robots do what; ``masses``: measured masses that choose ``heavier_of`` objects)."""
-    from cellengine.skills.cable import CableSkill, plan_cable_steps
-    from cellengine.skills.lab_plan import LabSkill, plan_lab_steps
+    @property
+    def mission(self) -> list[dict[str, Any]] | None:
+        mission = self.report.get("mission")
+        return None if mission is None else list(mission)
 
-    if all(isinstance(s, LabSkill) for s in steps):
-        lab = plan_lab_steps(world, cell, steps, masses)
-        return lab.segments, lab.mission
+
+def family_of(steps: Sequence[Skill]) -> SkillFamily:
+    """The one family every step belongs to (a plan is all of one family)."""
+    of_skill = families().of_skill
+    family = of_skill[steps[0].skill]
     for i, step in enumerate(steps):
-        if not isinstance(step, CableSkill):
-            raise InputError(
+        other = of_skill[step.skill]
+        if other is not family:
+            raise StepError(
                 Problem(
                     f"steps[{i}]: {step.skill} cannot be compiled to motion in a plan with "
-                    "cable skills (a plan is all cable skills, or all lab skills)"
-                )
+                    f"{family.name} skills (a plan's skills are all of one family: "
+                    + "; ".join(
+                        f"{f.name}: {', '.join(skill_name(m) for m in f.skills)}"
+                        for f in families().by_name.values()
+                    )
+                    + ")"
+                ),
+                i,
             )
-    return plan_cable_steps(world, steps)[0], None
+    return family
 
 
 def compile_plan(
@@ -84,39 +88,29 @@ def compile_plan(
     return compile_loaded(load_plan(path, cell=cell), strategy, merge, progress)
 
 
-Models = tuple[CellModel, CollisionChecker]
-
-
-def cell_models(world: World) -> Models:
-    """The robots and the collision checker of ``world``'s cell."""
-    cell = build_cell_model(world)
-    return cell, CollisionChecker(build_scene(cell, world))
-
-
 def compile_loaded(
     loaded: LoadedPlan,
     strategy: str | None = None,
     merge: str = "joint",
     progress: Progress | None = None,
-    models: Callable[[World], Models] = cell_models,
+    context: PlanningContext | None = None,
     masses: Mapping[str, float] | None = None,
 ) -> Compiled:
-    """Compile a loaded plan; ``models`` lets a caller reuse one cell's models across plans;
-    ``masses``: measured masses (kg) for runtime choices (else objects.yaml's)."""
-    world, plan = loaded.world, loaded.plan
-    cell, checker = models(world)
+    """Compile a loaded plan. ``context``: one already built for this plan's world (a
+    caller compiling several plans of one cell builds it once); ``masses``: measured masses
+    (kg) for runtime choices (else objects.yaml's)."""
+    plan = loaded.plan
+    ctx = context if context is not None else build_context(loaded.world)
+    if masses is not None:
+        ctx = ctx.with_masses(masses)
     chosen = strategy or plan.execution
-    segments, mission = _with_file(
-        plan.file, lambda: plan_segments(world, cell, plan.steps, masses)
-    )
     compiler = Compiler(
-        world,
-        cell,
-        checker,
-        home_configuration(cell),
+        ctx.world,
+        ctx.cell,
+        ctx.checker,
+        ctx.home,
         chosen,  # type: ignore[arg-type]
         merge=merge,  # type: ignore[arg-type]
-        plan_file=plan.file,
     )
     shown: set[int] = set()
 
@@ -125,35 +119,29 @@ def compile_loaded(
             shown.add(segment.step)
             progress(segment.step, len(plan.steps), plan.steps[segment.step].skill)
 
-    # add_all looks ahead from each transit and comes back to it when a later segment fails
-    program = compiler.add_all(segments, before_each)
-    mission_json = None
-    if mission is not None:
-        from cellengine.skills.lab_plan import mission_json as to_json
+    def search() -> Compiled:
+        family = family_of(plan.steps)
+        taken = compile_candidates(compiler, family.plan(ctx, plan.steps), before_each)
+        program = compiler.program()
+        report: dict[str, Any] = {}
+        for candidate in taken:
+            if candidate.report is not None:
+                report.update(candidate.report(program))
+        return Compiled(loaded, ctx, program, chosen, report)
 
-        spans = [
-            (s.segment, s.trajectory.start_time, s.trajectory.end_time) for s in program.segments
-        ]
-        mission_json = to_json(mission, spans)
-    return Compiled(loaded, cell, program, chosen, mission_json)
+    return _in_plan(plan, search)
 
 
-def _with_file(plan_file: Path, make: Callable[[], T]) -> T:
-    """Skill errors begin with the step (``steps[2] RouteCable guide3: ...``): put them at
-    that step's line in the plan file."""
+def _in_plan(plan: Plan, make: Callable[[], T]) -> T:
+    """Errors of a step at that step's place in the plan file; other errors in the file."""
     try:
         return make()
+    except StepError as e:
+        raise plan.locate(e) from None
     except InputError as e:
-        doc = load_yaml(plan_file)
-        problems = []
-        for p in e.problems:
-            if p.file:
-                problems.append(p)
-                continue
-            m = re.match(r"steps\[(\d+)\]", p.message)
-            line, col = (doc.where(("steps", int(m.group(1)))) if m else None) or (None, None)
-            problems.append(Problem(p.message, str(plan_file), line, col))
-        raise InputError(problems) from None
+        raise InputError(
+            p if p.file else Problem(p.message, str(plan.file), p.line, p.col) for p in e.problems
+        ) from None
 
 
 # trajectory.json numbers to 1e-9 (rad, rad/s, rad/s^2, s): far below what any arm resolves
@@ -214,8 +202,7 @@ def write_plan_outputs(compiled: Compiled, out: Path) -> dict[str, Path]:
         "execution": compiled.strategy,
         "duration": compiled.program.duration,
     }
-    if compiled.mission is not None:
-        extra["mission"] = compiled.mission
+    extra.update(compiled.report)
     labels = {i: step_label(step) for i, step in enumerate(plan.steps)}
     texts = {
         TRAJECTORY_JSON: json.dumps(trajectory_json(compiled.program)) + "\n",

@@ -32,6 +32,32 @@ class GripperEvent:
 
 
 @dataclass(frozen=True)
+class Measure:
+    """At the end of its segment the runner reads ``arm``'s load cell: the mass (kg) of
+    ``object``, which may change a runtime choice (``heavier_of``) and so the rest of the
+    plan."""
+
+    arm: str
+    object: str
+
+
+@dataclass(frozen=True)
+class Anchor:
+    """From the end of its segment ``object`` (a cable) is fixed at ``point`` (cell frame, m)
+    by ``by`` (a keypoint: the guide holding it); the report draws a cable through its
+    anchors so far, then the hands holding it."""
+
+    object: str
+    point: tuple[float, float, float]
+    by: str | None = None
+
+
+# What a skill says about a segment besides its motion: typed, so the runner and the report
+# act on it without knowing the skill (a Measure is done at run time, an Anchor is drawn).
+Annotation = Measure | Anchor
+
+
+@dataclass(frozen=True)
 class ArmPath:
     """One arm's motion in a segment.
 
@@ -79,6 +105,7 @@ class Segment:
     # what the step promises at the end of this segment, for reports and tests, e.g.
     # {"guide": "routing.guide2", "slot": [x, y, z]}
     facts: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
+    annotations: tuple[Annotation, ...] = ()
 
     def arms(self) -> tuple[str, ...]:
         return tuple(p.arm for p in self.paths)

@@ -1,8 +1,9 @@
-"""The skill registry and the base of every skill's parameter model.
+"""The base of every skill's parameter model.
 
 A plan step is validated against its skill's model. Fields that name things in the cell or
-the objects are annotated with a :class:`Ref` so one generic check resolves them all.
-Third-party skills come in through the ``cellengine.skills`` entry point group.
+the objects are annotated with a :class:`Ref` so one generic check resolves them all. Skills
+come in families (:mod:`cellengine.family`), registered through the ``cellengine.skills``
+entry point group.
 """
 
 from __future__ import annotations
@@ -10,8 +11,7 @@ from __future__ import annotations
 import typing
 from collections.abc import Iterator
 from dataclasses import dataclass
-from importlib.metadata import entry_points
-from typing import Annotated, Any, TypeVar
+from typing import Annotated, Any
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -90,28 +90,3 @@ def _walk(value: Any, tp: Any, meta: list[Any], loc: Loc) -> Iterator[tuple[Loc,
             if typing.get_origin(arg) is Annotated:
                 yield from _walk(value, arg, [], loc)
                 return
-
-
-REGISTRY: dict[str, type[Skill]] = {}
-
-S = TypeVar("S", bound=type[Skill])
-
-
-def register(cls: S) -> S:
-    REGISTRY[cls.__name__] = cls
-    return cls
-
-
-_loaded = False
-
-
-def registry() -> dict[str, type[Skill]]:
-    """Built-in skills plus those declared by installed packages."""
-    global _loaded
-    if not _loaded:
-        import cellengine.skills  # noqa: F401  (registers the built-ins)
-
-        for ep in entry_points(group="cellengine.skills"):
-            ep.load()
-        _loaded = True
-    return REGISTRY

@@ -1,5 +1,2 @@
-"""The built-in skill library. Importing it registers every built-in skill."""
-
-from cellengine.skills import cable, lab
-
-__all__ = ["cable", "lab"]
+"""The built-in skill families (cable routing, lab automation), registered under the
+``cellengine.skills`` entry point group in pyproject.toml like any other package's."""

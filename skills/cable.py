@@ -1,6 +1,6 @@
 """Cable-routing skills: the published dual-arm method (paper 003, Algorithm 1, Fig. 4).
 
-Each skill's ``plan(world, state)`` turns its step into :class:`~cellengine.program.Segment` s
+Each skill's ``plan(ctx, state)`` turns its step into :class:`~cellengine.program.Segment` s
 of fingertip (TCP) poses in the cell frame, gripper events and couplings, and returns them
 with the :class:`~cellengine.skills.cable_state.CableState` after them.
 :func:`plan_cable_steps` chains a plan's steps (it looks ahead so PickCable gives the
@@ -24,8 +24,7 @@ and the guide.
 from __future__ import annotations
 
 import math
-import weakref
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Annotated, Any, Literal
@@ -34,18 +33,18 @@ import numpy as np
 from pydantic import Field
 
 from cellengine import geometry as g
-from cellengine.errors import InputError, Problem, known
+from cellengine.errors import InputError, Problem, StepError, known
 from cellengine.geometry import Mat
 from cellengine.info.units import count
 from cellengine.motion import interpolate as ip
-from cellengine.program import ArmPath, GripperEvent, Segment
-from cellengine.skill import CableRef, GuideRef, KeypointRef, Skill, register
+from cellengine.program import Anchor, Annotation, ArmPath, GripperEvent, Segment
+from cellengine.skill import CableRef, GuideRef, KeypointRef, Skill
 from cellengine.skills import cable_geometry as cg
 from cellengine.skills.cable_state import CableState
 from cellengine.world import World
 
-if TYPE_CHECKING:
-    from cellengine.motion.robot import CellModel
+if TYPE_CHECKING:  # planning needs the motion stack; parsing a plan does not
+    from cellengine.context import PlanningContext
 
 OPEN, SLIDE, GRASP = "open", "slide", "grasp"  # jaw modes the method uses (the tool's table)
 Poses = cg.Poses
@@ -54,7 +53,6 @@ Poses = cg.Poses
 # =========================================================================== the skills
 
 
-@register
 class PickCable(Skill):
     """Grasp both ends of a cable from two combs, connector end first."""
 
@@ -64,12 +62,13 @@ class PickCable(Skill):
         tuple[KeypointRef, KeypointRef], count(2, "keypoints [connector end, other end]")
     ] = Field(alias="from")
 
-    def plan(self, world: World, state: CableState) -> tuple[list[Segment], CableState]:
+    def plan(self, ctx: PlanningContext, state: CableState) -> tuple[list[Segment], CableState]:
         """Algorithm 1, PICKCABLE: pick configuration; approach, grasp and retract both ends
         at once; turn both hands along the cable; the far hand goes down on a circle about
         the connector hand (the cable then slides back against gravity), slides up the
         cable to the connector hand and comes back up on a circle; both grippers' z aligned
         with the routing platform."""
+        world = ctx.world
         where = f"steps[{state.step}] PickCable {self.cable}"
         arms = _two_arms(world, where)
         conn_ref, free_ref = self.from_
@@ -78,12 +77,11 @@ class PickCable(Skill):
         for arm in arms:
             _check_jaw(world, arm, where)
         geo = _pick_geometry(world, state, self.cable, conn_ref, free_ref, c_arm, f_arm)
-        _check_reach(world, c_arm, geo.reach(c_arm), where)
-        _check_reach(world, f_arm, geo.reach(f_arm), where)
+        _check_reach(ctx, c_arm, geo.reach(c_arm), where)
+        _check_reach(ctx, f_arm, geo.reach(f_arm), where)
         return _emit_pick(self, state, geo, c_arm, f_arm)
 
 
-@register
 class PlaceConnector(Skill):
     """Insert the cable's connector into a connector guide."""
 
@@ -109,10 +107,11 @@ class PlaceConnector(Skill):
             )
         return holder if holder is not None else _nearest_arm(world, arms, self.guide)
 
-    def plan(self, world: World, state: CableState) -> tuple[list[Segment], CableState]:
+    def plan(self, ctx: PlanningContext, state: CableState) -> tuple[list[Segment], CableState]:
         """Algorithm 1, PLACECONNECTOR: align the held cable with the connector guide (both
         hands as one rigid pair); approach, insert and retract keypoints; release and retract
         the connector gripper; then pull_distance."""
+        world = ctx.world
         where = f"steps[{state.step}] PlaceConnector {self.guide}"
         c_arm = self.connector_arm(world, state.connector_arm, state.step)
         arms = _two_arms(world, where)
@@ -120,12 +119,11 @@ class PlaceConnector(Skill):
         _require_hold(state, c_arm, self.cable, where, "the connector end (plan PickCable first)")
         _require_hold(state, f_arm, self.cable, where, "the cable (plan PickCable first)")
         geo = _place_geometry(world, state, self, c_arm, f_arm, where)
-        _check_reach(world, c_arm, geo.reach(c_arm), where)
-        _check_reach(world, f_arm, geo.reach(f_arm), where)
+        _check_reach(ctx, c_arm, geo.reach(c_arm), where)
+        _check_reach(ctx, f_arm, geo.reach(f_arm), where)
         return _emit_place(self, state, geo, c_arm, f_arm)
 
 
-@register
 class RouteCable(Skill):
     """Route the cable through guides, in order."""
 
@@ -133,12 +131,13 @@ class RouteCable(Skill):
     cable: CableRef
     guides: tuple[GuideRef, ...] = Field(min_length=1)
 
-    def plan(self, world: World, state: CableState) -> tuple[list[Segment], CableState]:
+    def plan(self, ctx: PlanningContext, state: CableState) -> tuple[list[Segment], CableState]:
         """Algorithm 1, ROUTECABLE, for each guide: the other arm lets go of the previous
         guide; the routing gripper turns to face the guide and approaches it sliding; slides
         R_cable more at the sliding angle theta; the other arm grasps the cable where the
         routing gripper stopped; the routing gripper pulls the cable taut, lifts it over the
         guide, swings it over the slot and inserts it on circles about the other hand."""
+        world = ctx.world
         where = f"steps[{state.step}] RouteCable"
         r_arm, o_arm = _routing_arms(world, state, self.cable, where)
         _check_jaw(world, r_arm, where)
@@ -147,8 +146,8 @@ class RouteCable(Skill):
         sim = state
         for guide in self.guides:
             gp = _guide_plan(world, sim, self.cable, guide, r_arm, o_arm)
-            _check_reach(world, r_arm, gp.reach_routing(), gp.where)
-            _check_reach(world, o_arm, gp.reach_other(), gp.where)
+            _check_reach(ctx, r_arm, gp.reach_routing(), gp.where)
+            _check_reach(ctx, o_arm, gp.reach_other(), gp.where)
             _check_length(world, self.cable, _hand(world, r_arm), gp)
             sim = gp.after(sim, r_arm, o_arm, self.cable)
             plans.append(gp)
@@ -163,26 +162,40 @@ CableSkill = PickCable | PlaceConnector | RouteCable
 
 
 def plan_cable_steps(
-    world: World, steps: Sequence[Skill], state: CableState | None = None
+    ctx: PlanningContext, steps: Sequence[Skill], state: CableState | None = None
 ) -> tuple[list[Segment], CableState]:
-    """Every step's segments, chained through one state (from the arms' homes unless given).
-    Before a PickCable, looks ahead to the PlaceConnector of the same cable for its arm and
-    guide; when a cable's last step is done (another PickCable follows, or the plan ends),
-    releases it and retracts the arms."""
-    state = state if state is not None else CableState.at_home(world)
+    """Every step's segments (each step's first way), chained through one state (from the
+    arms' homes unless given); when the plan ends, the cable is released and the arms
+    retract."""
+    state = state if state is not None else CableState.at_home(ctx)
     segments: list[Segment] = []
-    for i, step in enumerate(steps):
-        if not isinstance(step, PickCable | PlaceConnector | RouteCable):
-            raise TypeError(f"steps[{i}]: {step.skill} is not a cable skill")
-        if isinstance(step, PickCable):
-            if state.held:
-                more, state = release_and_retract(state)
-                segments += more
-            state = _look_ahead(world, replace(state, step=i), step, steps[i + 1 :])
-        more, state = step.plan(world, replace(state, step=i))
+    for i in range(len(steps)):
+        more, state = next(step_ways(ctx, steps, i, state))
         segments += more
     more, state = release_and_retract(state)
     return segments + more, state
+
+
+def step_ways(
+    ctx: PlanningContext, steps: Sequence[Skill], i: int, state: CableState
+) -> Iterator[tuple[list[Segment], CableState]]:
+    """The ways to do ``steps[i]`` from ``state``, best first, each with the state after it:
+    one, the geometry of paper 003. Before a PickCable, the cable held is released (its last
+    step is done) and the PlaceConnector of the same cable is looked up for its arm and
+    guide. A step that cannot be done raises StepError with its index."""
+    step = steps[i]
+    if not isinstance(step, PickCable | PlaceConnector | RouteCable):
+        raise TypeError(f"steps[{i}]: {step.skill} is not a cable skill")
+    segments: list[Segment] = []
+    try:
+        if isinstance(step, PickCable):
+            if state.held:
+                segments, state = release_and_retract(state)
+            state = _look_ahead(ctx.world, replace(state, step=i), step, steps[i + 1 :])
+        more, state = step.plan(ctx, replace(state, step=i))
+    except InputError as e:
+        raise StepError.wrap(i, e) from None
+    yield segments + more, state
 
 
 def release_and_retract(state: CableState) -> tuple[list[Segment], CableState]:
@@ -225,6 +238,7 @@ class _Builder:
         closed_chain: tuple[str, str] | None = None,
         keep_distance: tuple[str, str] | None = None,
         facts: Mapping[str, Any] | None = None,
+        annotations: Iterable[Annotation] = (),
     ) -> None:
         seg = Segment(
             step=self.state.step,
@@ -235,6 +249,7 @@ class _Builder:
             closed_chain=closed_chain,
             keep_distance=keep_distance,
             facts=MappingProxyType(dict(facts or {})),
+            annotations=tuple(annotations),
         )
         state = self.state
         for event in seg.before:
@@ -599,6 +614,7 @@ def _emit_place(
         after=[GripperEvent(c_arm, OPEN)],
         closed_chain=pair,
         keep_distance=pair,
+        annotations=[Anchor(name, _point(geo.slot), step.guide)],
         facts={
             "guide": step.guide,
             "slot": _vec(geo.slot),
@@ -907,6 +923,7 @@ def _emit_guide(
         f"{label}: insert",
         [_cartesian(r_arm, gp.insert)],
         keep_distance=pair,
+        annotations=[Anchor(cable, _point(gp.slot), gp.guide)],
         facts={
             "guide": gp.guide,
             "slot": _vec(gp.slot),
@@ -994,28 +1011,12 @@ def _routing_arms(world: World, state: CableState, cable: str, where: str) -> tu
     return r_arm, _other(_two_arms(world, where), r_arm)
 
 
-_MODELS: dict[int, tuple[weakref.ref[World], CellModel]] = {}
-
-
-def _cell_model(world: World) -> CellModel:
-    """The world's robots, built once per world (a plan's steps share them)."""
-    from cellengine.motion.robot import build_cell_model
-
-    hit = _MODELS.get(id(world))
-    if hit is not None and hit[0]() is world:
-        return hit[1]
-    model = build_cell_model(world)
-    key = id(world)  # the callback must not hold the world, or it never goes
-    _MODELS[key] = (weakref.ref(world, lambda _: _MODELS.pop(key, None)), model)
-    return model
-
-
-def _check_reach(world: World, arm: str, poses: Sequence[tuple[str, Mat]], where: str) -> None:
+def _check_reach(
+    ctx: PlanningContext, arm: str, poses: Sequence[tuple[str, Mat]], where: str
+) -> None:
     """Every key pose has an inverse kinematics solution within the arm's joint limits (the
     executor plans the paths between them; this rejects a guide the arm cannot get to)."""
-    from cellengine.motion.ik import arm_ik
-
-    ik = arm_ik(_cell_model(world).arms[arm])
+    ik = ctx.iks[arm]
     for what, T in poses:
         if ik.solve(T) is None:
             x, y, z = (_mm(v) for v in T[:3, 3])
@@ -1034,6 +1035,9 @@ def _look_ahead(
         if isinstance(step, PickCable):
             break
         if isinstance(step, PlaceConnector) and step.cable == pick.cable:
-            arm = step.connector_arm(world, step=state.step + 1 + k)
+            try:
+                arm = step.connector_arm(world, step=state.step + 1 + k)
+            except InputError as e:  # the error is that step's
+                raise StepError.wrap(state.step + 1 + k, e) from None
             return replace(state, connector_arm=arm, place_guide=step.guide)
     return replace(state, connector_arm=None, place_guide=None)

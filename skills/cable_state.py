@@ -1,6 +1,6 @@
 """What the cable skills hand from one step to the next: :class:`CableState`.
 
-A cable skill's ``plan(world, state)`` starts where the previous step left the arms and the
+A cable skill's ``plan(ctx, state)`` starts where the previous step left the arms and the
 cable, and returns the state after its last segment. The state is plain data (poses, names,
 lengths); nothing in it talks to a driver.
 
@@ -14,13 +14,16 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from cellengine.geometry import Mat
 from cellengine.program import GripperEvent
-from cellengine.world import World
+
+if TYPE_CHECKING:
+    from cellengine.context import PlanningContext
 
 Point = tuple[float, float, float]
 
@@ -78,18 +81,10 @@ class CableState:
         object.__setattr__(self, "held", MappingProxyType(dict(self.held)))
 
     @classmethod
-    def at_home(cls, world: World) -> CableState:
-        """Every arm's TCP at its home configuration (cell.yaml ``home``; all zeros for an arm
-        without one), grippers in no known mode, nothing held."""
-        # Imported here: building the robots needs the motion layer, which skills only use
-        # for kinematics; importing skills must stay cheap (the plan parser imports them).
-        from cellengine.motion.robot import build_cell_model
-
-        model = build_cell_model(world)
-        tcp = {}
-        for name, arm in model.arms.items():
-            q = arm.home if arm.home is not None else np.zeros(arm.nq)
-            tcp[name] = arm.fk(q)
+    def at_home(cls, ctx: PlanningContext) -> CableState:
+        """Every arm's TCP at the cell's home configuration, grippers in no known mode,
+        nothing held."""
+        tcp = {name: ctx.tcp_home(name) for name in ctx.cell.arms}
         return cls(tcp=tcp, mode={name: None for name in tcp})
 
     @property

@@ -8,24 +8,21 @@ from typing import Literal
 from pydantic import Field, field_validator
 
 from cellengine.info.units import Angle, Number
-from cellengine.skill import KeypointRef, ObjectRef, Skill, register
+from cellengine.skill import KeypointRef, ObjectRef, Skill
 
 
-@register
 class Pick(Skill):
     skill: Literal["Pick"]
     object: ObjectRef
     from_: KeypointRef | None = Field(None, alias="from")  # default: where the object is
 
 
-@register
 class Place(Skill):
     skill: Literal["Place"]
     object: ObjectRef
     to: KeypointRef
 
 
-@register
 class Handover(Skill):
     """One arm puts the object at a shared keypoint; the other picks it up there."""
 
@@ -34,7 +31,6 @@ class Handover(Skill):
     at: KeypointRef | None = None  # default: the allocator's handover keypoint
 
 
-@register
 class Unscrew(Skill):
     """One arm holds the container, the other turns its cap off."""
 
@@ -43,13 +39,11 @@ class Unscrew(Skill):
     turns: Number | None = Field(None, gt=0)  # default: the cap's turns
 
 
-@register
 class Weigh(Skill):
     skill: Literal["Weigh"]
     object: ObjectRef
 
 
-@register
 class Pour(Skill):
     """Tilt an open container over a target and back."""
 
@@ -67,7 +61,6 @@ class Pour(Skill):
         return angle
 
 
-@register
 class BimanualCarry(Skill):
     """Both hands grasp one object (a box) on opposite sides and carry it to ``to`` keeping
     their relative pose (a closed chain: the follower tracks the leader)."""

@@ -15,47 +15,42 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from cellengine.execute import home_configuration
+from cellengine.context import PlanningContext
 from cellengine.geometry import Mat
 from cellengine.motion.collision import CollisionChecker
-from cellengine.motion.ik import ArmIK, arm_ik
+from cellengine.motion.ik import ArmIK
 from cellengine.motion.robot import TOOL_GEOMETRY, CellModel
 from cellengine.motion.scene import CollisionScene, pair_key, rearranged
 from cellengine.skills import lab_geometry as lg
-from cellengine.world import World
 
 MAX_BLOCKERS = 3  # containers looked for behind one another in one grasp's way
-# checkers by (arm, containers taken out), for one target at a time: assembling a scene
-# costs far more than checking in it
-_CHECKERS: dict[tuple[str, tuple[str, ...]], CollisionChecker] = {}
+# checkers by (arm, containers taken out), for one target: assembling a scene costs far more
+# than checking in it
+Checkers = dict[tuple[str, tuple[str, ...]], CollisionChecker]
 
 
 def blockers(
-    world: World,
-    cell: CellModel,
-    scene: CollisionScene,
-    target: str,
-    T_at: Mat,
-    robots: Sequence[str],
+    ctx: PlanningContext, target: str, T_at: Mat, robots: Sequence[str]
 ) -> tuple[str, ...]:
     """The containers to move before ``target`` (standing at ``T_at``) can be grasped by
     one of ``robots``; () when a grasp is clear, or when no grasp would be clear even with
     them moved (the planner then reports that grasp's own reason)."""
-    _CHECKERS.clear()  # per target: the tool's contact with it is allowed
+    world, cell, scene = ctx.world, ctx.cell, ctx.scene
+    checkers: Checkers = {}  # per target: the tool's contact with it is allowed
     containers = set(world.objects.containers) - {target}
     body = lg.Body.of(world.container(target))
-    home = home_configuration(cell)
+    home = ctx.home
     best: tuple[str, ...] | None = None
     for arm in robots:
         tool = world.cell.robots[arm].tool
         grasp = world.cell.tools[tool].grasp if tool is not None else "top"
         base = world.cell.robots[arm].base.matrix()[:3, 3]
-        ik = arm_ik(cell.arms[arm])
+        ik = ctx.iks[arm]
         # the tool may touch the target it closes on
         allow = {pair_key(f"{arm}/{TOOL_GEOMETRY}", target): "contact"}
         for T in lg.grasp_candidates(grasp, T_at, body, base):
             found = _in_the_way(
-                cell, scene, ik, arm, home, (T, lg.approach_of(T)), containers, allow
+                cell, scene, ik, arm, home, (T, lg.approach_of(T)), containers, allow, checkers
             )
             if found == ():
                 return ()
@@ -73,16 +68,17 @@ def _in_the_way(
     poses: Sequence[Mat],
     containers: set[str],
     allow: dict[tuple[str, str], str],
+    checkers: Checkers,
 ) -> tuple[str, ...] | None:
     """The containers in the way of reaching every pose (one IK branch for all), or None when
     something else is (or no solution exists)."""
     removed: list[str] = []
     while len(removed) <= MAX_BLOCKERS:
         key = (arm, tuple(sorted(removed)))
-        if key not in _CHECKERS:
+        if key not in checkers:
             statics = [s for s in scene.statics if s.name not in removed]
-            _CHECKERS[key] = CollisionChecker(rearranged(scene, statics, scene.held, allow))
-        checker = _CHECKERS[key]
+            checkers[key] = CollisionChecker(rearranged(scene, statics, scene.held, allow))
+        checker = checkers[key]
         hit = _first_hit(cell, checker, ik, arm, home, poses)
         if hit is None:
             return tuple(sorted(removed))

@@ -22,7 +22,7 @@ from cellengine import geometry as g
 from cellengine.errors import InputError, Problem
 from cellengine.geometry import Mat
 from cellengine.motion import interpolate as ip
-from cellengine.program import ArmPath, GripperEvent, Segment
+from cellengine.program import Annotation, ArmPath, GripperEvent, Measure, Segment
 from cellengine.skills import lab_geometry as lg
 from cellengine.skills.lab_state import LabState
 from cellengine.world import World
@@ -63,6 +63,7 @@ class Builder:
         closed_chain: tuple[str, str] | None = None,
         contacts: Iterable[tuple[str, str]] = (),
         facts: Mapping[str, Any] | None = None,
+        annotations: Iterable[Annotation] = (),
     ) -> None:
         seg = Segment(
             step=self.state.step,
@@ -73,6 +74,7 @@ class Builder:
             closed_chain=closed_chain,
             contacts=tuple(contacts),
             facts=MappingProxyType({**self.tag, **(facts or {})}),
+            annotations=tuple(annotations),
         )
         for path in seg.paths:
             self.state = self.state.moved(path.arm, path.poses[-1])
@@ -190,7 +192,7 @@ def set_down(
 
 
 def weigh(b: Builder, arm: str, name: str, where: str) -> None:
-    """Read the held container's mass: the segment's facts tell the runner to read the
+    """Read the held container's mass: the segment's Measure tells the runner to read the
     arm's load cell once the arm stands still after it."""
     held = b.state.held.get(arm)
     if held is None or held.name != name:
@@ -200,6 +202,7 @@ def weigh(b: Builder, arm: str, name: str, where: str) -> None:
         f"{where}: weigh {name}",
         [line(arm, T, lg.lifted(T, 0.01))],
         facts={"measure": "mass", "object": name, "arm": arm},
+        annotations=[Measure(arm, name)],
     )
 
 

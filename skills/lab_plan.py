@@ -42,15 +42,15 @@ from cellengine.allocate import (
     allocate,
 )
 from cellengine.allocation.options import Action
-from cellengine.errors import InputError, Problem
-from cellengine.execute import home_configuration
+from cellengine.choices import candidates, known_masses, resolve
+from cellengine.context import PlanningContext
+from cellengine.errors import InputError, Problem, at_step
 from cellengine.geometry import Mat
 from cellengine.motion.collision import CollisionChecker
-from cellengine.motion.ik import arm_ik
 from cellengine.motion.robot import CellModel
-from cellengine.motion.scene import CollisionScene, build_scene, rearranged, standing_container
+from cellengine.motion.scene import rearranged, standing_container
 from cellengine.program import Segment
-from cellengine.skill import HeavierOf, LighterOf, ObjectRef, Skill
+from cellengine.skill import Skill
 from cellengine.skills import lab_geometry as lg
 from cellengine.skills import lab_motion as lm
 from cellengine.skills.lab import BimanualCarry, Handover, Pick, Place, Pour, Unscrew, Weigh
@@ -84,26 +84,18 @@ class LabPlan:
     state: LabState
 
 
-def plan_lab_steps(
-    world: World,
-    cell: CellModel,
-    steps: Sequence[Skill],
-    masses: Mapping[str, float] | None = None,
-) -> LabPlan:
-    """The mission and its segments (see the module notes). ``masses``: measured masses
-    (kg) by object; objects.yaml's for the others."""
-    known = {n: float(c.mass) for n, c in world.objects.containers.items() if c.mass is not None}
-    known.update(masses or {})
-    reach = _Reach(world, cell, dict)  # no container for the allocation's reach tests
-    problem = build_problem(world, cell, steps, reach)
+def plan_lab_steps(ctx: PlanningContext, steps: Sequence[Skill]) -> LabPlan:
+    """The mission and its segments (see the module notes), with the masses measured so
+    far (``ctx.masses``) over objects.yaml's."""
+    world, cell = ctx.world, ctx.cell
+    known = known_masses(world, ctx.masses)
+    reach = _Reach(ctx, dict)  # no container for the allocation's reach tests
+    problem = build_problem(ctx, steps, reach)
     try:
         mission = allocate(problem)
     except ValueError as e:
         raise InputError(Problem(str(e))) from None
-    tcp = {
-        name: arm.fk(arm.home if arm.home is not None else np.zeros(arm.nq))
-        for name, arm in cell.arms.items()
-    }
+    tcp = {name: ctx.tcp_home(name) for name in cell.arms}
     b = lm.Builder(LabState.start(world, tcp))
     reach.where = lambda: b.state.where
     by_id = {_id(s, i): (i, s) for i, s in enumerate(steps)}
@@ -114,64 +106,84 @@ def plan_lab_steps(
             i = by_id[needs[name]][0]
             b.state = replace(b.state, step=i)
             b.tag = {"mission": (task, 0)}
-            _clear(b, world, reach, name, _actions(mission, task), f"steps[{i}] clear {name}")
+            with at_step(i):
+                _clear(b, world, reach, name, _actions(mission, task), f"steps[{i}] clear {name}")
             for arm in dict.fromkeys(a.robot for a in _actions(mission, task)):
                 b.add(f"steps[{i}] clear {name}: {arm} back", [lm.transit(arm, tcp[arm])])
             continue
         i, step = by_id[task]
-        assert isinstance(step, LabSkill)  # _tasks refused any other
-        b.state = replace(b.state, step=i)
-        where = f"steps[{i}] {step.skill}"
-        actions = _actions(mission, task)
-        for k, action in enumerate(actions):
-            prev = actions[k - 1] if k else None
-            b.tag = {"mission": (task, _part(mission, task, action))}
-            if prev is not None and prev.robot != action.robot and prev.kind != "hold":
-                # a robot that hands over (or is done) leaves before the other comes in
-                b.add(
-                    f"{where}: {prev.robot} back to its rest",
-                    [lm.transit(prev.robot, tcp[prev.robot])],
-                )
-            _do(b, world, cell, reach, step, action, known, where, actions)
-        # as the published platform does: each robot retracts after its work, so the next
-        # task finds the shared zone clear; a turner first puts the cap down, once the
-        # holder has gone
-        turners = [a.robot for a in actions if a.kind == "turn_cap"]
-        for arm in dict.fromkeys(a.robot for a in actions if a.robot not in turners):
-            b.add(f"{where}: {arm} back to its rest", [lm.transit(arm, tcp[arm])])
-        for arm in turners:
-            name = _resolve(step.object, known)
-            T = _cap_place(world, b, reach, arm)
-            lm.put_cap_down(b, reach, world, arm, name, T, where)
-            b.add(f"{where}: {arm} back to its rest", [lm.transit(arm, tcp[arm])])
+        with at_step(i):
+            _step(ctx, b, reach, mission, task, i, step, known, tcp)
     b.tag = {}
     return LabPlan(problem, mission, b.segments, b.state)
+
+
+def _step(
+    ctx: PlanningContext,
+    b: lm.Builder,
+    reach: _Reach,
+    mission: Mission,
+    task: str,
+    i: int,
+    step: Skill,
+    known: Mapping[str, float],
+    tcp: Mapping[str, Mat],
+) -> None:
+    """The segments of one step's task in the mission."""
+    world, cell = ctx.world, ctx.cell
+    assert isinstance(step, LabSkill)  # _tasks refused any other
+    b.state = replace(b.state, step=i)
+    where = f"steps[{i}] {step.skill}"
+    actions = _actions(mission, task)
+    for k, action in enumerate(actions):
+        prev = actions[k - 1] if k else None
+        b.tag = {"mission": (task, _part(mission, task, action))}
+        if prev is not None and prev.robot != action.robot and prev.kind != "hold":
+            # a robot that hands over (or is done) leaves before the other comes in
+            b.add(
+                f"{where}: {prev.robot} back to its rest",
+                [lm.transit(prev.robot, tcp[prev.robot])],
+            )
+        _do(b, world, cell, reach, step, action, known, where, actions)
+    # as the published platform does: each robot retracts after its work, so the next
+    # task finds the shared zone clear; a turner first puts the cap down, once the
+    # holder has gone
+    turners = [a.robot for a in actions if a.kind == "turn_cap"]
+    for arm in dict.fromkeys(a.robot for a in actions if a.robot not in turners):
+        b.add(f"{where}: {arm} back to its rest", [lm.transit(arm, tcp[arm])])
+    for arm in turners:
+        name = resolve(step.object, known)
+        T = _cap_place(world, b, reach, arm)
+        lm.put_cap_down(b, reach, world, arm, name, T, where)
+        b.add(f"{where}: {arm} back to its rest", [lm.transit(arm, tcp[arm])])
 
 
 # ------------------------------------------------------------------------------ the problem
 
 
 def build_problem(
-    world: World, cell: CellModel, steps: Sequence[Skill], reach: lm.Solver
+    ctx: PlanningContext, steps: Sequence[Skill], reach: lm.Solver
 ) -> AllocationProblem:
+    world, cell = ctx.world, ctx.cell
     skills = robot_skills(world, cell)
     robots = tuple(
         Robot(
             name,
             skills[name],
-            _point(arm.fk(arm.home if arm.home is not None else np.zeros(arm.nq))[:3, 3]),
+            _point(ctx.tcp_home(name)[:3, 3]),
             reach=_point_reach(world, name, reach),
         )
-        for name, arm in cell.arms.items()
+        for name in cell.arms
     )
     zones = tuple(Zone(n, z.min, z.max, frozenset(z.robots)) for n, z in world.cell.zones.items())
     handovers = tuple(
         _point(world.pose(ref)[:3, 3]) for z in world.cell.zones.values() for ref in z.handovers
     )
-    return AllocationProblem(robots, tuple(_tasks(world, cell, steps)), zones, handovers)
+    return AllocationProblem(robots, tuple(_tasks(ctx, steps)), zones, handovers)
 
 
-def _tasks(world: World, cell: CellModel, steps: Sequence[Skill]) -> list[Task]:
+def _tasks(ctx: PlanningContext, steps: Sequence[Skill]) -> list[Task]:
+    world = ctx.world
     last_on: dict[str, str] = {}  # object -> the id of the last step on it
     # where plan steps put things: not free for a blocker
     targets = {
@@ -186,44 +198,57 @@ def _tasks(world: World, cell: CellModel, steps: Sequence[Skill]) -> list[Task]:
         if c.at is not None
     }
     out = []
-    for i, step in enumerate(steps):
-        if not isinstance(step, LabSkill):
-            raise InputError(Problem(f"steps[{i}]: {step.skill} is not a lab skill"))
-        names = _candidates(step.object)
-        for n in names:
-            if n not in where:
-                raise InputError(
-                    Problem(
-                        f"steps[{i}] {step.skill}: '{n}' stands nowhere: the lab skills move "
-                        "containers, each given where it stands ('at') in objects.yaml"
-                    )
-                )
-        loc: Point | AnyOf = (
-            where[names[0]] if len(names) == 1 else AnyOf(tuple(where[n] for n in names))
-        )
-        prims = _primitives(world, step, loc, where)
-        blocked = _blocked(world, cell, step, names, where, targets) if len(names) == 1 else ()
-        after = set(step.after) | {last_on[n] for n in names if n in last_on}
-        arms = (
-            None
-            if step.arm == "auto"
-            else (tuple(world.cell.robots) if step.arm == "both" else (step.arm,))
-        )
-        tid = _id(step, i)
-        out.append(Task(tid, prims, tuple(sorted(after)), arms, blocked))
-        for n in names:
-            last_on[n] = tid
-        if isinstance(step, Place | Handover):
-            target = step.to if isinstance(step, Place) else step.at
-            if target is not None:
-                for n in names:
-                    where[n] = _point(world.pose(target)[:3, 3])
+    for i in range(len(steps)):
+        with at_step(i):
+            out.append(_task(ctx, steps, i, where, targets, last_on))
     return out
 
 
+def _task(
+    ctx: PlanningContext,
+    steps: Sequence[Skill],
+    i: int,
+    where: dict[str, Point],
+    targets: set[Point],
+    last_on: dict[str, str],
+) -> Task:
+    """Step ``i`` as an allocation task; ``where`` and ``last_on`` follow the plan so far."""
+    world, step = ctx.world, steps[i]
+    if not isinstance(step, LabSkill):
+        raise InputError(Problem(f"steps[{i}]: {step.skill} is not a lab skill"))
+    names = candidates(step.object)
+    for n in names:
+        if n not in where:
+            raise InputError(
+                Problem(
+                    f"steps[{i}] {step.skill}: '{n}' stands nowhere: the lab skills move "
+                    "containers, each given where it stands ('at') in objects.yaml"
+                )
+            )
+    loc: Point | AnyOf = (
+        where[names[0]] if len(names) == 1 else AnyOf(tuple(where[n] for n in names))
+    )
+    prims = _primitives(world, step, loc, where)
+    blocked = _blocked(ctx, step, names, where, targets) if len(names) == 1 else ()
+    after = set(step.after) | {last_on[n] for n in names if n in last_on}
+    arms = (
+        None
+        if step.arm == "auto"
+        else (tuple(world.cell.robots) if step.arm == "both" else (step.arm,))
+    )
+    tid = _id(step, i)
+    for n in names:
+        last_on[n] = tid
+    if isinstance(step, Place | Handover):
+        target = step.to if isinstance(step, Place) else step.at
+        if target is not None:
+            for n in names:
+                where[n] = _point(world.pose(target)[:3, 3])
+    return Task(tid, prims, tuple(sorted(after)), arms, blocked)
+
+
 def _blocked(
-    world: World,
-    cell: CellModel,
+    ctx: PlanningContext,
     step: LabSkill,
     names: Sequence[str],
     where: Mapping[str, Point],
@@ -231,12 +256,11 @@ def _blocked(
 ) -> tuple[Blocker, ...]:
     """The containers in the way of every grasp of the step's object (skills/lab_blockers),
     each with the zones' free places it may go to."""
-    name = names[0]
+    world, name = ctx.world, names[0]
     if world.container(name).at is None:
         return ()
-    robots = [r for r in cell.arms if step.arm in ("auto", "both", r)]
-    scene = _full_scene(world, cell)
-    found = blockers(world, cell, scene, name, _pose_at(where[name]), robots)
+    robots = [r for r in ctx.cell.arms if step.arm in ("auto", "both", r)]
+    found = blockers(ctx, name, _pose_at(where[name]), robots)
     if not found:
         return ()
     taken = set(where.values()) | targets
@@ -282,7 +306,7 @@ def _primitives(
             Primitive("carry", "pick", loc, to, DURATION["carry"], with_previous=True),
         )
     assert isinstance(step, Pour)
-    targets = _candidates(step.into)
+    targets = candidates(step.into)
     into: Point | AnyOf = (
         where[targets[0]] if len(targets) == 1 else AnyOf(tuple(where[n] for n in targets))
     )
@@ -345,8 +369,8 @@ def _do(
     actions: Sequence[Action] = (),
 ) -> None:
     """One action of a step; ``actions``: all the step's (a carry needs its partner's)."""
-    name = _resolve(step.object, masses)
-    names = _candidates(step.object)
+    name = resolve(step.object, masses)
+    names = candidates(step.object)
 
     def at(loc: tuple[Point, ...]) -> Mat:
         # a location planned for every candidate object: the chosen one's
@@ -373,7 +397,7 @@ def _do(
             lm.carry_together(b, reach, world, a.robot, pair[1].robot, name, to, where)
     elif a.kind == "pour":
         assert isinstance(step, Pour)
-        lm.pour(b, reach, world, arm, name, _resolve(step.into, masses), step.angle, where)
+        lm.pour(b, reach, world, arm, name, resolve(step.into, masses), step.angle, where)
     else:
         raise InputError(Problem(f"{where}: no motion for '{a.kind}'"))
 
@@ -417,31 +441,16 @@ def _cap_place(world: World, b: lm.Builder, reach: lm.Solver, arm: str) -> Mat:
 # ------------------------------------------------------------------------------- helpers
 
 
-_SCENES: dict[int, tuple[World, CollisionScene]] = {}
-
-
-def _full_scene(world: World, cell: CellModel) -> CollisionScene:
-    """The scene with every container where it stands, built once per world."""
-    hit = _SCENES.get(id(world))
-    if hit is None or hit[0] is not world:
-        hit = (world, build_scene(cell, world))
-        _SCENES.clear()
-        _SCENES[id(world)] = hit
-    return hit[1]
-
-
 class _Reach:
     """Reach tests (lm.Solver) in the scene as it is now: the containers standing where the
     plan has put them so far (``where()``), the held ones and those ignored left out; the
     other arms at home. Checkers are kept per arrangement."""
 
-    def __init__(
-        self, world: World, cell: CellModel, where: Callable[[], Mapping[str, Mat]]
-    ) -> None:
-        self.world, self.cell, self.where = world, cell, where
-        self.iks = {name: arm_ik(arm) for name, arm in cell.arms.items()}
-        self.home = home_configuration(cell)
-        self.scene = _full_scene(world, cell)
+    def __init__(self, ctx: PlanningContext, where: Callable[[], Mapping[str, Mat]]) -> None:
+        self.world, self.cell, self.where = ctx.world, ctx.cell, where
+        self.iks = ctx.iks
+        self.home = ctx.home
+        self.scene = ctx.scene
         self.checkers: dict[tuple[object, ...], CollisionChecker] = {}
 
     def __call__(self, arm: str, T_cell_tcp: Mat, ignore: Sequence[str] = ()) -> bool:
@@ -497,54 +506,6 @@ def _cooperation(world: World) -> Point:
     raise InputError(
         Problem("Unscrew needs a cooperation place: give a shared zone 'cooperation: [keypoint]'")
     )
-
-
-def _candidates(ref: ObjectRef) -> tuple[str, ...]:
-    if isinstance(ref, HeavierOf):
-        return ref.heavier_of
-    if isinstance(ref, LighterOf):
-        return ref.lighter_of
-    return (ref,)
-
-
-def choices(
-    world: World,
-    steps: Sequence[Skill],
-    masses: Mapping[str, float] | None = None,
-    measured_only: bool = False,
-) -> dict[str, str]:
-    """The objects the runtime choices (``heavier_of``, ``lighter_of``) pick, by
-    ``steps[i].field``, with ``masses`` over objects.yaml's (with ``measured_only``, with
-    ``masses`` alone); a choice whose masses are not all known is left out."""
-    known: dict[str, float] = {}
-    if not measured_only:
-        known = {
-            n: float(c.mass) for n, c in world.objects.containers.items() if c.mass is not None
-        }
-    known.update(masses or {})
-    out: dict[str, str] = {}
-    for i, step in enumerate(steps):
-        for field in ("object", "into"):
-            ref = getattr(step, field, None)
-            if isinstance(ref, HeavierOf | LighterOf) and all(n in known for n in _candidates(ref)):
-                out[f"steps[{i}].{field}"] = _resolve(ref, known)
-    return out
-
-
-def _resolve(ref: ObjectRef, masses: Mapping[str, float]) -> str:
-    if isinstance(ref, str):
-        return ref
-    names = _candidates(ref)
-    missing = [n for n in names if n not in masses]
-    if missing:
-        raise InputError(
-            Problem(
-                f"the mass of {', '.join(missing)} is not known: weigh it first or give it "
-                "in objects.yaml"
-            )
-        )
-    pick = max if isinstance(ref, HeavierOf) else min
-    return pick(names, key=lambda n: masses[n])
 
 
 def _pose_at(p: Point) -> Mat:

@@ -38,7 +38,9 @@ def resume(args: argparse.Namespace) -> int:
         return EXIT_OK
     compiled = compile_from_args(args)
     if progress.measured:
-        compiled = compile_loaded(compiled.loaded, compiled.strategy, masses=progress.measured)
+        compiled = compile_loaded(
+            compiled.loaded, compiled.strategy, context=compiled.context, masses=progress.measured
+        )
     labels = tuple(s.segment.label for s in compiled.program.segments)
     if labels[: progress.done] != progress.labels:
         pairs = enumerate(zip(labels, progress.labels, strict=False))

@@ -99,7 +99,6 @@ def move_to(
     the journal says an earlier run left them (a fault may stop them far into a segment)."""
 
     from cellengine.execute.recovery import recovery_segment
-    from cellengine.pipeline import cell_models
 
     segment = compiled.program.segments[index]
     q_now = driver.joint_state()
@@ -113,11 +112,10 @@ def move_to(
         near = np.vstack([np.asarray(left, dtype=float)[None, :], segment.trajectory.q])
         _check_move_limit(driver, q_now, near, f"the run left it (in or before '{label}')")
     holds = {arm: driver.gripper(arm).holds for arm in compiled.cell.arms}
-    _, checker = cell_models(compiled.world)
     move = recovery_segment(
         compiled.world,
         compiled.cell,
-        checker.scene,
+        compiled.context.scene,
         q_now,
         target,
         holds,
@@ -278,15 +276,17 @@ def _recompiled(
     candidate has now been weighed picks otherwise than the program (planned with
     ``planned`` over objects.yaml's masses) does; the segments already run must be the same
     in it."""
+    from cellengine.choices import choices
     from cellengine.pipeline import compile_loaded
-    from cellengine.skills.lab_plan import choices
 
     world, steps = compiled.world, compiled.loaded.plan.steps
     now = choices(world, steps, measured, measured_only=True)
     then = choices(world, steps, planned)
     if all(then.get(k) == v for k, v in now.items()):
         return None
-    again = compile_loaded(compiled.loaded, compiled.strategy, masses=measured)
+    again = compile_loaded(
+        compiled.loaded, compiled.strategy, context=compiled.context, masses=measured
+    )
     before = [s.segment.label for s in compiled.program.segments[:done]]
     if [s.segment.label for s in again.program.segments[:done]] != before:
         raise RuntimeError("replanning changed segments already run")  # a bug, not input

@@ -11,10 +11,10 @@ from pathlib import Path
 from typing import Any
 
 from cellengine.errors import EXIT_OK
+from cellengine.family import families
 from cellengine.info.cell import Cell
 from cellengine.info.objects import Objects
 from cellengine.info.plan import PlanFile
-from cellengine.skill import registry
 
 BASE = "https://cellengine.dev/schemas/"
 
@@ -34,7 +34,7 @@ def schemas() -> dict[str, dict[str, Any]]:
     plan = PlanFile.model_json_schema()
     defs = plan.setdefault("$defs", {})
     refs = []
-    for name, cls in sorted(registry().items()):
+    for name, cls in sorted(families().skills.items()):
         s = cls.model_json_schema(ref_template="#/$defs/{model}")
         defs.update(s.pop("$defs", {}))
         defs[name] = s

@@ -8,12 +8,15 @@ import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from cellengine.errors import EXIT_INVALID, EXIT_OK, InputError, Problem, UsageError, display_path
 from cellengine.info.load import LoadedPlan, load_objects, load_plan, load_world
 from cellengine.info.yamlio import load_yaml
 from cellengine.world import World
+
+if TYPE_CHECKING:
+    from cellengine.context import PlanningContext
 
 KINDS = ("cell", "objects", "plan")
 _KEYS = {"plan": ("steps",), "cell": ("robots",), "objects": ("cables", "containers")}
@@ -59,11 +62,12 @@ def validate_paths(paths: list[Path], compile_plans: bool = False) -> list[Resul
             files.append((p, True))
         else:
             raise UsageError.at("no such file or folder", p)
+    # each cell loaded once, whether it loads or not (plans sharing a broken cell do not
+    # load it again each), and its planning context built once for the plans that use it
     worlds: dict[Path, World | InputError] = {}
+    contexts: dict[tuple[Path, str], PlanningContext] = {}
 
     def world_of(cell: Path) -> World:
-        """Each cell loaded once, whether it loads or not: plans sharing a broken cell
-        do not load it again each."""
         key = cell.resolve()
         if key not in worlds:
             try:
@@ -79,21 +83,16 @@ def validate_paths(paths: list[Path], compile_plans: bool = False) -> list[Resul
             raise InputError(loaded.problems)
         return loaded
 
-    models: dict[Path, Any] = {}
-
-    def models_of(world: World) -> Any:
-        from cellengine.pipeline import cell_models
-
-        key = world.cell_file.resolve()
-        if key not in models:
-            models[key] = cell_models(world)
-        return models[key]
-
     def compile_one(loaded: LoadedPlan) -> None:
         # imported here: the motion stack is only needed when plans are compiled
+        from cellengine.context import build_context
         from cellengine.pipeline import compile_loaded
 
-        compile_loaded(loaded, models=models_of)
+        world = loaded.world  # the scene has the containers of the plan's objects
+        key = (world.cell_file.resolve(), world.objects.model_dump_json())
+        if key not in contexts:
+            contexts[key] = build_context(world)
+        compile_loaded(loaded, context=contexts[key])
 
     results = []
     seen: set[Path] = set()

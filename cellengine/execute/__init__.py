@@ -5,10 +5,11 @@
 strategies.py, merge.py and schedule.py for the choices.
 """
 
-from cellengine.execute.compile import Compiler, compile_segments, home_configuration
+from cellengine.execute.compile import Compiler, compile_segments
 from cellengine.execute.merge import MERGES, Merge
 from cellengine.execute.strategies import STRATEGIES, Strategy
 from cellengine.execute.timeline import program_trajectory
+from cellengine.motion.robot import home_configuration
 
 __all__ = [
     "MERGES",

@@ -21,13 +21,11 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from cellengine.errors import InputError
 from cellengine.execute.checks import gate, kept_distance
 from cellengine.execute.held import Held, Holding
 from cellengine.execute.merge import MERGES, Merge, Merged, merge_rows, on_one_axis
@@ -74,7 +72,6 @@ class Compiler:
         *,
         merge: Merge = "joint",
         split_threshold: float = SPLIT_THRESHOLD,
-        plan_file: Path | None = None,
     ) -> None:
         if strategy not in STRATEGIES:
             raise ValueError(f"unknown strategy '{strategy}'; known: {', '.join(STRATEGIES)}")
@@ -87,7 +84,6 @@ class Compiler:
         self.strategy: Strategy = strategy
         self.merge: Merge = merge
         self.split_threshold = split_threshold
-        self.plan_file = plan_file
         # checkers of its own: attaching held objects must not change the caller's
         self.holding = Holding(world, checker.scene)
         self.q = q
@@ -108,7 +104,7 @@ class Compiler:
             compiled = self._compile(segment, following, choice)
         except Refused as e:
             self.restore(mark)
-            raise in_plan_terms(segment, e, self.plan_file) from None
+            raise in_plan_terms(segment, e) from None
         self.segments.append(compiled)
         self.q = np.array(compiled.trajectory.q[-1])
         self.t = compiled.trajectory.end_time
@@ -233,18 +229,6 @@ class Compiler:
         raise refused
 
 
-def home_configuration(cell: CellModel) -> Vec:
-    """Every arm at its cell.yaml ``home``: where a program starts by default."""
-    missing = [name for name, arm in cell.arms.items() if arm.home is None]
-    if missing:
-        raise InputError.at(
-            f"robots.{missing[0]}.home is not given: a program needs every arm's start "
-            "configuration",
-            None,
-        )
-    return cell.join({name: np.asarray(arm.home) for name, arm in cell.arms.items()})
-
-
 def compile_segments(
     world: World,
     cell: CellModel,
@@ -255,7 +239,6 @@ def compile_segments(
     *,
     merge: Merge = "joint",
     split_threshold: float = SPLIT_THRESHOLD,
-    plan_file: Path | None = None,
 ) -> Program:
     """The program of ``segments`` from the cell configuration ``q_start`` (see the module
     notes). ``merge`` chooses which merge times two-arm parts (both are in the report)."""
@@ -267,7 +250,6 @@ def compile_segments(
         strategy,
         merge=merge,
         split_threshold=split_threshold,
-        plan_file=plan_file,
     )
     return compiler.add_all(list(segments))
 

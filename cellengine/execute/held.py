@@ -18,7 +18,6 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
-from weakref import WeakKeyDictionary
 
 import numpy as np
 
@@ -97,13 +96,6 @@ def _mat(rows: tuple[tuple[float, ...], ...]) -> Mat:
     return np.array(rows, dtype=float)
 
 
-# Scenes per base scene and per held state: a grasp-release cycle comes back to the same
-# states, and assembling a scene costs far more than a checker on it.
-_SCENES: WeakKeyDictionary[CollisionScene, dict[tuple[object, ...], CollisionScene]] = (
-    WeakKeyDictionary()
-)
-
-
 class Holding:
     """What the grippers hold and where containers stand (:class:`Held`), and a checker whose
     scene has them (``checker``: a new one whenever that changes; the base scene is never
@@ -120,6 +112,9 @@ class Holding:
             {n: _rows(world.pose(c.at)) for n, c in containers.items() if c.at is not None},
         )
         self.checker = CollisionChecker(scene)
+        # scenes per held state: a grasp-release cycle comes back to the same states, and
+        # assembling a scene costs far more than a checker on it
+        self.scenes: dict[tuple[object, ...], CollisionScene] = {}
 
     @property
     def by_arm(self) -> Mapping[str, str]:
@@ -156,11 +151,10 @@ class Holding:
 
     def _use(self, state: Held) -> None:
         key = state.key()
-        scenes = _SCENES.setdefault(self.base, {})
-        if key not in scenes:
-            scenes[key] = self._scene(state)
+        if key not in self.scenes:
+            self.scenes[key] = self._scene(state)
         self.state = state
-        self.checker = CollisionChecker(scenes[key])
+        self.checker = CollisionChecker(self.scenes[key])
 
     def _scene(self, state: Held) -> CollisionScene:
         if not state.grips and not state.contacts and self._standing_as_built(state):

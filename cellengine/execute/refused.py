@@ -2,16 +2,14 @@
 
 The solving, timing and checking code raises :class:`Refused` with what went wrong in motion
 terms ("the left arm's Cartesian path stops at 40 % of its length: waypoint 12: ..."); the
-compiler adds which step and which segment, and where the step is in the plan file, and raises
-an :class:`~cellengine.errors.InputError` (a plan that cannot run: exit 1, no traceback).
+compiler adds which step and which segment and raises a :class:`~cellengine.errors.StepError`
+(a plan that cannot run: exit 1, no traceback) carrying the step's index; the pipeline puts
+it at the step's line in the plan file.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
-
-from cellengine.errors import InputError
-from cellengine.info.yamlio import load_yaml
+from cellengine.errors import Problem, StepError
 from cellengine.program import Segment
 
 
@@ -24,7 +22,7 @@ class NoMoreChoices(Refused):
     exist: there is nothing more to try at this segment."""
 
 
-class ChoicesExhausted(InputError):
+class ChoicesExhausted(StepError):
     """NoMoreChoices in plan terms (only the compiler's search sees it)."""
 
 
@@ -34,15 +32,8 @@ def step_name(segment: Segment) -> str:
     return f"step {segment.step + 1} ({segment.label})"
 
 
-def in_plan_terms(segment: Segment, why: Refused, plan_file: Path | None = None) -> InputError:
-    """The error a user sees: the step and segment, then why; at the step's line in the plan
-    file when it is known."""
-    message = f"{step_name(segment)}: {why}"
-    cls = ChoicesExhausted if isinstance(why, NoMoreChoices) else InputError
-    if plan_file is None:
-        return cls.at(message, None)
-    try:
-        line, col = load_yaml(plan_file).where(("steps", segment.step)) or (None, None)
-    except InputError:  # the plan file is gone or unreadable: the message alone still helps
-        line, col = None, None
-    return cls.at(message, plan_file, line, col)
+def in_plan_terms(segment: Segment, why: Refused) -> StepError:
+    """The error a user sees: the step and segment, then why; carrying the step's index, so
+    whoever has the plan puts it at the step's line."""
+    cls = ChoicesExhausted if isinstance(why, NoMoreChoices) else StepError
+    return cls(Problem(f"{step_name(segment)}: {why}"), segment.step)

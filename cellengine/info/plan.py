@@ -8,11 +8,12 @@ from typing import Any, Literal
 
 from pydantic import Field
 
-from cellengine.errors import InputError, Problem, known
+from cellengine.errors import InputError, Problem, StepError, known
+from cellengine.family import families
 from cellengine.info.units import Frozen, Units
 from cellengine.info.validation import validate
 from cellengine.info.yamlio import YamlDoc
-from cellengine.skill import Skill, registry
+from cellengine.skill import Skill
 
 
 class PlanFile(Frozen):
@@ -30,6 +31,16 @@ class Plan:
     objects: str | None
     execution: str
     steps: tuple[Skill, ...]
+    # where each step begins in the file (line, column), kept from loading it
+    positions: tuple[tuple[int, int] | None, ...] = ()
+
+    def locate(self, error: StepError) -> InputError:
+        """``error`` at its step's place in the plan file (at the file's top when the step
+        is not known)."""
+        step = error.step
+        at = self.positions[step] if step is not None and step < len(self.positions) else None
+        line, col = at or (None, None)
+        return error.located(self.file, line, col)
 
 
 def parse_plan(doc: YamlDoc) -> Plan:
@@ -37,7 +48,7 @@ def parse_plan(doc: YamlDoc) -> Plan:
     context = head.units.context()
     problems: list[Problem] = []
     steps: list[Skill] = []
-    skills = registry()
+    skills = families().skills
     for i, raw in enumerate(head.steps):
         name = raw.get("skill")
         if not isinstance(name, str) or name not in skills:
@@ -61,7 +72,8 @@ def parse_plan(doc: YamlDoc) -> Plan:
     problems = _check_graph(doc, steps)
     if problems:
         raise InputError(problems)
-    return Plan(doc.file, head.cell, head.objects, head.execution, tuple(steps))
+    positions = tuple(doc.where(("steps", i)) for i in range(len(steps)))
+    return Plan(doc.file, head.cell, head.objects, head.execution, tuple(steps), positions)
 
 
 def _check_graph(doc: YamlDoc, steps: list[Skill]) -> list[Problem]:

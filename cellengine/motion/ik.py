@@ -19,7 +19,6 @@ one per arm.
 from __future__ import annotations
 
 import math
-import weakref
 from typing import Any
 
 import numpy as np
@@ -169,14 +168,13 @@ class ArmIK:
         return sd
 
 
-_CACHE: weakref.WeakKeyDictionary[Arm, ArmIK] = weakref.WeakKeyDictionary()
-
-
 def arm_ik(arm: Arm) -> ArmIK:
-    """The arm's :class:`ArmIK`, built once per arm (building NumericIK costs a little)."""
-    ik = _CACHE.get(arm)
-    if ik is None:
-        ik = _CACHE[arm] = ArmIK(arm)
+    """The arm's :class:`ArmIK`, built once per arm and kept on it (building NumericIK costs a
+    little), so it lives and goes with the arm's model."""
+    ik = arm.solver
+    if not isinstance(ik, ArmIK):
+        ik = ArmIK(arm)
+        object.__setattr__(arm, "solver", ik)
     return ik
 
 

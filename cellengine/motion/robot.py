@@ -108,6 +108,8 @@ class Arm:
     dh: DH | None  # the DH table of a built-in UR model (closed-form IK), else None
     home: Vec | None = None  # cell.yaml's home configuration, if given
     _data: Any = field(init=False, repr=False, compare=False)
+    # its inverse kinematics, built on first use by motion.ik.arm_ik (which owns the type)
+    solver: Any = field(init=False, default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         for name in ("T_cell_base", "T_flange_tcp"):
@@ -184,6 +186,19 @@ class CellModel:
                 raise ValueError(f"arm '{name}': q has shape {part.shape}")
             out[s] = part
         return out
+
+
+def home_configuration(cell: CellModel) -> Vec:
+    """Every arm at its cell.yaml ``home``: where a program starts, and the one configuration
+    of the cell called home (reach tests, the arms' rests, a report without motion)."""
+    missing = [name for name, arm in cell.arms.items() if arm.home is None]
+    if missing:
+        raise InputError.at(
+            f"robots.{missing[0]}.home is not given: a program needs every arm's start "
+            "configuration",
+            None,
+        )
+    return cell.join({name: np.asarray(arm.home) for name, arm in cell.arms.items()})
 
 
 # ---------------------------------------------------------------------------------- building

@@ -31,7 +31,7 @@ arm's bodies joined by one joint), ``held`` (a held object and the gripper holdi
 ``user``, ``srdf``, ``out_of_reach`` (the spheres each object can ever occupy, about a point
 fixed in the cell, do not meet: a geometric proof), ``never``: an arm's own pairs never within
 ACM_MARGIN in ACM_SAMPLES random configurations, their closest approach then lowered by local
-descent (:func:`sampled_self_pairs`; memoised per arm geometry, about 0.15 s per distinct arm,
+descent (:func:`sampled_self_pairs`; once per distinct arm geometry in a scene, about 0.15 s,
 so no file cache), and the objects moved by an arm's first joint alone against the
 environment, swept finely enough to be a proof (:func:`sampled_first_joint_pairs`). Arm
 against arm pairs are not sampled: their distance depends on all twelve joints, where 10 000
@@ -232,8 +232,9 @@ def build_scene(
     statics, notes = environment(world)
     links = _objects_of(cell)
     fixed: dict[Pair, str] = {}
+    memo: SelfPairMemo = {}  # the second of two identical arms costs nothing
     for _name, arm in cell.arms.items():
-        for pair, closest in sampled_self_pairs(arm, samples, margin, seed).items():
+        for pair, closest in sampled_self_pairs(arm, samples, margin, seed, memo).items():
             fixed[pair] = (
                 f"never (none within {margin * 1000:g} mm in {samples} samples; "
                 f"{closest * 1000:.1f} mm at the closest found by local descent)"
@@ -742,22 +743,27 @@ def _reach(model: Any, geometry: Any, objects: Sequence[SceneObject]) -> tuple[V
 # ---------------------------------------------------------------------------------- sampling
 
 
+# (arm signature, samples, margin, seed) -> ((link-local names), closest distance)
+SelfPairMemo = dict[tuple[str, int, float, int], tuple[tuple[Pair, float], ...]]
+
+
 def sampled_self_pairs(
-    arm: Arm, samples: int = ACM_SAMPLES, margin: float = ACM_MARGIN, seed: int = ACM_SEED
+    arm: Arm,
+    samples: int = ACM_SAMPLES,
+    margin: float = ACM_MARGIN,
+    seed: int = ACM_SEED,
+    memo: SelfPairMemo | None = None,
 ) -> dict[Pair, float]:
     """One arm's pairs (links, tool) that never came within ``margin`` in ``samples`` random
     configurations within its limits (MoveIt's 'never in collision'), with the closest
-    distance seen. Seeded and deterministic. Memoised per arm geometry relative to its base,
-    so the second of two identical arms costs nothing."""
+    distance seen. Seeded and deterministic. ``memo``: results by arm geometry relative to
+    its base, so the second of two identical arms costs nothing."""
+    memo = {} if memo is None else memo
     key = (_arm_signature(arm), samples, margin, seed)
-    if key not in _SELF_PAIRS:
-        _SELF_PAIRS[key] = _sample_self_pairs(arm, samples, margin, seed)
+    if key not in memo:
+        memo[key] = _sample_self_pairs(arm, samples, margin, seed)
     prefix = f"{arm.name}/"
-    return {pair_key(prefix + a, prefix + b): d for (a, b), d in _SELF_PAIRS[key]}
-
-
-# (signature, samples, margin, seed) -> ((link-local names), closest distance)
-_SELF_PAIRS: dict[tuple[str, int, float, int], tuple[tuple[Pair, float], ...]] = {}
+    return {pair_key(prefix + a, prefix + b): d for (a, b), d in memo[key]}
 
 
 def _sample_self_pairs(

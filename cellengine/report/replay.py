@@ -26,8 +26,8 @@ from numpy.typing import NDArray
 from cellengine.info import primitives
 from cellengine.info.cell import Obstacle
 from cellengine.info.mesh import Mesh
-from cellengine.motion.robot import CellModel
-from cellengine.program import Program, TimedEvent
+from cellengine.motion.robot import CellModel, home_configuration
+from cellengine.program import Anchor, Program, TimedEvent
 from cellengine.report.data import event_entry, step_names
 from cellengine.report.distance import ArmDistance
 from cellengine.report.sampling import joint_order, program_span, sample_program, sample_times
@@ -59,7 +59,7 @@ def replay_data(
     if program.segments:
         q, qd = sample_program(program, times, joint_order(program, cell.joint_names))
     else:  # nothing moves: the cell at home
-        q, qd = _home(cell)[None], np.zeros((1, cell.nq))
+        q, qd = home_configuration(cell)[None], np.zeros((1, cell.nq))
     geometry, tcp = placements(cell, q)
     distance = ArmDistance(cell).series(q)
     start, end = program_span(program)
@@ -90,12 +90,6 @@ def replay_data(
         "events": [event_entry(e) for e in program.events],
         "cables": cables(program, world),
     }
-
-
-def _home(cell: CellModel) -> Vec:
-    return cell.join(
-        {n: arm.home if arm.home is not None else np.zeros(arm.nq) for n, arm in cell.arms.items()}
-    )
 
 
 def _round(a: Any, decimals: int) -> Any:
@@ -280,24 +274,23 @@ def timeline(program: Program, step_labels: Mapping[int, str]) -> dict[str, Any]
 
 def cables(program: Program, world: World) -> list[dict[str, Any]]:
     """Each cable some gripper holds: when which arms hold it (``held``: intervals with the
-    same non-empty set of arms) and where it is fixed (``anchors``: the slot of a segment's
-    ``facts``, e.g. a guide it was inserted into, from that segment's end). The page draws a
-    cable through its anchors so far and then the hands holding it."""
+    same non-empty set of arms) and where it is fixed (``anchors``: a segment's
+    :class:`~cellengine.program.Anchor`, e.g. the slot of a guide it was inserted into, from
+    that segment's end). The page draws a cable through its anchors so far and then the
+    hands holding it."""
     names = set(world.objects.cables)
     events = sorted(program.events, key=lambda e: e.time)
     held = _held_spans(events, names, program_span(program)[1])
     anchors: dict[str, list[dict[str, Any]]] = {}
     for cs in program.segments:
-        slot = cs.segment.facts.get("slot")
-        if slot is None or np.shape(slot) != (3,):
-            continue
         end = cs.trajectory.end_time
-        cable = cs.segment.facts.get("cable") or _held_at(events, names, end)
-        if cable in names:
-            guide = cs.segment.facts.get("guide")
-            anchors.setdefault(str(cable), []).append(
-                {"time": end, "guide": guide, "p": _round(slot, DECIMALS)}
-            )
+        held_now = set(_holding(events, names, end).values())
+        for a in cs.segment.annotations:
+            # a cable no hand holds is not being laid (nothing to draw)
+            if isinstance(a, Anchor) and a.object in names and a.object in held_now:
+                anchors.setdefault(a.object, []).append(
+                    {"time": end, "guide": a.by, "p": _round(a.point, DECIMALS)}
+                )
     return [
         {"name": c, "held": held.get(c, []), "anchors": anchors.get(c, [])}
         for c in sorted(set(held) | set(anchors))
@@ -319,11 +312,6 @@ def _holding(events: Sequence[TimedEvent], cables: set[str], until: float) -> di
             break
         out[e.event.arm] = _cable_of(e.event.holds, cables)
     return {arm: c for arm, c in out.items() if c is not None}
-
-
-def _held_at(events: Sequence[TimedEvent], cables: set[str], t: float) -> str | None:
-    held = sorted(set(_holding(events, cables, t).values()))
-    return held[0] if len(held) == 1 else None
 
 
 def _held_spans(

@@ -158,14 +158,19 @@ def test_a_cartesian_path_out_of_reach_is_refused_with_its_stop() -> None:
     )
 
 
-def test_the_error_points_at_the_step_in_the_plan_file(tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_the_error_carries_the_step_to_put_it_in_the_plan_file(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from cellengine.errors import StepError
+    from cellengine.info.yamlio import load_yaml
+
     world, cell, checker = cable_cell()
     plan = tmp_path / "plan.yaml"
     plan.write_text("cell: cell.yaml\nsteps:\n  - skill: A\n  - skill: B\n    cable: c\n")
     far = Segment(1, "B: reach", (ArmPath("left", "transit", pose((1.5, 0.15, 0.2))[None]),))
-    with pytest.raises(InputError) as e:
-        compile_segments(world, cell, checker, [far], home(cell), plan_file=plan)
-    (problem,) = e.value.problems
+    with pytest.raises(StepError) as e:
+        compile_segments(world, cell, checker, [far], home(cell))
+    assert e.value.step == 1
+    line, col = load_yaml(plan).where(("steps", e.value.step)) or (None, None)
+    (problem,) = e.value.located(plan, line, col).problems
     assert (problem.file, problem.line, problem.col) == (str(plan), 4, 5)
     assert problem.message.startswith("step 2 (B: reach): the left arm cannot reach")
 

@@ -8,6 +8,7 @@ from functools import cache
 import numpy as np
 import pytest
 
+from cellengine.context import build_context
 from cellengine.execute import STRATEGIES, Compiler, home_configuration, program_trajectory
 from cellengine.execute.checks import KEEP_DISTANCE_TOLERANCE, tcp_distances
 from cellengine.info.load import load_plan
@@ -33,7 +34,7 @@ def models() -> tuple[CellModel, CollisionChecker]:
 def segments(plan: str, steps: int | None = None) -> tuple[list[Segment], object]:
     loaded = load_plan(PLANS / plan)
     chosen = loaded.plan.steps if steps is None else loaded.plan.steps[:steps]
-    return plan_cable_steps(loaded.world, chosen)[0], loaded
+    return plan_cable_steps(build_context(loaded.world), chosen)[0], loaded
 
 
 def compiled(plan: str, strategy: str, steps: int | None = None) -> Program:
@@ -45,7 +46,6 @@ def compiled(plan: str, strategy: str, steps: int | None = None) -> Program:
         checker,
         home_configuration(cell),
         strategy,  # type: ignore[arg-type]
-        plan_file=PLANS / plan,
     )
     return c.add_all(segs)
 

@@ -529,12 +529,9 @@ def test_deterministic(cell: CellModel, world: World, scene: CollisionScene) -> 
     assert again.acm.reasons == scene.acm.reasons
     assert again.pairs == scene.pairs
     np.testing.assert_array_equal(again.motion, scene.motion)
-    # the sampling itself, not its memo: the same seed, the same pairs and distances
-    from cellengine.motion import scene as scene_module
-
+    # the sampling itself (no memo is shared between calls): same seed, same pairs, distances
     arm = cell.arms["left"]
     first = sampled_self_pairs(arm, 2000)
-    scene_module._SELF_PAIRS.clear()
     assert sampled_self_pairs(arm, 2000) == first
     # the two arms are the same UR5e with the same tool: the same pairs, prefixed
     right = sampled_self_pairs(cell.arms["right"], 2000)

@@ -11,6 +11,7 @@ from cellengine.info.load import load_world
 from cellengine.motion.robot import CellModel, build_cell_model
 from cellengine.motion.trajectory import Trajectory
 from cellengine.program import (
+    Anchor,
     ArmPath,
     CompiledSegment,
     GripperEvent,
@@ -119,6 +120,7 @@ def sample_program(cell: CellModel, seconds: float = 1.0) -> Program:
                 after=release,
                 keep_distance=("left", "right"),
                 facts={"guide": "routing.guide2", "slot": np.array([0.3, -0.2, 0.065])},
+                annotations=(Anchor("cable1", (0.3, -0.2, 0.065), "routing.guide2"),),
             ),
             "sync",
             trajectory(cell, q2, q3, d0 + d1, d2),

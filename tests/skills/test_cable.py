@@ -21,6 +21,7 @@ import pytest
 
 from cellengine import geometry as g
 from cellengine.cli import main
+from cellengine.context import PlanningContext, build_context
 from cellengine.errors import InputError
 from cellengine.info.load import load_plan
 from cellengine.motion import interpolate as ip
@@ -47,6 +48,17 @@ class Planned:
     home: CableState
 
 
+_CONTEXTS: dict[int, tuple[World, PlanningContext]] = {}
+
+
+def context(world: World) -> PlanningContext:
+    """One planning context per world for these tests (building the scene costs ~0.5 s)."""
+    hit = _CONTEXTS.get(id(world))
+    if hit is None or hit[0] is not world:
+        hit = _CONTEXTS[id(world)] = (world, build_context(world))
+    return hit[1]
+
+
 @cache
 def planned(name: str) -> Planned:
     return planned_file(CELLS / "cable_routing" / f"{name}.yaml")
@@ -55,8 +67,8 @@ def planned(name: str) -> Planned:
 def planned_file(path: Path) -> Planned:
     loaded = load_plan(path)
     world = loaded.world
-    home = CableState.at_home(world)
-    segments, state = plan_cable_steps(world, loaded.plan.steps, home)
+    home = CableState.at_home(context(world))
+    segments, state = plan_cable_steps(context(world), loaded.plan.steps, home)
     start, end = replay(home, segments)
     route = next(s for s in loaded.plan.steps if isinstance(s, RouteCable)).guides
     return Planned(world, route, segments, start, end, state, home)
@@ -386,10 +398,12 @@ def test_route_cable_state_counts_the_cable_it_lays() -> None:
     routing hand ends R_cable + pull - (L / 2 + X_offset) = 84.8809 - 40 = 44.8809 mm past it."""
     loaded = load_plan(CELLS / "cable_routing" / "plan_straight.yaml")
     world, steps = loaded.world, loaded.plan.steps
-    state = replace(CableState.at_home(world), connector_arm="right", place_guide=CONNECTOR_GUIDE)
+    state = replace(
+        CableState.at_home(context(world)), connector_arm="right", place_guide=CONNECTOR_GUIDE
+    )
     for i, step in enumerate(steps):
         assert isinstance(step, PickCable | PlaceConnector | RouteCable)
-        _, state = step.plan(world, replace(state, step=i))
+        _, state = step.plan(context(world), replace(state, step=i))
     assert state.guides == (CONNECTOR_GUIDE, "routing.guide1", "routing.guide2", "routing.guide3")
     assert state.route_length() == pytest.approx(312.5 * MM, abs=1e-9)
     assert state.pull_distance == pytest.approx((83.2166 * 1.02 - 40.0) * MM, abs=1e-7)
@@ -424,7 +438,7 @@ def _with_element(world: World, ref: str, xyz: list[float] | None = None, **dims
 
 def _fails(world: World, steps: tuple[object, ...]) -> str:
     with pytest.raises(InputError) as err:
-        plan_cable_steps(world, steps)  # type: ignore[arg-type]
+        plan_cable_steps(context(world), steps)  # type: ignore[arg-type]
     (problem,) = err.value.problems
     return problem.message
 
@@ -483,9 +497,9 @@ def test_a_slide_blocked_on_both_sides_fails_naming_what_blocks_it() -> None:
 
 def test_route_cable_needs_a_placed_connector() -> None:
     world, steps = _world()
-    state = CableState.at_home(world)
+    state = CableState.at_home(context(world))
     with pytest.raises(InputError) as err:
-        steps[2].plan(world, replace(state, step=2))
+        steps[2].plan(context(world), replace(state, step=2))
     assert err.value.problems[0].message == (
         "steps[2] RouteCable: cable 'cable1' has no placed connector (plan PlaceConnector first)"
     )
@@ -508,7 +522,7 @@ def test_the_connector_goes_to_the_placing_arm_the_plan_names() -> None:
     pick; the right hand then routes (the guides being in reach of both arms)."""
     world, steps = _world()
     place = steps[1].model_copy(update={"arm": "left"})
-    segments, _ = plan_cable_steps(world, (steps[0], place, steps[2]))
+    segments, _ = plan_cable_steps(context(world), (steps[0], place, steps[2]))
     pick = segments[1].facts["grasps"]
     assert pick["left"]["end"] == "connector end" and pick["right"]["end"] == "free end"
     inserts = [s for s in segments if "routing_arm" in s.facts]
@@ -519,20 +533,22 @@ def test_each_check_names_its_step_when_planned_alone() -> None:
     """A skill's plan() checks before it returns any segment: planning RouteCable on a state
     after PlaceConnector with an unreachable last guide yields nothing but the error."""
     world, steps = _world()
-    state = replace(CableState.at_home(world), connector_arm="right", place_guide=CONNECTOR_GUIDE)
+    state = replace(
+        CableState.at_home(context(world)), connector_arm="right", place_guide=CONNECTOR_GUIDE
+    )
     for i in (0, 1):
-        _, state = steps[i].plan(world, replace(state, step=i))
+        _, state = steps[i].plan(context(world), replace(state, step=i))
     far = _with_element(world, "routing.guide3", xyz=[0.43, 1.5, 0.01])
     with pytest.raises(InputError, match=r"^.*steps\[7\] RouteCable routing.guide3: out of reach"):
-        steps[2].plan(far, replace(state, step=7))
+        steps[2].plan(context(far), replace(state, step=7))
 
 
-def test_the_robot_model_cache_lets_worlds_go() -> None:
+def test_planning_keeps_no_world_alive() -> None:
     import gc
     import weakref
 
     world, steps = _world()
-    plan_cable_steps(world, steps)
+    plan_cable_steps(build_context(world), steps)
     ref = weakref.ref(world)
     del world, steps
     gc.collect()
@@ -545,8 +561,8 @@ def _facts(segments: list[Segment], key: str) -> list[Mapping[str, object]]:
 
 def test_planning_is_deterministic() -> None:
     world, steps = _world("plan_two_turns")
-    a, _ = plan_cable_steps(world, steps)
-    b, _ = plan_cable_steps(world, steps)
+    a, _ = plan_cable_steps(context(world), steps)
+    b, _ = plan_cable_steps(context(world), steps)
     assert [s.label for s in a] == [s.label for s in b]
     for sa, sb in zip(a, b, strict=True):
         for pa, pb in zip(sa.paths, sb.paths, strict=True):
@@ -558,7 +574,7 @@ def test_two_cables_in_one_plan_release_the_first_before_picking_the_second() ->
     """A second PickCable (the same cable again, as a stand-in) releases the first cable and
     retracts before it picks."""
     world, steps = _world()
-    segments, state = plan_cable_steps(world, (*steps, *steps))
+    segments, state = plan_cable_steps(context(world), (*steps, *steps))
     names = [s.label for s in segments]
     first_release = names.index("cable1: release and retract")
     assert names[first_release + 1] == "PickCable cable1: pick configuration"
@@ -580,7 +596,7 @@ def test_at_home_is_forward_kinematics_of_each_home() -> None:
     from cellengine.motion.robot import build_cell_model
 
     world, _ = _world()
-    home = CableState.at_home(world)
+    home = CableState.at_home(context(world))
     model = build_cell_model(world)
     for name, arm in model.arms.items():
         assert arm.home is not None

@@ -245,6 +245,7 @@ def test_two_arms_carry_a_box_as_one_closed_chain(tmp_path: Path) -> None:
     """BimanualCarry: each hand at the middle of the side facing its base, the follower's pose
     relative to the leader's the same at every waypoint of lift, carry and set down, and the
     program (through the executor) leaves the box where it was asked to go."""
+    from cellengine.context import build_context
     from cellengine.execute import Compiler
     from cellengine.motion.collision import CollisionChecker
     from cellengine.motion.scene import build_scene
@@ -256,9 +257,10 @@ def test_two_arms_carry_a_box_as_one_closed_chain(tmp_path: Path) -> None:
     tray = "  tray: {kind: box, size: [60, 100, 80], mass: 200, at: routing.guide1.slot}\n"
     objects.write_text(objects.read_text() + "containers:\n" + tray)
     world = load_world(folder / "cell.yaml", objects)
-    model = build_cell_model(world)
+    ctx = build_context(world)
+    model = ctx.cell
     b = lm.Builder(_start(world))
-    reach = _Reach(world, model, lambda: b.state.where)
+    reach = _Reach(ctx, lambda: b.state.where)
     target = world.pose("routing.guide5.slot")
     lm.carry_together(b, reach, world, "left", "right", "tray", target, "carry")
     chained = [s for s in b.segments if s.closed_chain is not None]

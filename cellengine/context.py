@@ -1,0 +1,61 @@
+"""The planning context: what every skill family and the compiler plan over, built once per
+compile and passed explicitly (no module-level caches keyed by the world).
+
+It holds the loaded world, the robots as pinocchio models, the collision scene of the cell
+with its containers where they stand and a checker on it, each arm's inverse kinematics, the
+one home configuration, the cell's clearance, and the masses measured so far (a runtime
+choice such as ``heavier_of`` picks by them).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from types import MappingProxyType
+
+from cellengine.execute.schedule import SCHEDULE_CLEARANCE
+from cellengine.geometry import Mat
+from cellengine.motion.collision import CollisionChecker
+from cellengine.motion.ik import ArmIK, arm_ik
+from cellengine.motion.robot import CellModel, build_cell_model, home_configuration
+from cellengine.motion.scene import CollisionScene, build_scene
+from cellengine.world import World
+
+
+@dataclass(frozen=True)
+class PlanningContext:
+    world: World
+    cell: CellModel
+    scene: CollisionScene  # every container where objects.yaml stands it
+    checker: CollisionChecker  # on ``scene``; the compiler attaches held objects to its own
+    iks: Mapping[str, ArmIK]  # by arm
+    masses: Mapping[str, float] = field(default_factory=lambda: MappingProxyType({}))
+    # the least distance (m) between two arms moving on their own (the async schedule's)
+    clearance: float = SCHEDULE_CLEARANCE
+
+    @property
+    def home(self) -> Mat:
+        """Every arm at its cell.yaml ``home`` (InputError naming an arm without one)."""
+        return home_configuration(self.cell)
+
+    def tcp_home(self, arm: str) -> Mat:
+        """T_cell_tcp of ``arm`` at home."""
+        return self.cell.arms[arm].fk(self.home[self.cell.slices[arm]])
+
+    def with_masses(self, masses: Mapping[str, float]) -> PlanningContext:
+        """The same cell with other measured masses (a replan after a weighing)."""
+        return replace(self, masses=MappingProxyType(dict(masses)))
+
+
+def build_context(world: World, masses: Mapping[str, float] | None = None) -> PlanningContext:
+    """Build the robots, the scene, its checker and the IK of every arm of ``world``."""
+    cell = build_cell_model(world)
+    scene = build_scene(cell, world)
+    return PlanningContext(
+        world,
+        cell,
+        scene,
+        CollisionChecker(scene),
+        MappingProxyType({name: arm_ik(arm) for name, arm in cell.arms.items()}),
+        MappingProxyType(dict(masses or {})),
+    )

@@ -1,0 +1,145 @@
+"""Compiling a skill family's candidates (:mod:`cellengine.family`).
+
+The first candidate at every choice is taken and all their segments are compiled in one go
+(:func:`~cellengine.execute.search.add_all`: each transit looks ahead over the whole plan).
+When that fails, the choice that produced the failing step is asked for its next candidate,
+then the choices before it; what is compiled before that choice is kept (the compiler is
+restored to where that choice's segments began) and compiling goes on with the new
+candidates. A family that cannot plan a choice at all (its generator raises) sends the search
+to the choice before. ``MAX_TRIES`` candidates taken in all; then the first error is raised:
+with one candidate per choice, exactly the error of compiling the first candidates.
+
+Deterministic: candidates are tried in the order the family offers them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from cellengine.errors import InputError, StepError
+from cellengine.execute.search import add_all
+from cellengine.program import Segment
+
+if TYPE_CHECKING:
+    from cellengine.execute.compile import Compiler, Mark
+    from cellengine.family import Candidate
+
+MAX_TRIES = 64  # candidates taken after the first ones, per compile
+
+
+@dataclass
+class _Choice:
+    options: Iterator[Candidate]  # the ones not tried yet
+    taken: Candidate
+
+
+def compile_candidates(
+    compiler: Compiler,
+    first: Iterator[Candidate],
+    before_each: Callable[[Segment], None] | None = None,
+) -> list[Candidate]:
+    """Compile the candidates into ``compiler`` (see the module notes); the candidates taken,
+    in order. The first error when no combination within ``MAX_TRIES`` gets through."""
+    chosen: list[_Choice] = []
+    marks: dict[int, Mark] = {0: compiler.mark()}  # where each choice's segments begin
+    start = 0  # the first choice whose segments are not compiled; the compiler is at its mark
+    pending: Iterator[Candidate] | None = first
+    first_error: InputError | None = None
+    for _ in range(MAX_TRIES + 1):
+        try:
+            _grow(chosen, pending)
+            _compile_from(compiler, chosen, start, marks, before_each)
+            return [c.taken for c in chosen]
+        except _Grown as e:  # the choice after the last one taken offered nothing
+            first_error = first_error or e.error
+            failed = len(chosen)
+        except InputError as e:
+            first_error = first_error or e
+            failed = _owner(chosen, e)
+        k = _next_candidate(chosen, failed)
+        if k is None:
+            break
+        for j in [j for j in marks if j > k]:
+            del marks[j]  # compiled with choices now dropped
+        start = max(marks)
+        compiler.restore(marks[start])
+        then = chosen[k].taken.then
+        pending = then() if then is not None else None
+    if first_error is None:  # a family that offered no candidate at all
+        raise InputError.at("the skill family offered no way to do the plan", None)
+    raise first_error
+
+
+class _Grown(Exception):
+    """Growing stopped at a choice with no candidate (``error``: the family's, if any)."""
+
+    def __init__(self, error: InputError | None) -> None:
+        self.error = error
+
+
+def _grow(chosen: list[_Choice], pending: Iterator[Candidate] | None) -> None:
+    """Take the first candidate of every choice from ``pending`` to the plan's end."""
+    while pending is not None:
+        try:
+            taken = next(pending)
+        except StopIteration:
+            raise _Grown(None) from None
+        except InputError as e:  # the family cannot do this choice
+            raise _Grown(e) from None
+        chosen.append(_Choice(pending, taken))
+        pending = taken.then() if taken.then is not None else None
+
+
+def _compile_from(
+    compiler: Compiler,
+    chosen: list[_Choice],
+    start: int,
+    marks: dict[int, Mark],
+    before_each: Callable[[Segment], None] | None,
+) -> None:
+    """Compile the segments of choices ``start`` on, marking where each choice begins."""
+    segments: list[Segment] = []
+    begins: dict[int, int] = {}  # id of a choice's first segment -> the choice
+    for k in range(start, len(chosen)):
+        if chosen[k].taken.segments:
+            begins[id(chosen[k].taken.segments[0])] = k
+        segments += chosen[k].taken.segments
+
+    def before(segment: Segment) -> None:
+        k = begins.get(id(segment))
+        if k is not None:
+            marks[k] = compiler.mark()
+        if before_each is not None:
+            before_each(segment)
+
+    add_all(compiler, segments, before)
+
+
+def _owner(chosen: list[_Choice], error: InputError) -> int:
+    """The latest choice with a segment of the failing step (the last choice when the step
+    is not known)."""
+    step = error.step if isinstance(error, StepError) else None
+    for k in range(len(chosen) - 1, -1, -1):
+        if any(s.step == step for s in chosen[k].taken.segments):
+            return k
+    return len(chosen) - 1
+
+
+def _next_candidate(chosen: list[_Choice], failed: int) -> int | None:
+    """Take the next candidate at choice ``failed`` or, when it has none, at the choices
+    before it; the choices after it are dropped. The choice changed, or None."""
+    k = min(failed, len(chosen) - 1)
+    del chosen[k + 1 :]
+    while k >= 0:
+        try:
+            chosen[k].taken = next(chosen[k].options)
+            return k
+        except StopIteration:
+            pass
+        except InputError:
+            pass  # the family could not plan another: as if it had none
+        del chosen[k:]
+        k -= 1
+    return None
