@@ -6,33 +6,19 @@ from __future__ import annotations
 import html
 import json
 from collections.abc import Mapping, Sequence
+from importlib.resources import files
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from cellengine.report.page_css import CSS
-from cellengine.report.page_js import JS
+# The page's style sheet and scripts: files in cellengine/report/assets, shipped as package data.
+ASSETS = files("cellengine.report") / "assets"
 
-# Catches every error of the page's own script (which runs after it) into the DOM, so a
-# headless browser can read them with --dump-dom.
-GUARD = r"""
-(function () {
-  function fail(msg) {
-    var e = document.getElementById('errors');
-    e.hidden = false;
-    e.textContent += msg + '\n';
-    document.body.dataset.status = 'error';
-  }
-  window.addEventListener('error', function (ev) {
-    fail('error: ' + ev.message + ' (line ' + ev.lineno + ':' + ev.colno + ')');
-  });
-  window.addEventListener('unhandledrejection', function (ev) {
-    fail('unhandled rejection: ' + ev.reason);
-  });
-  window.ceFail = fail;
-})();
-"""
+
+def asset(name: str) -> str:
+    return (ASSETS / name).read_text(encoding="utf-8")
+
 
 BODY = r"""
 <header>
@@ -86,20 +72,25 @@ BODY = r"""
 </div>
 """
 
-TEMPLATE = (
-    "<!DOCTYPE html>\n<html lang='en'>\n<head>\n<meta charset='utf-8'>\n"
-    "<meta name='viewport' content='width=device-width, initial-scale=1'>\n"
-    "<title>__CE_TITLE__</title>\n<style>"
-    + CSS
-    + "</style>\n</head>\n<body data-status='loading'>\n<pre id='errors' hidden></pre>\n"
-    + "<script>"
-    + GUARD
-    + "</script>\n"
-    + BODY
-    + "<script type='application/json' id='ce-data'>__CE_DATA__</script>\n<script>"
-    + JS
-    + "</script>\n</body>\n</html>\n"
-)
+
+def template() -> str:
+    """The page around ``__CE_TITLE__`` and ``__CE_DATA__``; the assets are read each time."""
+    return (
+        "<!DOCTYPE html>\n<html lang='en'>\n<head>\n<meta charset='utf-8'>\n"
+        "<meta name='viewport' content='width=device-width, initial-scale=1'>\n"
+        "<title>__CE_TITLE__</title>\n<style>\n"
+        + asset("page.css")
+        + "</style>\n</head>\n<body data-status='loading'>\n<pre id='errors' hidden></pre>\n"
+        # catches every error of the page's own script (which runs after it) into the DOM, so
+        # a headless browser can read them with --dump-dom
+        + "<script>\n"
+        + asset("guard.js")
+        + "</script>\n"
+        + BODY
+        + "<script type='application/json' id='ce-data'>__CE_DATA__</script>\n<script>\n"
+        + asset("replay.js")
+        + "</script>\n</body>\n</html>\n"
+    )
 
 
 # Per-sample series are embedded as integer deltas between consecutive samples (a third of the
@@ -148,5 +139,5 @@ def embed_json(data: Any) -> str:
 
 def render_page(report: Mapping[str, Any], replay: Mapping[str, Any], title: str) -> str:
     data = embed_json({"report": report, "replay": pack_replay(replay), "title": title})
-    head, _, tail = TEMPLATE.partition("__CE_DATA__")
+    head, _, tail = template().partition("__CE_DATA__")
     return head.replace("__CE_TITLE__", html.escape(title)) + data + tail

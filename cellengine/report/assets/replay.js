@@ -1,16 +1,3 @@
-"""report.html's script: a small canvas renderer (perspective camera orbiting a target,
-painter's algorithm over shaded triangles, capsules drawn as thick round-capped strokes), the
-time slider and playback, joint plots, the step timeline and the steps table. No library.
-
-The data (``#ce-data``): ``{"report": report_data(...), "replay": replay_data(...), "title"}``.
-When the page has drawn, ``body[data-status]`` is ``ok``, ``body[data-canvas]`` the 3D
-canvas's rectangle (x,y,w,h in CSS pixels), ``data-drawn`` the number of shapes and
-``data-cables`` of cable lines in the first frame; on any error the status is ``error`` and
-``#errors`` says why (tests read these with a headless browser's --dump-dom). The page's URL
-may say where to start: ``#t=2.5&az=-0.75&el=0.55`` (seconds from the start, camera angles).
-"""
-
-JS = r"""
 'use strict';
 (function () {
   const DATA = JSON.parse(document.getElementById('ce-data').textContent);
@@ -1051,4 +1038,3 @@ JS = r"""
     window.ceFail('init: ' + ((e && e.stack) || e));
   }
 })();
-"""
