@@ -1,10 +1,33 @@
 """report.html: one self-contained page (inline CSS and JS, the data as embedded JSON, system
-fonts; nothing is fetched). :func:`render_page` fills the template."""
+fonts; nothing is fetched). :func:`render_page` fills the template.
+
+The style sheet and the scripts are files in ``cellengine/report/assets`` (package data, read
+with importlib.resources at each render and inlined). The page's script is a small canvas
+renderer (perspective camera orbiting a target, painter's algorithm over shaded triangles,
+capsules drawn as thick round-capped strokes), the time slider and playback, joint plots, the
+step timeline and the steps table; no library. Its parts (:data:`SCRIPTS`) are joined, in order,
+into one function.
+
+No three.js or uPlot: the replay carries the cell's meshes and the arms' collision shapes
+(capsules, spheres, boxes), which the canvas draws; three.js (about 0.7 MB minified, inlined
+since the page fetches nothing) would triple the page without more to show, and WebGL is
+missing or software-emulated where reports are opened headless (tests, CI). Real robot meshes
+would need their triangles in the data first; then a z-buffer (WebGL) would be worth its size.
+The plots are a few canvas lines; uPlot would replace them, not improve them.
+
+The data (``#ce-data``): ``{"report": report_data(...), "replay": replay_data(...), "title"}``.
+When the page has drawn, ``body[data-status]`` is ``ok``, ``body[data-canvas]`` the 3D
+canvas's rectangle (x,y,w,h in CSS pixels), ``data-drawn`` the number of shapes and
+``data-cables`` of cable lines in the first frame; on any error the status is ``error`` and
+``#errors`` says why (tests read these with a headless browser's --dump-dom). The page's URL
+may say where to start: ``#t=2.5&az=-0.75&el=0.55`` (seconds from the start, camera angles).
+"""
 
 from __future__ import annotations
 
 import html
 import json
+import textwrap
 from collections.abc import Mapping, Sequence
 from importlib.resources import files
 from typing import Any
@@ -12,12 +35,26 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-# The page's style sheet and scripts: files in cellengine/report/assets, shipped as package data.
 ASSETS = files("cellengine.report") / "assets"
+STYLE = "page.css"
+GUARD = "guard.js"  # runs first: catches the errors of the page's script into the DOM
+SCRIPTS = ("base.js", "time.js", "scene.js", "draw.js", "plots.js", "panels.js", "main.js")
 
 
 def asset(name: str) -> str:
-    return (ASSETS / name).read_text(encoding="utf-8")
+    """An asset's text as inlined: without its header, the comments up to the first blank line
+    (what a part is, ESLint's /* global */ lists), which are for the source's reader."""
+    text = (ASSETS / name).read_text(encoding="utf-8")
+    header, blank, body = text.partition("\n\n")
+    if not blank or not header.startswith(("//", "/*")):
+        raise ValueError(f"report asset {name}: no header comment followed by a blank line")
+    return body
+
+
+def script() -> str:
+    """The page's script: the parts in one function (their shared scope), strict."""
+    parts = "\n".join(asset(name) for name in SCRIPTS)
+    return "'use strict';\n(function () {\n" + textwrap.indent(parts, "  ") + "})();\n"
 
 
 BODY = r"""
@@ -79,16 +116,14 @@ def template() -> str:
         "<!DOCTYPE html>\n<html lang='en'>\n<head>\n<meta charset='utf-8'>\n"
         "<meta name='viewport' content='width=device-width, initial-scale=1'>\n"
         "<title>__CE_TITLE__</title>\n<style>\n"
-        + asset("page.css")
+        + asset(STYLE)
         + "</style>\n</head>\n<body data-status='loading'>\n<pre id='errors' hidden></pre>\n"
-        # catches every error of the page's own script (which runs after it) into the DOM, so
-        # a headless browser can read them with --dump-dom
         + "<script>\n"
-        + asset("guard.js")
+        + asset(GUARD)
         + "</script>\n"
         + BODY
         + "<script type='application/json' id='ce-data'>__CE_DATA__</script>\n<script>\n"
-        + asset("replay.js")
+        + script()
         + "</script>\n</body>\n</html>\n"
     )
 
