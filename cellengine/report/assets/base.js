@@ -86,7 +86,7 @@ function shortJoint(name, arm) {
 function capture(target, e) {
   try {
     target.setPointerCapture(e.pointerId);
-  } catch (err) {
+  } catch {
     // a synthetic or already released pointer: dragging works without capture
   }
 }
