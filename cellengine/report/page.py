@@ -8,12 +8,14 @@ capsules drawn as thick round-capped strokes), the time slider and playback, joi
 step timeline and the steps table; no library. Its parts (:data:`SCRIPTS`) are joined, in order,
 into one function.
 
-No three.js or uPlot: the replay carries the cell's meshes and the arms' collision shapes
-(capsules, spheres, boxes), which the canvas draws; three.js (about 0.7 MB minified, inlined
-since the page fetches nothing) would triple the page without more to show, and WebGL is
-missing or software-emulated where reports are opened headless (tests, CI). Real robot meshes
-would need their triangles in the data first; then a z-buffer (WebGL) would be worth its size.
-The plots are a few canvas lines; uPlot would replace them, not improve them.
+No three.js or uPlot (decided when the assets became files): the replay carries the cell's
+meshes as triangles and the arms as their collision shapes (capsules, spheres, boxes), which the
+canvas draws. three.js (0.187 on npm: core and module 2.1 MB, about 0.7 MB minified, all inlined
+since the page fetches nothing) would nearly triple a typical page (0.39 MB) to draw the same
+shapes, and is one more vendored library to keep current. Real robot meshes would first need
+their triangles in the replay data; with many of them a depth buffer (WebGL) would beat the
+painter's algorithm and be worth its size. The plots are a few canvas lines with a cursor, step
+bands and limits; uPlot (51 KB) would replace them, not improve them.
 
 The data (``#ce-data``): ``{"report": report_data(...), "replay": replay_data(...), "title"}``.
 When the page has drawn, ``body[data-status]`` is ``ok``, ``body[data-canvas]`` the 3D

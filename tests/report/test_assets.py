@@ -68,3 +68,10 @@ def test_an_asset_without_its_header_is_refused(
     monkeypatch.setattr(page, "ASSETS", tmp_path)
     with pytest.raises(ValueError, match=r"x\.js"):
         page.asset("x.js")
+
+
+def test_no_asset_closes_its_element() -> None:
+    """Inlined text cannot say '</script' or '</style' (the HTML parser would end the element)."""
+    for name in resource_names():
+        text = (files("cellengine.report") / "assets" / name).read_text().lower()
+        assert "</script" not in text and "</style" not in text, name
