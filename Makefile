@@ -24,10 +24,22 @@ run: $(VENV)/.installed
 test: $(VENV)/.installed-test
 	$(BIN)/python -m pytest
 
-lint: $(VENV)/.installed-test
+# report.html's scripts are checked with ESLint from npm, installed under .venv (git-ignored; the
+# config is .ci/eslint.config.mjs); pinned so that a fresh clone lints as CI does
+ESLINT_DIR := $(VENV)/eslint
+ESLINT_PACKAGES := eslint@9.39.5 globals@16.5.0
+REPORT_JS := $(wildcard cellengine/report/assets/*.js)
+
+$(VENV)/.installed-eslint: Makefile | $(BIN)/python
+	npm install --prefix $(ESLINT_DIR) --no-save --no-audit --no-fund --loglevel=error $(ESLINT_PACKAGES)
+	touch $@
+
+lint: $(VENV)/.installed-test $(VENV)/.installed-eslint
 	$(BIN)/ruff check cellengine skills tests
 	$(BIN)/ruff format --check cellengine skills tests
 	$(BIN)/mypy
+	for f in $(REPORT_JS); do node --check $$f || exit 1; done
+	$(ESLINT_DIR)/node_modules/.bin/eslint --config .ci/eslint.config.mjs --max-warnings 0 $(REPORT_JS)
 
 $(VENV)/.installed-bench: pyproject.toml | $(BIN)/python
 	$(BIN)/pip install -q -e '.[test,bench]'

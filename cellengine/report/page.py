@@ -1,38 +1,63 @@
 """report.html: one self-contained page (inline CSS and JS, the data as embedded JSON, system
-fonts; nothing is fetched). :func:`render_page` fills the template."""
+fonts; nothing is fetched). :func:`render_page` fills the template.
+
+The style sheet and the scripts are files in ``cellengine/report/assets`` (package data, read
+with importlib.resources at each render and inlined). The page's script is a small canvas
+renderer (perspective camera orbiting a target, painter's algorithm over shaded triangles,
+capsules drawn as thick round-capped strokes), the time slider and playback, joint plots, the
+step timeline and the steps table; no library. Its parts (:data:`SCRIPTS`) are joined, in order,
+into one function.
+
+No three.js or uPlot (decided when the assets became files): the replay carries the cell's
+meshes as triangles and the arms as their collision shapes (capsules, spheres, boxes), which the
+canvas draws. three.js (0.187 on npm: core and module 2.1 MB, about 0.7 MB minified, all inlined
+since the page fetches nothing) would nearly triple a typical page (0.39 MB) to draw the same
+shapes, and is one more vendored library to keep current. Real robot meshes would first need
+their triangles in the replay data; with many of them a depth buffer (WebGL) would beat the
+painter's algorithm and be worth its size. The plots are a few canvas lines with a cursor, step
+bands and limits; uPlot (51 KB) would replace them, not improve them.
+
+The data (``#ce-data``): ``{"report": report_data(...), "replay": replay_data(...), "title"}``.
+When the page has drawn, ``body[data-status]`` is ``ok``, ``body[data-canvas]`` the 3D
+canvas's rectangle (x,y,w,h in CSS pixels), ``data-drawn`` the number of shapes and
+``data-cables`` of cable lines in the first frame; on any error the status is ``error`` and
+``#errors`` says why (tests read these with a headless browser's --dump-dom). The page's URL
+may say where to start: ``#t=2.5&az=-0.75&el=0.55`` (seconds from the start, camera angles).
+"""
 
 from __future__ import annotations
 
 import html
 import json
+import textwrap
 from collections.abc import Mapping, Sequence
+from importlib.resources import files
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from cellengine.report.page_css import CSS
-from cellengine.report.page_js import JS
+ASSETS = files("cellengine.report") / "assets"
+STYLE = "page.css"
+GUARD = "guard.js"  # runs first: catches the errors of the page's script into the DOM
+SCRIPTS = ("base.js", "time.js", "scene.js", "draw.js", "plots.js", "panels.js", "main.js")
 
-# Catches every error of the page's own script (which runs after it) into the DOM, so a
-# headless browser can read them with --dump-dom.
-GUARD = r"""
-(function () {
-  function fail(msg) {
-    var e = document.getElementById('errors');
-    e.hidden = false;
-    e.textContent += msg + '\n';
-    document.body.dataset.status = 'error';
-  }
-  window.addEventListener('error', function (ev) {
-    fail('error: ' + ev.message + ' (line ' + ev.lineno + ':' + ev.colno + ')');
-  });
-  window.addEventListener('unhandledrejection', function (ev) {
-    fail('unhandled rejection: ' + ev.reason);
-  });
-  window.ceFail = fail;
-})();
-"""
+
+def asset(name: str) -> str:
+    """An asset's text as inlined: without its header, the comments up to the first blank line
+    (what a part is, ESLint's /* global */ lists), which are for the source's reader."""
+    text = (ASSETS / name).read_text(encoding="utf-8")
+    header, blank, body = text.partition("\n\n")
+    if not blank or not header.startswith(("//", "/*")):
+        raise ValueError(f"report asset {name}: no header comment followed by a blank line")
+    return body
+
+
+def script() -> str:
+    """The page's script: the parts in one function (their shared scope), strict."""
+    parts = "\n".join(asset(name) for name in SCRIPTS)
+    return "'use strict';\n(function () {\n" + textwrap.indent(parts, "  ") + "})();\n"
+
 
 BODY = r"""
 <header>
@@ -86,20 +111,23 @@ BODY = r"""
 </div>
 """
 
-TEMPLATE = (
-    "<!DOCTYPE html>\n<html lang='en'>\n<head>\n<meta charset='utf-8'>\n"
-    "<meta name='viewport' content='width=device-width, initial-scale=1'>\n"
-    "<title>__CE_TITLE__</title>\n<style>"
-    + CSS
-    + "</style>\n</head>\n<body data-status='loading'>\n<pre id='errors' hidden></pre>\n"
-    + "<script>"
-    + GUARD
-    + "</script>\n"
-    + BODY
-    + "<script type='application/json' id='ce-data'>__CE_DATA__</script>\n<script>"
-    + JS
-    + "</script>\n</body>\n</html>\n"
-)
+
+def template() -> str:
+    """The page around ``__CE_TITLE__`` and ``__CE_DATA__``; the assets are read each time."""
+    return (
+        "<!DOCTYPE html>\n<html lang='en'>\n<head>\n<meta charset='utf-8'>\n"
+        "<meta name='viewport' content='width=device-width, initial-scale=1'>\n"
+        "<title>__CE_TITLE__</title>\n<style>\n"
+        + asset(STYLE)
+        + "</style>\n</head>\n<body data-status='loading'>\n<pre id='errors' hidden></pre>\n"
+        + "<script>\n"
+        + asset(GUARD)
+        + "</script>\n"
+        + BODY
+        + "<script type='application/json' id='ce-data'>__CE_DATA__</script>\n<script>\n"
+        + script()
+        + "</script>\n</body>\n</html>\n"
+    )
 
 
 # Per-sample series are embedded as integer deltas between consecutive samples (a third of the
@@ -148,5 +176,5 @@ def embed_json(data: Any) -> str:
 
 def render_page(report: Mapping[str, Any], replay: Mapping[str, Any], title: str) -> str:
     data = embed_json({"report": report, "replay": pack_replay(replay), "title": title})
-    head, _, tail = TEMPLATE.partition("__CE_DATA__")
+    head, _, tail = template().partition("__CE_DATA__")
     return head.replace("__CE_TITLE__", html.escape(title)) + data + tail

@@ -24,7 +24,7 @@ from tests.report.png import read_png
 from tests.report.programs import cable_cell, sample_program
 
 WINDOW = (1400, 1000)
-BACKGROUND = np.array([0xE9, 0xED, 0xF3])  # the 3D view's background (page_js BG)
+BACKGROUND = np.array([0xE9, 0xED, 0xF3])  # the 3D view's background (assets/base.js BG)
 FLAGS = (
     "--headless",
     "--no-sandbox",
