@@ -18,7 +18,7 @@ from types import MappingProxyType
 import numpy as np
 from numpy.typing import NDArray
 
-from cellengine.geometry import Mat
+from cellengine.arrays import Mat
 from cellengine.program import GripperEvent
 from cellengine.world import World
 

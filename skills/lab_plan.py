@@ -42,9 +42,9 @@ from cellengine.allocate import (
     allocate,
 )
 from cellengine.allocation.options import Action
+from cellengine.arrays import Mat
 from cellengine.errors import InputError, Problem
 from cellengine.execute import home_configuration
-from cellengine.geometry import Mat
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.ik import arm_ik
 from cellengine.motion.robot import CellModel

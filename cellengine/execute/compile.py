@@ -25,8 +25,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from cellengine.arrays import Vec
 from cellengine.errors import InputError
 from cellengine.execute.checks import gate, kept_distance
 from cellengine.execute.held import Held, Holding
@@ -43,8 +44,6 @@ from cellengine.motion.robot import CellModel
 from cellengine.motion.trajectory import Trajectory, concatenate
 from cellengine.program import CompiledSegment, Program, Segment, TimedEvent
 from cellengine.world import World
-
-Vec = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
