@@ -218,5 +218,12 @@ def inverse(T: Mat) -> Mat:
     return transform(R.T, -R.T @ t)
 
 
+def transform_points(T: Mat, points: ArrayLike) -> Vec:
+    """Points (k, 3) given in T's child frame, in its parent frame: ``p @ R^T + t`` (any
+    affine 4x4 ``T``)."""
+    out: Vec = np.asarray(points) @ T[:3, :3].T + T[:3, 3]
+    return out
+
+
 def xyz_rpy(T: Mat) -> tuple[Mat, Mat]:
     return T[:3, 3].copy(), matrix_to_rpy(T[:3, :3])

@@ -333,7 +333,7 @@ def footprints(world: World, exclude: str, up: Vec) -> list[Footprint]:
             if element is skip or corners is None:
                 continue
             T = platform.T_cell_platform @ element.T_platform_element
-            P = corners @ T[:3, :3].T + T[:3, 3]
+            P = g.transform_points(T, corners)
             heights = P @ up
             flat = P - np.outer(heights, up)
             lo, hi = flat.min(axis=0), flat.max(axis=0)
@@ -359,7 +359,7 @@ def _corners(element: Element) -> Vec | None:
         return out
     if element.boxes:
         parts = [
-            (unit_box * np.asarray(b.size)) @ b.T_element_box[:3, :3].T + b.T_element_box[:3, 3]
+            g.transform_points(b.T_element_box, unit_box * np.asarray(b.size))
             for b in element.boxes
         ]
         return np.concatenate(parts)

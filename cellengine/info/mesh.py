@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from cellengine import geometry as g
 from cellengine.arrays import IntArray, Vec
 
 
@@ -74,7 +75,7 @@ class Mesh:
         """This mesh under the 4x4 affine ``T``; a mirroring ``T`` flips the faces so they
         still wind outwards."""
         faces = self.faces if np.linalg.det(T[:3, :3]) >= 0 else self.faces[:, ::-1]
-        return Mesh(self.vertices @ T[:3, :3].T + T[:3, 3], faces)
+        return Mesh(g.transform_points(T, self.vertices), faces)
 
     @staticmethod
     def concatenate(parts: Sequence[Mesh]) -> Mesh:

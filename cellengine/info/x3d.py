@@ -25,7 +25,7 @@ from lxml import etree
 
 from cellengine.arrays import IntArray, Mat
 from cellengine.errors import CellError, InputError, Problem, display_path, known
-from cellengine.geometry import axis_angle_to_matrix, inverse, rot_x
+from cellengine.geometry import axis_angle_to_matrix, inverse, rot_x, transform_points
 from cellengine.info import primitives
 from cellengine.info.files import read_capped, resolve_inside
 from cellengine.info.mesh import Mesh
@@ -433,7 +433,7 @@ class _Loader:
             )
         owner = ctx.owner or self.loose
         M = owner.T_inv @ ctx.A  # the shape's frame -> the owner's rigid frame
-        V = V @ M[:3, :3].T + M[:3, 3]
+        V = transform_points(M, V)
         if not np.isfinite(V).all():
             raise ctx.file.error(
                 el, f"{_label(el)}: coordinates overflow: the Transform chain has numbers too large"

@@ -448,7 +448,7 @@ def _aabb(s: StaticShape) -> tuple[Vec, Vec]:
             for z in (box.min_[2], box.max_[2])
         ]
     )
-    cell_corners = corners @ s.T_cell_shape[:3, :3].T + s.T_cell_shape[:3, 3]
+    cell_corners = g.transform_points(s.T_cell_shape, corners)
     return cell_corners.min(axis=0), cell_corners.max(axis=0)
 
 

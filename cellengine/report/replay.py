@@ -22,6 +22,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 
+from cellengine import geometry as g
 from cellengine.arrays import IntArray, Vec
 from cellengine.info import primitives
 from cellengine.info.cell import Obstacle
@@ -216,7 +217,7 @@ def obstacle_mesh(o: Obstacle) -> Mesh:
 
 
 def _placed(mesh: Mesh, T: Vec) -> tuple[Vec, IntArray]:
-    return mesh.vertices @ T[:3, :3].T + T[:3, 3], mesh.faces
+    return g.transform_points(T, mesh.vertices), mesh.faces
 
 
 def decimate(vertices: Vec, faces: IntArray, max_faces: int) -> tuple[Vec, IntArray]:
