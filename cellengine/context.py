@@ -13,8 +13,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 
+from cellengine.arrays import Mat
 from cellengine.execute.schedule import SCHEDULE_CLEARANCE
-from cellengine.geometry import Mat
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.ik import ArmIK, arm_ik
 from cellengine.motion.robot import CellModel, build_cell_model, home_configuration

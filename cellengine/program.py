@@ -14,11 +14,9 @@ from types import MappingProxyType
 from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import NDArray
 
+from cellengine.arrays import Poses
 from cellengine.motion.trajectory import Trajectory
-
-Poses = NDArray[np.float64]  # (k, 4, 4) T_cell_tcp
 
 
 @dataclass(frozen=True)

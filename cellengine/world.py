@@ -10,8 +10,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from cellengine.arrays import Mat
 from cellengine.errors import known
-from cellengine.geometry import Mat
 from cellengine.info.cell import Cell
 from cellengine.info.objects import Cable, Container, Objects
 from cellengine.info.platform import Element, Keypoint, Platform

@@ -33,8 +33,8 @@ import numpy as np
 from pydantic import Field
 
 from cellengine import geometry as g
+from cellengine.arrays import Mat, Poses, Vec
 from cellengine.errors import InputError, Problem, StepError, known
-from cellengine.geometry import Mat
 from cellengine.info.units import count
 from cellengine.motion import interpolate as ip
 from cellengine.program import Anchor, Annotation, ArmPath, GripperEvent, Segment
@@ -47,7 +47,6 @@ if TYPE_CHECKING:  # planning needs the motion stack; parsing a plan does not
     from cellengine.context import PlanningContext
 
 OPEN, SLIDE, GRASP = "open", "slide", "grasp"  # jaw modes the method uses (the tool's table)
-Poses = cg.Poses
 
 
 # =========================================================================== the skills
@@ -274,11 +273,11 @@ def _transit(arm: str, T_cell_tcp: Mat) -> ArmPath:
     return ArmPath(arm, "transit", np.asarray(T_cell_tcp)[None])
 
 
-def _up(T: Mat, arm: str, up: cg.Vec, height: float) -> ArmPath:
+def _up(T: Mat, arm: str, up: Vec, height: float) -> ArmPath:
     return _cartesian(arm, cg.line(T, cg.lifted(T, up, height)))
 
 
-def _stand_back(state: CableState, arm: str, up: cg.Vec) -> Poses:
+def _stand_back(state: CableState, arm: str, up: Vec) -> Poses:
     """Up by RETRACT_HEIGHT, then STAND_BACK back along the route (its last two points: the
     pivot and the slot of the last guide)."""
     T = state.tcp[arm]
@@ -299,7 +298,7 @@ def _vec(v: Any) -> list[float]:
 
 @dataclass(frozen=True)
 class _PickGeometry:
-    up: cg.Vec
+    up: Vec
     grasp: Mapping[str, Mat]  # each hand's grasp pose
     retracted: Mapping[str, Mat]
     faced: Mapping[str, Poses]  # each hand turned along the cable
@@ -369,7 +368,7 @@ def _pick_geometry(
     down = cg.slide_down_angle(float(np.linalg.norm(faced_f[-1][:3, 3] - centre)))
     lower = cg.arc(faced_f[-1], centre, axis, -down, turn=True)
     spacing = _connector_spacing(world, state.place_guide, conn_len, hand_f)
-    towards = cg.unit(lower[-1][:3, 3] - centre)
+    towards = g.unit(lower[-1][:3, 3] - centre)
     slide = cg.line(lower[-1], cg.at(lower[-1], centre + spacing * towards))
     raise_ = cg.arc(slide[-1], centre, axis, down, turn=True)
     align = _align_z(world, state.place_guide, faced_c[-1], raise_[-1], up)
@@ -401,7 +400,7 @@ def _connector_spacing(world: World, guide: str | None, conn_len: float, hand: c
 
 
 def _align_z(
-    world: World, guide: str | None, T_c: Mat, T_f: Mat, up: cg.Vec
+    world: World, guide: str | None, T_c: Mat, T_f: Mat, up: Vec
 ) -> tuple[Poses, Poses] | None:
     """Both hands turned as one pair about the connector hand until its z is the routing
     platform's down (tipped back by LEAN, as everywhere); None when it already is (a level
@@ -409,7 +408,7 @@ def _align_z(
     platform_up = cg.platform_up(world, guide) if guide is not None else up
     cable = cg.horizontal(T_c[:3, 0], platform_up)
     T_c1 = cg.tcp_frame(T_c[:3, 3], cable, platform_up, -cable, cg.LEAN)
-    if cg.rotation_angle(T_c, T_c1) < cg.TINY_ANGLE:
+    if g.rotation_angle(T_c, T_c1) < cg.TINY_ANGLE:
         return None
     return cg.pair_line(T_c, T_c1, g.inverse(T_c) @ T_f)
 
@@ -479,9 +478,9 @@ def _emit_pick(
 class _PlaceGeometry:
     guide: str
     connector_arm: str
-    up: cg.Vec
-    slot: cg.Vec
-    axis: cg.Vec  # from the connector to its cable
+    up: Vec
+    slot: Vec
+    axis: Vec  # from the connector to its cable
     gap: float
     adjust: Poses | None  # the other hand slides to where the placing needs it
     T_c_f: Mat  # the other hand in the connector hand's TCP frame, while both carry
@@ -489,7 +488,7 @@ class _PlaceGeometry:
     approach: tuple[Poses, Poses]
     insert: tuple[Poses, Poses]
     retract: Poses
-    rear: cg.Vec  # the connector's rear face, seated
+    rear: Vec  # the connector's rear face, seated
     pull_distance: float
     s_other: float
 
@@ -559,7 +558,7 @@ def _place_geometry(
     )
 
 
-def _pair_pose(spacing: float, up: cg.Vec) -> Mat:
+def _pair_pose(spacing: float, up: Vec) -> Mat:
     """T_connector-hand_other-hand when both hold the cable ``spacing`` apart, leaning apart."""
     x = cg.horizontal(_any_normal(up), up)
     origin = np.zeros(3)
@@ -567,9 +566,9 @@ def _pair_pose(spacing: float, up: cg.Vec) -> Mat:
     return g.inverse(T_c) @ cg.tcp_frame(origin + spacing * x, x, up, x, cg.LEAN)
 
 
-def _any_normal(up: cg.Vec) -> cg.Vec:
+def _any_normal(up: Vec) -> Vec:
     v = np.array([1.0, 0.0, 0.0]) if abs(up[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    out: cg.Vec = v - up * float(v @ up)
+    out: Vec = v - up * float(v @ up)
     return out
 
 
@@ -577,8 +576,8 @@ def _same_pose(A: Mat, B: Mat, tol_m: float = 1e-3, tol_rad: float = math.radian
     dp = float(np.linalg.norm(A[:3, 3] - B[:3, 3]))
     return (
         dp <= tol_m
-        and cg.angle_between(A[:3, 0], B[:3, 0]) <= tol_rad
-        and (cg.angle_between(A[:3, 2], B[:3, 2]) <= tol_rad)
+        and g.angle_between(A[:3, 0], B[:3, 0]) <= tol_rad
+        and (g.angle_between(A[:3, 2], B[:3, 2]) <= tol_rad)
     )
 
 
@@ -650,9 +649,9 @@ class GuidePlan:
     guide: str
     where: str
     dims: cg.GuideDims
-    up: cg.Vec
-    slot: cg.Vec  # S: the slot keypoint
-    axis: cg.Vec  # u: the cable's direction through the guide, along the route
+    up: Vec
+    slot: Vec  # S: the slot keypoint
+    axis: Vec  # u: the cable's direction through the guide, along the route
     side: float  # +1: slide to the left of u (up x u), -1: to the right
     x_offset: float
     a: float
@@ -709,7 +708,7 @@ class GuidePlan:
         return s.hold(r_arm, cable, self.laid + self.radius)
 
 
-def _point(v: cg.Vec) -> tuple[float, float, float]:
+def _point(v: Vec) -> tuple[float, float, float]:
     return (float(v[0]), float(v[1]), float(v[2]))
 
 
@@ -745,8 +744,8 @@ def _guide_plan(
     ap = slot - (dims.length / 2.0 + x_off) * axis
     # The routing hand tips forward and towards its base, the other hand back and towards
     # its base (the other hand by more): see cg.LEAN and cg.PIVOT_LEAN.
-    tip_r = cg.unit(axis + _towards_base(world, r_arm, slot, up))
-    tip_o = cg.unit(-axis + _towards_base(world, o_arm, slot, up))
+    tip_r = g.unit(axis + _towards_base(world, r_arm, slot, up))
+    tip_o = g.unit(-axis + _towards_base(world, o_arm, slot, up))
     T_r0 = state.tcp[r_arm]
     T_ap = cg.nearer_turn(T_r0, cg.tcp_frame(ap, axis, up, tip_r, cg.LEAN))
     T_pivot = cg.nearer_turn(state.tcp[o_arm], cg.tcp_frame(ap, axis, up, tip_o, cg.PIVOT_LEAN))
@@ -755,13 +754,13 @@ def _guide_plan(
     left = np.cross(up, axis)
     d = math.cos(theta) * axis + side * math.sin(theta) * left
     reorient = None
-    if cg.rotation_angle(T_r0, T_ap) > cg.REORIENT_MIN:
+    if g.rotation_angle(T_r0, T_ap) > cg.REORIENT_MIN:
         reorient = cg.turn_in_place(T_r0, T_ap)
         T_r0 = reorient[-1]
     approach = cg.line(T_r0, T_ap)
     # Sliding, the hand turns about the vertical to hold the cable along the slide; the swing
     # over the slot turns it back, so it inserts in the approach orientation.
-    T_slid = g.transform(cg.rotation_about(up, side * theta) @ T_ap[:3, :3], ap + r_cable * d)
+    T_slid = g.transform(g.axis_angle_to_matrix(up, side * theta) @ T_ap[:3, :3], ap + r_cable * d)
     slide = cg.line(T_ap, T_slid)
     pull_path = cg.line(slide[-1], cg.at(slide[-1], ap + (r_cable + pull_r) * d))
     # Lift: up on the circle about the pivot in the vertical plane of the slide, to the
@@ -810,9 +809,9 @@ def _slide_side(
     world: World,
     guide: str,
     where: str,
-    ap: cg.Vec,
-    axis: cg.Vec,
-    up: cg.Vec,
+    ap: Vec,
+    axis: Vec,
+    up: Vec,
     theta: float,
     length: float,
     hand: cg.Hand,
@@ -968,7 +967,7 @@ def _nearest_arm(world: World, arms: tuple[str, str], ref: str) -> str:
     return arms[0] if dist[0] <= dist[1] else arms[1]
 
 
-def _towards_base(world: World, arm: str, p: cg.Vec, up: cg.Vec) -> cg.Vec:
+def _towards_base(world: World, arm: str, p: Vec, up: Vec) -> Vec:
     """Horizontal unit vector from ``p`` towards the arm's base."""
     return cg.horizontal(world.cell.robots[arm].base.matrix()[:3, 3] - p, up)
 

@@ -56,18 +56,15 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from cellengine import geometry as g
+from cellengine.arrays import Mat, Poses, Vec
 from cellengine.errors import InputError, Problem
-from cellengine.geometry import Mat
 from cellengine.info.cell import Tool
 from cellengine.info.platform import Element
 from cellengine.motion import interpolate as ip
 from cellengine.world import World
-
-Vec = NDArray[np.float64]
-Poses = NDArray[np.float64]  # (k, 4, 4)
 
 # Offsets of the method (m, rad). Constants of the skills, not of a cell: the paper gives no
 # values; these fit a 6 mm cable and 20 mm fingers with room for a few mm of error.
@@ -113,19 +110,10 @@ REORIENT_MIN = math.radians(10.0)
 # --------------------------------------------------------------------------- frames
 
 
-def unit(v: ArrayLike) -> Vec:
-    a = np.asarray(v, dtype=float)
-    n = float(np.linalg.norm(a))
-    if n < 1e-12:
-        raise ValueError("unit: zero vector")
-    out: Vec = a / n
-    return out
-
-
 def horizontal(v: ArrayLike, up: Vec) -> Vec:
     """``v`` projected on the plane normal to ``up``, unit length."""
     a = np.asarray(v, dtype=float)
-    return unit(a - up * float(a @ up))
+    return g.unit(a - up * float(a @ up))
 
 
 def tcp_frame(
@@ -143,8 +131,8 @@ def tcp_frame(
     z = -up
     if flange_towards is not None and lean != 0.0:
         z = -math.cos(lean) * up - math.sin(lean) * horizontal(flange_towards, up)
-    y = unit(np.cross(z, c))
-    return g.transform(np.column_stack([np.cross(y, z), y, z]), position)
+    y = g.unit(np.cross(z, c))
+    return g.transform(g.frame_yz(y, z), position)
 
 
 def at(T: Mat, position: ArrayLike) -> Mat:
@@ -156,21 +144,6 @@ def at(T: Mat, position: ArrayLike) -> Mat:
 
 def lifted(T: Mat, up: Vec, height: float) -> Mat:
     return at(T, T[:3, 3] + height * up)
-
-
-def rotation_about(axis: ArrayLike, angle: float) -> Mat:
-    return g.axis_angle_to_matrix(list(np.asarray(axis, dtype=float)), angle)
-
-
-def angle_between(a: ArrayLike, b: ArrayLike) -> float:
-    ua, ub = unit(a), unit(b)
-    return math.atan2(float(np.linalg.norm(np.cross(ua, ub))), float(ua @ ub))
-
-
-def signed_angle(a: ArrayLike, b: ArrayLike, axis: Vec) -> float:
-    """Angle (rad, right-handed about ``axis``) from ``a`` to ``b``, both normal to it."""
-    ua, ub = unit(a), unit(b)
-    return math.atan2(float(np.cross(ua, ub) @ axis), float(ua @ ub))
 
 
 # --------------------------------------------------------------------------- paths
@@ -195,13 +168,10 @@ def nearer_turn(T_from: Mat, T_to: Mat) -> Mat:
     flipped = np.array(T_to, dtype=float)
     flipped[:3, :2] *= -1.0  # Rz(pi): x and y reversed, z kept
     return (
-        flipped if rotation_angle(T_from, flipped) < rotation_angle(T_from, T_to) - 1e-9 else T_to
+        flipped
+        if g.rotation_angle(T_from, flipped) < g.rotation_angle(T_from, T_to) - 1e-9
+        else T_to
     )
-
-
-def rotation_angle(A: Mat, B: Mat) -> float:
-    """The angle (rad) of the rotation from A's orientation to B's."""
-    return float(np.linalg.norm(ip.rotation_vector(A[:3, :3].T @ B[:3, :3])))
 
 
 def pair_line(T_leader0: Mat, T_leader1: Mat, T_leader_follower: Mat) -> tuple[Poses, Poses]:
@@ -327,7 +297,7 @@ def _width(dims: Mapping[str, float]) -> float | None:
 def platform_up(world: World, ref: str) -> Vec:
     """The z axis of the platform ``ref`` is on, in the cell frame: 'up' for its elements."""
     platform, _, _ = world.resolve(ref)
-    return unit(platform.T_cell_platform[:3, 2])
+    return g.unit(platform.T_cell_platform[:3, 2])
 
 
 def position(world: World, ref: str) -> Vec:
@@ -363,7 +333,7 @@ def footprints(world: World, exclude: str, up: Vec) -> list[Footprint]:
             if element is skip or corners is None:
                 continue
             T = platform.T_cell_platform @ element.T_platform_element
-            P = corners @ T[:3, :3].T + T[:3, 3]
+            P = g.transform_points(T, corners)
             heights = P @ up
             flat = P - np.outer(heights, up)
             lo, hi = flat.min(axis=0), flat.max(axis=0)
@@ -389,7 +359,7 @@ def _corners(element: Element) -> Vec | None:
         return out
     if element.boxes:
         parts = [
-            (unit_box * np.asarray(b.size)) @ b.T_element_box[:3, :3].T + b.T_element_box[:3, 3]
+            g.transform_points(b.T_element_box, unit_box * np.asarray(b.size))
             for b in element.boxes
         ]
         return np.concatenate(parts)

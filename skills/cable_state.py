@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from cellengine.geometry import Mat
+from cellengine.arrays import Mat
 from cellengine.program import GripperEvent
 
 if TYPE_CHECKING:

@@ -15,8 +15,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from cellengine.arrays import Mat
 from cellengine.context import PlanningContext
-from cellengine.geometry import Mat
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.ik import ArmIK
 from cellengine.motion.robot import TOOL_GEOMETRY, CellModel

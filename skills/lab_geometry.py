@@ -22,13 +22,11 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from numpy.typing import NDArray
 
 from cellengine import geometry as g
-from cellengine.geometry import Mat
+from cellengine.arrays import Mat, Vec
 from cellengine.info.objects import Container
 
-Vec = NDArray[np.float64]
 Grasp = Literal["top", "side"]
 
 APPROACH = 0.06  # m: the hand comes in along its z from this far
@@ -92,7 +90,7 @@ def top_grasp(axis_point: Vec, heading: float) -> Mat:
     about z from the cell's x)."""
     z = -UP
     y = np.array([math.cos(heading), math.sin(heading), 0.0])
-    return g.transform(np.column_stack([np.cross(y, z), y, z]), axis_point)
+    return g.transform(g.frame_yz(y, z), axis_point)
 
 
 def side_grasp(axis_point: Vec, direction: Vec) -> Mat:
@@ -100,7 +98,7 @@ def side_grasp(axis_point: Vec, direction: Vec) -> Mat:
     ``direction``: z along it, the jaw axis horizontal across it."""
     z = horizontal(direction)
     y = np.cross(UP, z)
-    return g.transform(np.column_stack([np.cross(y, z), y, z]), axis_point)
+    return g.transform(g.frame_yz(y, z), axis_point)
 
 
 def approach_of(T_grasp: Mat, distance: float = APPROACH) -> Mat:

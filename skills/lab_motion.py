@@ -19,8 +19,8 @@ from typing import Any, Protocol
 import numpy as np
 
 from cellengine import geometry as g
+from cellengine.arrays import Mat
 from cellengine.errors import InputError, Problem
-from cellengine.geometry import Mat
 from cellengine.motion import interpolate as ip
 from cellengine.program import Annotation, ArmPath, GripperEvent, Measure, Segment
 from cellengine.skills import lab_geometry as lg
@@ -371,7 +371,7 @@ def pour(
 
 def _tilted(T: Mat, axis: Any, angle: float) -> Mat:
     out = np.array(T, dtype=float)
-    R = g.axis_angle_to_matrix(list(np.asarray(axis, dtype=float)), angle)[:3, :3]
+    R = g.axis_angle_to_matrix(axis, angle)
     out[:3, :3] = R @ T[:3, :3]
     return out
 

@@ -42,10 +42,10 @@ from cellengine.allocate import (
     allocate,
 )
 from cellengine.allocation.options import Action
+from cellengine.arrays import Mat
 from cellengine.choices import candidates, known_masses, resolve
 from cellengine.context import PlanningContext
 from cellengine.errors import InputError, Problem, at_step
-from cellengine.geometry import Mat
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.robot import CellModel
 from cellengine.motion.scene import rearranged, standing_container

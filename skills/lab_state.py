@@ -14,7 +14,7 @@ from types import MappingProxyType
 import numpy as np
 
 from cellengine import geometry as g
-from cellengine.geometry import Mat
+from cellengine.arrays import Mat
 from cellengine.world import World
 
 

@@ -28,8 +28,8 @@ from types import TracebackType
 from typing import Any, ClassVar, NamedTuple, TypeVar
 
 import numpy as np
-from numpy.typing import NDArray
 
+from cellengine.arrays import FloatArray
 from cellengine.drivers.fault import DriverFault, DriverRefused, Fault
 from cellengine.drivers.layout import CellLayout
 from cellengine.drivers.lifecycle import Lifecycle, LifecycleError, State
@@ -39,7 +39,6 @@ from cellengine.info.cell import Cell
 from cellengine.info.objects import Objects
 from cellengine.program import CompiledSegment, TimedEvent
 
-FloatArray = NDArray[np.float64]
 T = TypeVar("T")
 
 # how far (rad or m) a joint may be from a segment's first point when the segment is sent

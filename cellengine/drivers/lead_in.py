@@ -11,11 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 import ruckig
-from numpy.typing import NDArray
 
+from cellengine.arrays import FloatArray
 from cellengine.motion.otg import Retargeter
-
-FloatArray = NDArray[np.float64]
 
 VELOCITY = 0.5  # rad/s
 ACCELERATION = 5.0  # rad/s^2

@@ -22,9 +22,8 @@ from typing import Any, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
+from cellengine.arrays import FloatArray
 from cellengine.drivers.fault import Fault
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

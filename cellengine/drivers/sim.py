@@ -24,7 +24,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from cellengine.drivers.base import START_TOLERANCE, Driver, FloatArray, GripperState
+from cellengine.arrays import FloatArray
+from cellengine.drivers.base import START_TOLERANCE, Driver, GripperState
 from cellengine.drivers.clock import Clock, RealClock, SimulatedClock
 from cellengine.drivers.fault import DriverFault, DriverRefused, Fault
 from cellengine.drivers.injection import Injection, Injections

@@ -13,10 +13,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
+from cellengine.arrays import BoolArray, FloatArray
 
 
 def lag_gain(lag: float, period: float) -> float:

@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from cellengine.arrays import FloatArray
 from cellengine.drivers.base import Driver as Base
 from cellengine.drivers.base import GripperState
 from cellengine.drivers.clock import sleep_until
@@ -46,8 +47,6 @@ from cellengine.info.cell import Cell
 from cellengine.info.cell import UrRtdeDriver as Config
 from cellengine.info.objects import Objects
 from cellengine.program import CompiledSegment, TimedEvent
-
-FloatArray = np.ndarray
 
 SERVO_PERIOD = 0.002  # s: 500 Hz, the e-Series controller's rate
 CONNECT_TIMEOUT = 5.0  # s for each connection (dashboard, receive, control, IO)

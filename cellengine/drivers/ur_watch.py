@@ -12,9 +12,8 @@ tested without a controller.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
+from cellengine.arrays import FloatArray
 
 PROTECTIVE_STOP = 2
 SAFEGUARD_STOP = 4

@@ -12,15 +12,13 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
-from numpy.typing import NDArray
 
+from cellengine.arrays import Vec
 from cellengine.execute.refused import Refused
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.gate import GateReport, check_cell_trajectory
 from cellengine.motion.robot import CellModel
 from cellengine.motion.trajectory import Trajectory
-
-Vec = NDArray[np.float64]
 
 KEEP_DISTANCE_TOLERANCE = 0.001  # m: the fingertips' distance may vary by this much
 KEEP_DISTANCE_DT = 0.005  # s between the samples where it is measured

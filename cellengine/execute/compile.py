@@ -24,8 +24,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from cellengine.arrays import Vec
 from cellengine.execute.checks import gate, kept_distance
 from cellengine.execute.held import Held, Holding
 from cellengine.execute.merge import MERGES, Merge, Merged, merge_rows, on_one_axis
@@ -41,8 +42,6 @@ from cellengine.motion.robot import CellModel
 from cellengine.motion.trajectory import Trajectory, concatenate
 from cellengine.program import CompiledSegment, Program, Segment, TimedEvent
 from cellengine.world import World
-
-Vec = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

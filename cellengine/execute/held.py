@@ -21,7 +21,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from cellengine.geometry import Mat
+from cellengine import geometry as g
+from cellengine.arrays import Mat
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.robot import TOOL_GEOMETRY
 from cellengine.motion.scene import (
@@ -141,7 +142,7 @@ class Holding:
             by_arm[arm] = obj
             if obj in standing:
                 T_centre = _mat(standing.pop(obj)) @ _half_height(self.world, obj, 1.0)
-                grips[arm] = _rows(np.linalg.inv(_need(T_cell_tcp, arm, obj)) @ T_centre)
+                grips[arm] = _rows(g.inverse(_need(T_cell_tcp, arm, obj)) @ T_centre)
         self._use(Held(by_arm, grips, standing, s.contacts))
 
     def touch(self, contacts: Iterable[tuple[str, str]]) -> None:

@@ -42,14 +42,13 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from numpy.typing import NDArray
 
+from cellengine.arrays import Vec
 from cellengine.execute.retime import fastest, jerk_limits, moves, still, thinned, timed
 from cellengine.motion.robot import CellModel
 from cellengine.motion.topp import SplinePath
 from cellengine.motion.trajectory import Trajectory
 
-Vec = NDArray[np.float64]
 Merge = Literal["joint", "published"]
 MERGES: tuple[Merge, ...] = ("joint", "published")
 

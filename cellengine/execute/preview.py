@@ -19,16 +19,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from numpy.typing import NDArray
 
+from cellengine.arrays import Vec
 from cellengine.execute import solve
 from cellengine.execute.refused import Refused
 from cellengine.execute.solve import Accept
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.robot import CellModel
 from cellengine.program import Segment
-
-Vec = NDArray[np.float64]
 
 PREVIEW_SEGMENTS = 6
 

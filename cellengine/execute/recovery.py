@@ -11,8 +11,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 import numpy as np
-from numpy.typing import NDArray
 
+from cellengine.arrays import Vec
 from cellengine.drivers.fault import DriverRefused
 from cellengine.execute.held import Holding
 from cellengine.execute.retime import timed
@@ -22,8 +22,6 @@ from cellengine.motion.scene import CollisionScene
 from cellengine.motion.transit import plan_for_arms
 from cellengine.program import CompiledSegment, Segment
 from cellengine.world import World
-
-Vec = NDArray[np.float64]
 
 
 def recovery_segment(

@@ -15,13 +15,11 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from numpy.typing import NDArray
 
+from cellengine.arrays import Vec
 from cellengine.motion.robot import Limits
 from cellengine.motion.timing import speed_profile, time_parameterize
 from cellengine.motion.trajectory import Trajectory
-
-Vec = NDArray[np.float64]
 
 JERK_PER_ACCELERATION = 50.0  # 1/s: jerk limit = 50 x acceleration limit, per joint
 # Rows closer than this (rad or m, largest joint) are one: a zero-length spline interval.

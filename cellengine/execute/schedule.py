@@ -22,14 +22,12 @@ from collections.abc import Mapping
 from typing import Protocol
 
 import numpy as np
-from numpy.typing import NDArray
 
+from cellengine.arrays import Vec
 from cellengine.execute.merge import on_one_axis
 from cellengine.execute.refused import Refused
 from cellengine.motion.robot import CellModel
 from cellengine.motion.trajectory import Trajectory
-
-Vec = NDArray[np.float64]
 
 SCHEDULE_DT = 0.01  # s between the states checked for each candidate start
 DELAY_STEP = 0.05  # s by which an arm's start is pushed back

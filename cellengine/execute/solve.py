@@ -19,8 +19,8 @@ import itertools
 from collections.abc import Callable, Iterator, Mapping, Sequence
 
 import numpy as np
-from numpy.typing import NDArray
 
+from cellengine.arrays import Poses, Vec
 from cellengine.execute.refused import NoMoreChoices, Refused
 from cellengine.motion.cartesian import (
     ArmInCell,
@@ -34,8 +34,6 @@ from cellengine.motion.ik import arm_ik
 from cellengine.motion.robot import CellModel
 from cellengine.motion.transit import plan_for_arms
 
-Vec = NDArray[np.float64]
-Poses = NDArray[np.float64]
 Accept = Callable[[Vec], bool]  # a goal configuration -> whether what follows can run from it
 
 PLANNER_SEED = 0  # OMPL is re-seeded per query: the same segment gives the same path

@@ -19,10 +19,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
-Vec = NDArray[np.float64]
-Poses = NDArray[np.float64]
+from cellengine.arrays import Poses, Vec
 
 # m between a waypoint and the other arm's TCP. The paper calls it collision_threshold and
 # does not give its value; 10 cm is about a gripper's width plus the fingers' travel.

@@ -26,8 +26,8 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
-from numpy.typing import NDArray
 
+from cellengine.arrays import Vec
 from cellengine.execute import solve
 from cellengine.execute.refused import Refused
 from cellengine.execute.solve import Accept
@@ -36,7 +36,6 @@ from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.robot import CellModel
 from cellengine.program import ArmPath, Segment
 
-Vec = NDArray[np.float64]
 Strategy = Literal["split", "sync", "async"]
 STRATEGIES: tuple[Strategy, ...] = ("split", "sync", "async")
 Solved = Literal["still", "one_arm", "together", "apart"]

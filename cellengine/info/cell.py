@@ -9,6 +9,7 @@ from typing import Annotated, Literal
 from pydantic import Field, StringConstraints, model_validator
 
 from cellengine import geometry
+from cellengine.arrays import Mat
 from cellengine.info.units import Angle, Frozen, Length, Mass, Units, Vec3Angle, Vec3Length
 
 # Names become parts of dotted references (platform.element.keypoint): no dots, no spaces.
@@ -21,7 +22,7 @@ class Pose(Frozen):
     xyz: Vec3Length = (0.0, 0.0, 0.0)
     rpy: Vec3Angle = (0.0, 0.0, 0.0)  # URDF: R = Rz(yaw) Ry(pitch) Rx(roll)
 
-    def matrix(self) -> geometry.Mat:
+    def matrix(self) -> Mat:
         return geometry.pose(self.xyz, self.rpy)
 
 
@@ -123,7 +124,7 @@ class Zone(Frozen):
             raise ValueError("robots: a robot is named twice")
         return self
 
-    def contains(self, p: Sequence[float] | geometry.Mat) -> bool:
+    def contains(self, p: Sequence[float] | Mat) -> bool:
         """Whether the point ``p`` (cell frame, m) is inside, faces included."""
         return all(lo <= float(v) <= hi for lo, v, hi in zip(self.min, p, self.max, strict=True))
 

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-Vec = NDArray[np.float64]
-Ints = NDArray[np.int64]
+from cellengine import geometry as g
+from cellengine.arrays import IntArray, Vec
 
 
 def _frozen(a: ArrayLike, dtype: type[np.generic]) -> NDArray[np.generic]:
@@ -34,7 +34,7 @@ def _frozen(a: ArrayLike, dtype: type[np.generic]) -> NDArray[np.generic]:
 @dataclass(frozen=True, eq=False)  # eq=False: compared by identity, as arrays compare per item
 class Mesh:
     vertices: Vec  # (n, 3)
-    faces: Ints  # (m, 3) indices into vertices, counter-clockwise seen from outside
+    faces: IntArray  # (m, 3) indices into vertices, counter-clockwise seen from outside
 
     def __post_init__(self) -> None:
         # read-only: a mesh is shared by elements and USE'd nodes, none of which may change it
@@ -75,7 +75,7 @@ class Mesh:
         """This mesh under the 4x4 affine ``T``; a mirroring ``T`` flips the faces so they
         still wind outwards."""
         faces = self.faces if np.linalg.det(T[:3, :3]) >= 0 else self.faces[:, ::-1]
-        return Mesh(self.vertices @ T[:3, :3].T + T[:3, 3], faces)
+        return Mesh(g.transform_points(T, self.vertices), faces)
 
     @staticmethod
     def concatenate(parts: Sequence[Mesh]) -> Mesh:

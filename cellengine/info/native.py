@@ -12,8 +12,8 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Literal
 
+from cellengine.arrays import Mat
 from cellengine.errors import InputError, known
-from cellengine.geometry import Mat
 from cellengine.info.mapcsv import MapRow, load_map
 from cellengine.info.models_xml import ElementModel, load_models
 from cellengine.info.platform import Element, Platform, Source, frozen_array

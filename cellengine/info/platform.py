@@ -12,7 +12,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from cellengine.geometry import Mat
+from cellengine.arrays import Mat
 from cellengine.info.mesh import Mesh
 
 

@@ -24,8 +24,9 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Literal
 
+from cellengine.arrays import Mat
 from cellengine.errors import CellError, InputError
-from cellengine.geometry import Mat, rot_x, rot_y, rot_z, transform
+from cellengine.geometry import rot_x, rot_y, rot_z, transform
 from cellengine.info.files import read_capped
 from cellengine.info.models_xml import element_column, source_lines
 from cellengine.info.platform import (

@@ -22,16 +22,15 @@ from typing import Literal, NamedTuple, TypeAlias
 
 import numpy as np
 from lxml import etree
-from numpy.typing import NDArray
 
+from cellengine.arrays import IntArray, Mat
 from cellengine.errors import CellError, InputError, Problem, display_path, known
-from cellengine.geometry import Mat, axis_angle_to_matrix, inverse, rot_x
+from cellengine.geometry import axis_angle_to_matrix, inverse, rot_x, transform_points
 from cellengine.info import primitives
 from cellengine.info.files import read_capped, resolve_inside
 from cellengine.info.mesh import Mesh
 from cellengine.info.xmlsafe import parse_xml
 
-Ints: TypeAlias = NDArray[np.int64]
 Element: TypeAlias = etree._Element
 
 MAX_INLINE_DEPTH = 8
@@ -157,8 +156,8 @@ class _File:
         self.chain = (*chain, path.resolve())  # the Inline chain down to this file
         self.defs: dict[str, Element] = {}  # DEF and id names; a USE looks only in its file
         self._order = {el: i for i, el in enumerate(root.iter(etree.Element))}
-        self._lines: Ints | None = None
-        self._cols: Ints = np.zeros(0, dtype=np.int64)
+        self._lines: IntArray | None = None
+        self._cols: IntArray = np.zeros(0, dtype=np.int64)
         for el in self._order:
             self._define(el)
 
@@ -206,7 +205,7 @@ class _Owner:
     line: int
     T: Mat  # rigid platform <- node
     T_inv: Mat
-    parts: list[tuple[Mat, Ints]] = field(default_factory=list)
+    parts: list[tuple[Mat, IntArray]] = field(default_factory=list)
     problem: Problem | None = None  # the first malformed geometry, when skipped
 
     def node(self) -> X3DNode:
@@ -233,7 +232,7 @@ class _Loader:
         self.owners: dict[str, _Owner] = {}
         self.loose = _Owner("", "", 0, np.eye(4), np.eye(4))
         self.active: set[Element] = set()  # elements being visited: USE cycles
-        self.cache: dict[Element, tuple[Mat, Ints]] = {}  # geometry, in its own frame
+        self.cache: dict[Element, tuple[Mat, IntArray]] = {}  # geometry, in its own frame
         self.points: dict[Element, Mat] = {}  # Coordinate nodes, often USE'd
         self.visits = 0
         self.triangles = 0
@@ -404,7 +403,7 @@ class _Loader:
                 continue
             self._add(V, F, ctx, child)
 
-    def _geometry(self, el: Element, tag: str, f: _File) -> tuple[Mat, Ints]:
+    def _geometry(self, el: Element, tag: str, f: _File) -> tuple[Mat, IntArray]:
         cached = self.cache.get(el)
         if cached is None:
             cached = self.cache[el] = _BUILDERS[tag](el, f, self)
@@ -423,7 +422,7 @@ class _Loader:
             pts = self.points[coord] = _points(coord, "point", f)
         return pts
 
-    def _add(self, V: Mat, F: Ints, ctx: _Ctx, el: Element) -> None:
+    def _add(self, V: Mat, F: IntArray, ctx: _Ctx, el: Element) -> None:
         if len(F) == 0:
             return
         self.triangles += len(F)
@@ -434,7 +433,7 @@ class _Loader:
             )
         owner = ctx.owner or self.loose
         M = owner.T_inv @ ctx.A  # the shape's frame -> the owner's rigid frame
-        V = V @ M[:3, :3].T + M[:3, 3]
+        V = transform_points(M, V)
         if not np.isfinite(V).all():
             raise ctx.file.error(
                 el, f"{_label(el)}: coordinates overflow: the Transform chain has numbers too large"
@@ -504,7 +503,7 @@ def _floats(text: str) -> Mat | None:
     return a if np.isfinite(a).all() else None
 
 
-def _ints(text: str) -> Ints | None:
+def _ints(text: str) -> IntArray | None:
     text = _plain(text)
     if not text:
         return np.empty(0, np.int64)
@@ -567,7 +566,7 @@ def _points(el: Element, attr: str, f: _File) -> Mat:
     return a.reshape(-1, 3)
 
 
-def _indices(el: Element, attr: str, f: _File) -> Ints:
+def _indices(el: Element, attr: str, f: _File) -> IntArray:
     a = _ints(el.get(attr, ""))
     if a is None:
         raise _bad_array(el, attr, "integers", f, True)
@@ -597,10 +596,10 @@ def _scaling(s: Mat, SR: Mat) -> Mat:
 
 # --- geometry, in the geometry node's own frame ----------------------------------------------
 
-Geometry: TypeAlias = tuple[Mat, Ints]
+Geometry: TypeAlias = tuple[Mat, IntArray]
 
 
-def _in_range(el: Element, attr: str, idx: Ints, n: int, f: _File) -> None:
+def _in_range(el: Element, attr: str, idx: IntArray, n: int, f: _File) -> None:
     bad = idx[(idx < 0) | (idx >= n)]
     if bad.size:
         raise f.error(
@@ -610,11 +609,11 @@ def _in_range(el: Element, attr: str, idx: Ints, n: int, f: _File) -> None:
         )
 
 
-def _oriented(el: Element, F: Ints) -> Ints:
+def _oriented(el: Element, F: IntArray) -> IntArray:
     return F[:, ::-1].copy() if el.get("ccw", "true").strip().lower() == "false" else F
 
 
-def _fan(idx: Ints) -> Ints:
+def _fan(idx: IntArray) -> IntArray:
     """Triangles of -1-separated polygons, each fanned from its first vertex, vectorised."""
     if idx.size and idx[-1] != -1:  # the trailing -1 is optional
         idx = np.append(idx, -1)

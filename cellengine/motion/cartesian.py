@@ -74,13 +74,11 @@ import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
 from cellengine import geometry as g
+from cellengine.arrays import BoolArray, Poses, Vec
 from cellengine.motion.ik import ArmIK, arm_ik, wrap
-from cellengine.motion.interpolate import rotations, step_lengths
+from cellengine.motion.interpolate import step_lengths
 from cellengine.motion.robot import Arm, CellModel
 
-Vec = NDArray[np.float64]
-BoolVec = NDArray[np.bool_]
-Poses = NDArray[np.float64]
 StopKind = Literal["unreachable", "limit", "joint_jump", "collision"]
 
 TWO_PI = 2.0 * math.pi
@@ -272,7 +270,7 @@ def _closed_form_rows(ik: ArmIK, Ts: Poses, seed: Vec) -> tuple[Vec, Stop | None
     return q, stop
 
 
-def _start_branch(sols: Vec, valid: BoolVec, seed: Vec) -> int:
+def _start_branch(sols: Vec, valid: BoolArray, seed: Vec) -> int:
     """The seed's branch: the one whose solution at the first waypoint is nearest the seed
     (angles compared modulo 2 pi). A tie (the seed at a singularity, where branches coincide)
     is broken at the second waypoint."""
@@ -285,7 +283,7 @@ def _start_branch(sols: Vec, valid: BoolVec, seed: Vec) -> int:
     return int(np.argmin(d0))
 
 
-def _branch_distance(sols: Vec, valid: BoolVec, seed: Vec) -> Vec:
+def _branch_distance(sols: Vec, valid: BoolArray, seed: Vec) -> Vec:
     d: Vec = np.sqrt((wrap(sols - seed) ** 2).sum(axis=1))
     d[~valid] = np.inf
     return d
@@ -315,7 +313,7 @@ def _unwrap(q: Vec, seed: Vec) -> Vec:
     return out
 
 
-def _unreachable_on_branch(ik: ArmIK, i: int, branch: int, valid_i: BoolVec) -> Stop:
+def _unreachable_on_branch(ik: ArmIK, i: int, branch: int, valid_i: BoolArray) -> Stop:
     others = [int(b) for b in np.flatnonzero(valid_i)]
     if others:
         why = (
@@ -398,7 +396,7 @@ def _joint_steps(ik: ArmIK, q: Vec, seed: Vec) -> Vec:
     return np.array([pin.difference(model, a, b) for a, b in itertools.pairwise(rows)])
 
 
-def _prismatic(ik: ArmIK) -> BoolVec:
+def _prismatic(ik: ArmIK) -> BoolArray:
     """(nv,) which velocity coordinates are prismatic."""
     out = np.zeros(ik.arm.model.nv, dtype=bool)
     for j in list(ik.arm.model.joints)[1:]:
@@ -419,10 +417,10 @@ def _first_jump(ik: ArmIK, q: Vec, seed: Vec, Ts: Poses, jump: JumpThreshold) ->
         np.inf if jump.prismatic is None else jump.prismatic,
         np.inf if jump.revolute is None else jump.revolute,
     )
-    absolute: BoolVec = np.asarray((dq > bound).any(axis=1))
+    absolute: BoolArray = np.asarray((dq > bound).any(axis=1))
     biggest = dq.max(axis=1)
     zero = lengths <= ZERO_STEP
-    still: BoolVec = np.asarray(zero & (biggest > ZERO_STEP_MOTION))
+    still: BoolArray = np.asarray(zero & (biggest > ZERO_STEP_MOTION))
     gain = np.where(zero, 0.0, biggest / np.where(zero, 1.0, lengths))
     median = float(np.median(gain[~zero])) if (~zero).any() else 0.0
     relative = np.zeros(len(dq), dtype=bool)
@@ -739,22 +737,8 @@ def resample(Ts: Poses, s: Vec, grid: Vec) -> Poses:
     at_end = t >= 1.0
     out[at_end] = B[at_end]
     if inner.any():
-        w = _rotation_vectors(np.swapaxes(A[inner, :3, :3], 1, 2) @ B[inner, :3, :3])
-        out[inner, :3, :3] = A[inner, :3, :3] @ rotations(t[inner, None] * w)
-    return out
-
-
-def _rotation_vectors(R: Poses) -> Vec:
-    """log of many rotations (k, 3, 3) -> (k, 3): from the skew part for the small angles
-    between consecutive waypoints, pinocchio's log3 near pi (where the skew part vanishes)."""
-    chord = np.linalg.norm((R - np.eye(3)).reshape(-1, 9), axis=1)
-    angle = 2.0 * np.arcsin(np.minimum(chord / (2.0 * math.sqrt(2.0)), 1.0))
-    skew = np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]], 1)
-    small = angle < 1e-9  # angle / sin(angle) = 1 to round-off
-    scale = np.where(small, 0.5, angle / np.where(small, 1.0, 2.0 * np.sin(angle)))
-    out: Vec = skew * scale[:, None]
-    for i in np.flatnonzero(angle > 2.0):
-        out[i] = pin.log3(R[i])
+        w = g.log3_batch(np.swapaxes(A[inner, :3, :3], 1, 2) @ B[inner, :3, :3])
+        out[inner, :3, :3] = A[inner, :3, :3] @ g.exp3_batch(t[inner, None] * w)
     return out
 
 

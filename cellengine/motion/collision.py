@@ -31,9 +31,8 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
+from cellengine.arrays import Vec
 from cellengine.motion.scene import CollisionScene, HeldObject, Pair, attach, detach
-
-Vec = NDArray[np.float64]
 
 STEP_SAFETY = 0.9  # of the largest step a flagged pair's distance allows
 STEP_GROWTH = 2.0  # after a passed step

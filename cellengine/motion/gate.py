@@ -15,10 +15,9 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from cellengine.arrays import Vec
 from cellengine.motion.robot import CellModel, Limits
 from cellengine.motion.trajectory import Trajectory
-
-Vec = NDArray[np.float64]
 
 SAMPLE_DT = 0.001  # seconds between checked samples
 TOLERANCE = 1e-6  # relative slack on limits, for rounding in the producers

@@ -6,9 +6,8 @@ from typing import Any
 
 import coal
 import numpy as np
-from numpy.typing import NDArray
 
-Vec = NDArray[np.float64]
+from cellengine.arrays import Vec
 
 # Qt: triangulated facets (coal needs it to keep triangles). Pp: no precision warnings, which
 # coal's qhull would print through a null stream and crash.

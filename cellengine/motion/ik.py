@@ -25,12 +25,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from cellengine import geometry as g
+from cellengine.arrays import BoolArray, Vec
 from cellengine.motion.numeric_ik import NumericIK
 from cellengine.motion.robot import Arm
 from cellengine.motion.ur_ik import URKinematics
 
-Vec = NDArray[np.float64]
-BoolVec = NDArray[np.bool_]
 TWO_PI = 2.0 * math.pi
 
 # Two solutions closer than this (rad, per joint, after wrapping) are one (singular poses,
@@ -115,7 +114,7 @@ class ArmIK:
 
     def solve_batch(
         self, T_cell_tcp: ArrayLike, seed: ArrayLike | None = None
-    ) -> tuple[Vec, BoolVec]:
+    ) -> tuple[Vec, BoolArray]:
         """For N unrelated poses, each one's solution nearest ``seed`` ((n,) or (N, n);
         default home): q (N, n), NaN where ok (N,) is False. Closed form: one numpy pass;
         numerical: one solve per pose."""
@@ -135,7 +134,7 @@ class ArmIK:
 
     def branches(
         self, T_cell_tcp: ArrayLike, seed6: ArrayLike | None = None
-    ) -> tuple[Vec, BoolVec]:
+    ) -> tuple[Vec, BoolArray]:
         """Closed form only: all eight branches of N poses, q (N, 8, 6) wrapped to [-pi, pi],
         valid (N, 8) (reached, limits not applied). ``seed6``: q6 at wrist singularities."""
         kin = self._closed_form()

@@ -8,7 +8,7 @@ that keeps both under their maximum: ``max(ceil(length / max_translation), ceil(
 max_rotation), 1)`` steps, N = steps + 1 poses.
 
 This is the problem-building half of a Cartesian path; :mod:`cellengine.motion.cartesian`
-solves it. Rotation helpers (log, batched exp) are private here until geometry.py grows them.
+solves it. The rotations (log, batched exp, slerp, angles) are :mod:`cellengine.geometry`'s.
 """
 
 from __future__ import annotations
@@ -19,64 +19,21 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import pinocchio as pin
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-from cellengine.geometry import Mat
-
-Vec = NDArray[np.float64]
-Poses = NDArray[np.float64]  # (N, 4, 4)
+from cellengine import geometry as g
+from cellengine.arrays import Mat, Poses, Vec
 
 MAX_TRANSLATION = 0.005  # m per step: 1 mm of chord sag between steps on a 5 cm radius arc
 MAX_ROTATION = math.radians(2.0)  # rad per step
 # Three points closer than this to one line have no circle through them.
 COLLINEAR = 1e-9
-# Rotation angle (rad) below which a rotation axis is meaningless.
-TINY_ANGLE = 1e-12
 # The length of one radian of TCP rotation when rotation and translation are measured together
 # (path length, fraction of a path achieved): a point 10 cm from the TCP moves 10 cm per rad.
 ROTATION_LENGTH = 0.1  # m / rad
 
 
-# ----------------------------------------------------------------------------- rotations
-
-
-def rotation_vector(R: Mat) -> Vec:
-    """The axis times the angle (rad, in [0, pi]) of a rotation matrix."""
-    return np.asarray(pin.log3(np.asarray(R, dtype=float)), dtype=float)
-
-
-def rotations(axis_angle: Vec) -> Poses:
-    """Rodrigues' formula over many rotation vectors (N, 3) -> (N, 3, 3)."""
-    w = np.asarray(axis_angle, dtype=float).reshape(-1, 3)
-    angle = np.linalg.norm(w, axis=1)
-    k = w / np.where(angle > TINY_ANGLE, angle, 1.0)[:, None]
-    K = np.zeros((len(w), 3, 3))
-    K[:, 0, 1], K[:, 0, 2] = -k[:, 2], k[:, 1]
-    K[:, 1, 0], K[:, 1, 2] = k[:, 2], -k[:, 0]
-    K[:, 2, 0], K[:, 2, 1] = -k[:, 1], k[:, 0]
-    s, c = np.sin(angle)[:, None, None], np.cos(angle)[:, None, None]
-    R: Poses = np.eye(3) + s * K + (1.0 - c) * (K @ K)
-    return R
-
-
-def slerp(R0: Mat, R1: Mat, t: ArrayLike) -> Poses:
-    """Rotations from R0 (t = 0) to R1 (t = 1) along the shortest arc, at constant angular
-    speed: ``R0 @ exp(t * log(R0^T R1))``, (len(t), 3, 3)."""
-    w = rotation_vector(np.asarray(R0).T @ np.asarray(R1))
-    ts = np.atleast_1d(np.asarray(t, dtype=float))
-    out: Poses = np.asarray(R0, dtype=float) @ rotations(ts[:, None] * w)
-    return out
-
-
-def rotation_angles(Ts: Poses) -> Vec:
-    """Angle (rad) between consecutive orientations of (N, 4, 4) or (N, 3, 3) poses, (N-1,).
-    From the chord: |R1 - R0|_F = 2 sqrt(2) sin(angle / 2), exact for small steps where
-    arccos of the trace loses half the digits."""
-    R = np.asarray(Ts)[:, :3, :3]
-    chord = np.linalg.norm((R[1:] - R[:-1]).reshape(-1, 9), axis=1)
-    out: Vec = 2.0 * np.arcsin(np.minimum(chord / (2.0 * math.sqrt(2.0)), 1.0))
-    return out
+# ----------------------------------------------------------------------------- lengths
 
 
 def step_lengths(Ts: Poses) -> Vec:
@@ -84,7 +41,7 @@ def step_lengths(Ts: Poses) -> Vec:
     ``hypot(|dp|, ROTATION_LENGTH * angle)``, so a pure reorientation has a length too."""
     P = np.asarray(Ts)[:, :3, 3]
     dp = np.linalg.norm(np.diff(P, axis=0), axis=1)
-    out: Vec = np.hypot(dp, ROTATION_LENGTH * rotation_angles(Ts))
+    out: Vec = np.hypot(dp, ROTATION_LENGTH * g.rotation_angles(Ts))
     return out
 
 
@@ -112,10 +69,10 @@ def line(
     """A straight line of the TCP from ``T_start`` to ``T_end``, orientation by slerp."""
     T0, T1 = _pose(T_start, "T_start"), _pose(T_end, "T_end")
     dp = T1[:3, 3] - T0[:3, 3]
-    w = rotation_vector(T0[:3, :3].T @ T1[:3, :3])
+    w = g.log3(T0[:3, :3].T @ T1[:3, :3])
     n = steps(float(np.linalg.norm(dp)), float(np.linalg.norm(w)), max_translation, max_rotation)
     t = np.arange(n + 1) / n
-    out = _poses(T0[:3, :3] @ rotations(t[:, None] * w), T0[:3, 3] + t[:, None] * dp)
+    out = _poses(T0[:3, :3] @ g.exp3_batch(t[:, None] * w), T0[:3, 3] + t[:, None] * dp)
     out[-1] = T1  # exact end, whatever the round-off
     return out
 
@@ -199,11 +156,11 @@ def arc_through(
     orientation by slerp from T_start's to T_end's in step with the arc angle."""
     T0, T1 = _pose(T_start, "T_start"), _pose(T_end, "T_end")
     circle, _, sweep = circle_through(T0[:3, 3], p_via, T1[:3, 3])
-    w = rotation_vector(T0[:3, :3].T @ T1[:3, :3])
+    w = g.log3(T0[:3, :3].T @ T1[:3, :3])
     angle = float(np.linalg.norm(w))
     n = steps(circle.radius * sweep, angle, max_translation, max_rotation)
     t = np.arange(n + 1) / n
-    out = _poses(T0[:3, :3] @ rotations(t[:, None] * w), circle.points(t * sweep))
+    out = _poses(T0[:3, :3] @ g.exp3_batch(t[:, None] * w), circle.points(t * sweep))
     out[0], out[-1] = T0, T1
     return out
 
@@ -233,7 +190,7 @@ def arc_about(
     radius = float(np.linalg.norm(r_vec - k * float(k @ r_vec)))
     n = steps(radius * abs(angle), abs(angle) if turn else 0.0, max_translation, max_rotation)
     t = np.arange(n + 1) / n
-    R = rotations((t * angle)[:, None] * k)  # (n + 1, 3, 3) about the axis
+    R = g.exp3_batch((t * angle)[:, None] * k)  # (n + 1, 3, 3) about the axis
     positions = c + R @ r_vec
     orientations = R @ T0[:3, :3] if turn else np.broadcast_to(T0[:3, :3], R.shape)
     out = _poses(orientations, positions)
@@ -252,7 +209,7 @@ def arc_circle(T_start: Mat, centre: ArrayLike, axis: ArrayLike) -> Circle:
     foot = c + k * float(k @ r_vec)
     radial = T0[:3, 3] - foot
     radius = float(np.linalg.norm(radial))
-    x = radial / radius if radius > 0 else _any_perpendicular(k)
+    x = radial / radius if radius > 0 else g.any_perpendicular(k)
     return Circle(foot, k, radius, x)
 
 
@@ -265,13 +222,6 @@ def _angle_on(circle: Circle, p: Vec) -> float:
     y = np.cross(circle.axis, circle.x)
     a = math.atan2(float(d @ y), float(d @ circle.x))
     return a if a > 0 else a + 2.0 * math.pi
-
-
-def _any_perpendicular(k: Vec) -> Vec:
-    x = np.array([1.0, 0.0, 0.0]) if abs(k[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    x = x - k * float(x @ k)
-    out: Vec = x / np.linalg.norm(x)
-    return out
 
 
 def _pose(T: ArrayLike, name: str) -> Mat:

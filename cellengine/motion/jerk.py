@@ -37,12 +37,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
+from cellengine.arrays import FloatArray
 from cellengine.motion.topp import GeometricPath, SpeedPlanner, SpeedProfile, row_max, row_min
 from cellengine.motion.trajectory import Trajectory
-
-FloatArray = NDArray[np.float64]
 
 # Knots are placed where the filtered motion has a kink in jerk (reference grid times,
 # their shifts by W, path knots crossed), and no further apart than this, so the quintic

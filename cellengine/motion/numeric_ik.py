@@ -25,9 +25,9 @@ from typing import Any, NamedTuple
 import eigenpy  # type: ignore[import-untyped]
 import numpy as np
 import pinocchio as pin
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-Array = NDArray[np.float64]
+from cellengine.arrays import FloatArray
 
 # Limits beyond these are "none" for sampling restarts (URDF joints without a limit tag get
 # +-max float in pinocchio).
@@ -49,7 +49,7 @@ class IKResult(NamedTuple):
     ``success``), in pinocchio's layout (nq). A NamedTuple: a third of a frozen dataclass's
     construction time, which shows in a 30 us warm solve."""
 
-    q: Array
+    q: FloatArray
     success: bool
     pos_err: float  # m, |p_frame - p_target|
     rot_err: float  # rad, angle of R_frame^T R_target
@@ -116,7 +116,7 @@ class NumericIK:
 
     # ------------------------------------------------------------------ public
 
-    def ik(self, target: pin.SE3 | ArrayLike, seed: ArrayLike | None = None) -> Array | None:
+    def ik(self, target: pin.SE3 | ArrayLike, seed: ArrayLike | None = None) -> FloatArray | None:
         """The configuration (nq) placing the frame at ``target``, or None."""
         r = self.solve(target, seed)
         return r.q if r.success else None
@@ -142,7 +142,7 @@ class NumericIK:
 
     # ------------------------------------------------------------------ the loop
 
-    def _attempt(self, q: Array, oMdes: pin.SE3) -> tuple[bool, float, float, int, Array]:
+    def _attempt(self, q: FloatArray, oMdes: pin.SE3) -> tuple[bool, float, float, int, FloatArray]:
         """One LM descent from q: (success, pos err, rot err, iterations, q)."""
         model, data, fid = self.model, self.data, self.frame_id
         chain = self._chain
@@ -237,31 +237,31 @@ class _Chain:
         self._lo = np.where(np.isin(np.arange(model.nq), self.bounded), lo, -np.inf)
         self._hi = np.where(np.isin(np.arange(model.nq), self.bounded), hi, np.inf)
 
-    def step(self, q: Array, v_chain: Array) -> Array:
+    def step(self, q: FloatArray, v_chain: FloatArray) -> FloatArray:
         """q moved by v along the chain, then clamped to the limits."""
         if self.cols is None:
             v = v_chain
         else:
             v = self._v
             v[self.cols] = v_chain
-        q2: Array = np.minimum(np.maximum(pin.integrate(self.model, q, v), self._lo), self._hi)
+        q2: FloatArray = np.minimum(np.maximum(pin.integrate(self.model, q, v), self._lo), self._hi)
         return q2
 
-    def clamp(self, q: Array) -> Array:
+    def clamp(self, q: FloatArray) -> FloatArray:
         if q.shape != (self.model.nq,):
             raise ValueError(f"a configuration has nq = {self.model.nq} entries, got {q.shape}")
-        out: Array = np.minimum(np.maximum(q, self._lo), self._hi)
+        out: FloatArray = np.minimum(np.maximum(q, self._lo), self._hi)
         return out
 
-    def middle(self) -> Array:
+    def middle(self) -> FloatArray:
         """The middle of each bounded coordinate's range; 0 (angle) for the others."""
-        q: Array = pin.neutral(self.model)
+        q: FloatArray = pin.neutral(self.model)
         for i in self.bounded:
             lo, hi = self.lower[i], self.upper[i]
             q[i] = 0.5 * (lo + hi) if np.isfinite(lo + hi) and hi - lo < 1e300 else 0.0
         return self.clamp(q)
 
-    def sample(self, rng: np.random.Generator, q: Array) -> Array:
+    def sample(self, rng: np.random.Generator, q: FloatArray) -> FloatArray:
         """q with the chain's coordinates drawn uniformly within their limits (a bounded range
         for coordinates without useful limits)."""
         out = q.copy()

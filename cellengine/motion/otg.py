@@ -17,11 +17,10 @@ from collections.abc import Sequence
 
 import numpy as np
 import ruckig
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from cellengine.arrays import FloatArray
 from cellengine.motion.trajectory import Trajectory
-
-FloatArray = NDArray[np.float64]
 
 UNLIMITED_JERK_RAMP = 0.002
 # Phase boundaries closer than this are one knot (ruckig gives zero-length phases).

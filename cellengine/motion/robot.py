@@ -31,11 +31,11 @@ from typing import Any, Literal
 import coal
 import numpy as np
 import pinocchio as pin
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from cellengine import geometry as g
+from cellengine.arrays import Mat, Vec
 from cellengine.errors import InputError, Problem, known
-from cellengine.geometry import Mat
 from cellengine.info.cell import Robot, Tool, UrdfModel
 from cellengine.info.files import resolve_inside
 from cellengine.info.units import Units
@@ -43,8 +43,6 @@ from cellengine.info.yamlio import load_yaml
 from cellengine.motion.ur_ik import DH, UR_DH
 from cellengine.motion.urdf import Urdf, build_geometry, build_model, check_chain, read_urdf
 from cellengine.world import World
-
-Vec = NDArray[np.float64]
 
 BUILTIN_DIR = Path(__file__).resolve().parent / "urdf"
 BUILTIN_TIP = "tool0"
@@ -320,21 +318,13 @@ def _add_tool_geometry(
     if length < 1e-6:  # a TCP on the flange: no volume to add
         return
     width = tool.finger_width or DEFAULT_FINGER_WIDTH
-    T_flange_box = g.transform(_z_along(p_tcp / length), p_tcp / 2)
+    T_flange_box = g.transform(g.z_along(p_tcp / length), p_tcp / 2)
     flange = model.frames[tool0]
     placement = flange.placement * pin.SE3(T_flange_box)
     box = coal.Box(width, width, length)
     geom.addGeometryObject(
         pin.GeometryObject(f"{owner}/{TOOL_GEOMETRY}", flange.parentJoint, tool0, placement, box)
     )
-
-
-def _z_along(z: Vec) -> Mat:
-    """A rotation whose z axis is the unit vector ``z`` (x kept near the flange's x)."""
-    x = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    x = x - z * float(x @ z)
-    x /= np.linalg.norm(x)
-    return np.column_stack([x, np.cross(z, x), z])
 
 
 def _limits(urdf: Urdf, tip: str, robot: Robot) -> Limits:

@@ -57,8 +57,8 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from cellengine import geometry as g
+from cellengine.arrays import Mat, Vec
 from cellengine.errors import InputError
-from cellengine.geometry import Mat
 from cellengine.info.cell import Obstacle
 from cellengine.info.files import resolve_inside
 from cellengine.info.mesh import Mesh
@@ -67,7 +67,6 @@ from cellengine.motion.hull import convex_hull
 from cellengine.motion.robot import TOOL_GEOMETRY, Arm, CellModel
 from cellengine.world import World
 
-Vec = NDArray[np.float64]
 Pair = tuple[str, str]  # two object names, sorted
 Kind = Literal["link", "static", "held"]
 
@@ -450,7 +449,7 @@ def _aabb(s: StaticShape) -> tuple[Vec, Vec]:
             for z in (box.min_[2], box.max_[2])
         ]
     )
-    cell_corners = corners @ s.T_cell_shape[:3, :3].T + s.T_cell_shape[:3, 3]
+    cell_corners = g.transform_points(s.T_cell_shape, corners)
     return cell_corners.min(axis=0), cell_corners.max(axis=0)
 
 
@@ -915,12 +914,8 @@ def _distance_gradient(
             continue
         J = pin.getJointJacobian(model, data, joint, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
         lever = points[side] - data.oMi[joint].translation
-        velocity[side] = normal @ (J[:3] - _skew(lever) @ J[3:])
+        velocity[side] = normal @ (J[:3] - g.skew(lever) @ J[3:])
     return float(result.min_distance), velocity[1] - velocity[0]
-
-
-def _skew(v: Vec) -> Vec:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
 def sampled_first_joint_pairs(

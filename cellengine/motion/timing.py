@@ -26,14 +26,13 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from cellengine.arrays import FloatArray
 from cellengine.motion import otg
 from cellengine.motion.jerk import PathLimits, smooth
 from cellengine.motion.topp import SpeedPlanner, SpeedProfile, SplinePath
 from cellengine.motion.trajectory import Trajectory
-
-FloatArray = NDArray[np.float64]
 
 # Grid of the speed profile: points per waypoint interval, within these bounds.
 GRID_PER_SEGMENT = 10

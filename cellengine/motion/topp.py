@@ -29,9 +29,9 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-FloatArray = NDArray[np.float64]
+from cellengine.arrays import FloatArray
 
 # A joint whose path derivative |dq_j/ds| is below this is treated as not moving along s
 # there: its velocity limit cannot bind and its acceleration limit bounds x alone.

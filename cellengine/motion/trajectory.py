@@ -20,7 +20,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-FloatArray = NDArray[np.float64]
+from cellengine.arrays import FloatArray
 
 # Junctions of concatenated trajectories must agree to this (rad or m, and per second).
 JOIN_TOLERANCE = 1e-6

@@ -15,15 +15,15 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 from ompl import base as ob
 from ompl import geometric as og
 from ompl import util as ou
 
+from cellengine.arrays import Vec
 from cellengine.errors import known
 from cellengine.motion.robot import CellModel
 
-Vec = NDArray[np.float64]
 StateValid = Callable[[Vec], bool]
 SegmentValid = Callable[[Vec, Vec], bool]
 

@@ -8,12 +8,10 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from cellengine import geometry as g
-from cellengine.geometry import Mat
-
-Vec = NDArray[np.float64]
+from cellengine.arrays import Mat, Vec
 
 
 def _bounds(b: ArrayLike) -> Vec:

@@ -33,10 +33,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-Array = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
+from cellengine.arrays import BoolArray, FloatArray
 
 TWO_PI = 2.0 * math.pi
 INV_TWO_PI = 1.0 / TWO_PI
@@ -158,12 +157,12 @@ class URKinematics:
 
     # ------------------------------------------------------------------ forward kinematics
 
-    def fk(self, q: ArrayLike) -> Array:
+    def fk(self, q: ArrayLike) -> FloatArray:
         """T_base_flange (4, 4) for one configuration (6,)."""
-        T: Array = self.fk_batch(np.asarray(q, dtype=float).reshape(1, 6))[0]
+        T: FloatArray = self.fk_batch(np.asarray(q, dtype=float).reshape(1, 6))[0]
         return T
 
-    def fk_batch(self, q: ArrayLike) -> Array:
+    def fk_batch(self, q: ArrayLike) -> FloatArray:
         """T_base_flange (N, 4, 4) for N configurations (N, 6)."""
         qa = np.asarray(q, dtype=float).reshape(-1, 6)
         n = qa.shape[0]
@@ -176,7 +175,7 @@ class URKinematics:
 
     def solve(
         self, T_base_flange: ArrayLike, seed6: ArrayLike | None = None
-    ) -> tuple[Array, BoolArray]:
+    ) -> tuple[FloatArray, BoolArray]:
         """All eight branches for N poses: q (N, 8, 6) in [-pi, pi] and valid (N, 8).
 
         ``seed6`` (scalar or (N,)) is q6 at wrist singularities (default 0). Invalid branches
@@ -187,7 +186,7 @@ class URKinematics:
 
     def _solve_t(
         self, T_base_flange: ArrayLike, seed6: ArrayLike | None
-    ) -> tuple[Array, BoolArray]:
+    ) -> tuple[FloatArray, BoolArray]:
         """:meth:`solve` in the layout the arithmetic wants: q (6, 8, N), valid (8, N). With the
         pose index last every operation runs over contiguous blocks of N, and sums over the
         six joints are six additions of whole blocks (numpy reduces a length-6 last axis
@@ -272,7 +271,7 @@ class URKinematics:
         seed: ArrayLike,
         lower: ArrayLike | None = None,
         upper: ArrayLike | None = None,
-    ) -> tuple[Array, BoolArray]:
+    ) -> tuple[FloatArray, BoolArray]:
         """For each of N poses the solution nearest ``seed`` ((6,) or (N, 6)) within limits:
         q (N, 6) and ok (N,). Rows where ok is False are NaN."""
         Ts = np.asarray(T_base_flange, dtype=float).reshape(-1, 4, 4)
@@ -297,7 +296,7 @@ class URKinematics:
 
     # ------------------------------------------------------------------ one pose (pure Python)
 
-    def ik_all(self, T_base_flange: ArrayLike, seed6: float = 0.0) -> tuple[Array, BoolArray]:
+    def ik_all(self, T_base_flange: ArrayLike, seed6: float = 0.0) -> tuple[FloatArray, BoolArray]:
         """All eight branches for one pose: q (8, 6) in (-pi, pi] and valid (8,)."""
         branches = self._branches(_rows(T_base_flange), seed6)
         q = np.zeros((8, 6))
@@ -314,7 +313,7 @@ class URKinematics:
         seed: ArrayLike | None = None,
         lower: ArrayLike | None = None,
         upper: ArrayLike | None = None,
-    ) -> Array | None:
+    ) -> FloatArray | None:
         """The solution nearest ``seed`` (Euclidean in joint space, each angle moved by a
         multiple of 2 pi to the representative nearest the seed within limits), or None when no
         branch reaches the pose within the limits."""
@@ -474,13 +473,15 @@ def _near(v: float, s: float, lo: float, hi: float) -> float | None:
     return w
 
 
-def _wrap(q: Array) -> Array:
+def _wrap(q: FloatArray) -> FloatArray:
     """q moved by multiples of 2 pi into [-pi, pi]."""
-    out: Array = q - TWO_PI * np.floor(q * INV_TWO_PI + 0.5)
+    out: FloatArray = q - TWO_PI * np.floor(q * INV_TWO_PI + 0.5)
     return out
 
 
-def _wrap_near(q: Array, seed: Array, lo: Array, hi: Array) -> tuple[Array, BoolArray]:
+def _wrap_near(
+    q: FloatArray, seed: FloatArray, lo: FloatArray, hi: FloatArray
+) -> tuple[FloatArray, BoolArray]:
     """Vectorised :func:`_near` on (6, 8, N) angles with seed (6, 1, N) and limits (6, 1, 1):
     (moved q, all six within limits (8, N)). The limit fix-ups run only when some angle needs
     one (with UR limits of +-2 pi, rarely)."""
@@ -504,7 +505,7 @@ def _wrap_near(q: Array, seed: Array, lo: Array, hi: Array) -> tuple[Array, Bool
     return w, within
 
 
-def _dh_matrices(theta: Array, d: float, a: float, alpha: float) -> Array:
+def _dh_matrices(theta: FloatArray, d: float, a: float, alpha: float) -> FloatArray:
     """Rz(theta) Tz(d) Tx(a) Rx(alpha) for each theta: (N, 4, 4)."""
     ct, st = np.cos(theta), np.sin(theta)
     ca, sa = math.cos(alpha), math.sin(alpha)

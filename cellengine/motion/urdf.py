@@ -40,11 +40,10 @@ import coal
 import numpy as np
 import pinocchio as pin
 from lxml import etree
-from numpy.typing import NDArray
 
 from cellengine import geometry as g
+from cellengine.arrays import Mat
 from cellengine.errors import InputError, known
-from cellengine.geometry import Mat
 from cellengine.info.files import read_capped, resolve_inside
 from cellengine.info.xmlsafe import parse_xml
 from cellengine.motion.hull import convex_hull
@@ -58,7 +57,6 @@ PACKAGE = "package://"
 _URL = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]+:")
 
 Vec3 = tuple[float, float, float]
-Vec = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

@@ -13,11 +13,11 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from cellengine.arrays import Vec
 from cellengine.motion.robot import CellModel
 
-Vec = NDArray[np.float64]
 Pair = tuple[str, str]
 
 

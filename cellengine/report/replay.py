@@ -21,8 +21,9 @@ from typing import Any
 import coal
 import numpy as np
 import pinocchio as pin
-from numpy.typing import NDArray
 
+from cellengine import geometry as g
+from cellengine.arrays import IntArray, Vec
 from cellengine.info import primitives
 from cellengine.info.cell import Obstacle
 from cellengine.info.mesh import Mesh
@@ -32,9 +33,6 @@ from cellengine.report.data import event_entry, step_names
 from cellengine.report.distance import ArmDistance
 from cellengine.report.sampling import joint_order, program_span, sample_program, sample_times
 from cellengine.world import World
-
-Vec = NDArray[np.float64]
-Faces = NDArray[np.int64]
 
 REPLAY_FORMAT = "cellengine.replay/1"
 REPLAY_RATE = 25.0  # Hz: link shapes, TCPs, joint states
@@ -165,7 +163,7 @@ def static_meshes(world: World, max_triangles: int = MESH_TRIANGLES) -> list[dic
     """Platform elements (their mesh, else their collision boxes) and obstacles as triangle
     meshes in the cell frame. ``ground``: an obstacle nothing else reaches below the top of
     (the table), which the page draws first."""
-    items: list[tuple[str, str, str, Vec, Faces]] = []
+    items: list[tuple[str, str, str, Vec, IntArray]] = []
     for pname, platform in world.platforms.items():
         for ename, element in platform.elements.items():
             T = platform.T_cell_platform @ element.T_platform_element
@@ -212,11 +210,11 @@ def obstacle_mesh(o: Obstacle) -> Mesh:
     return primitives.sphere(o.sphere.radius)
 
 
-def _placed(mesh: Mesh, T: Vec) -> tuple[Vec, Faces]:
-    return mesh.vertices @ T[:3, :3].T + T[:3, 3], mesh.faces
+def _placed(mesh: Mesh, T: Vec) -> tuple[Vec, IntArray]:
+    return g.transform_points(T, mesh.vertices), mesh.faces
 
 
-def decimate(vertices: Vec, faces: Faces, max_faces: int) -> tuple[Vec, Faces]:
+def decimate(vertices: Vec, faces: IntArray, max_faces: int) -> tuple[Vec, IntArray]:
     """At most ``max_faces`` triangles by vertex clustering: vertices in one cell of a grid
     merge to their mean, collapsed and repeated triangles go; the grid coarsens until few
     enough remain. Small meshes come back unchanged."""

@@ -7,9 +7,8 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from cellengine.arrays import Vec
 from cellengine.program import Program
-
-Vec = NDArray[np.float64]
 
 
 def joint_order(program: Program, names: Sequence[str]) -> NDArray[np.intp]:

@@ -6,8 +6,8 @@ from functools import cache
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import NDArray
 
+from cellengine.arrays import Vec
 from cellengine.info.load import load_world
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.robot import CellModel, build_cell_model
@@ -16,7 +16,6 @@ from cellengine.motion.trajectory import Trajectory
 from cellengine.program import ArmPath, GripperEvent, Segment
 from cellengine.world import World
 
-Vec = NDArray[np.float64]
 CELL = Path(__file__).resolve().parents[2] / "cells" / "cable_routing" / "cell.yaml"
 DOWN = np.diag([1.0, -1.0, -1.0])  # TCP z pointing down, x along the cell's x
 STEP = 0.005  # m between Cartesian waypoints (the skills' step)

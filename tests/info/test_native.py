@@ -9,8 +9,9 @@ from types import MappingProxyType
 import numpy as np
 import pytest
 
+from cellengine.arrays import Mat
 from cellengine.errors import InputError
-from cellengine.geometry import Mat, pose, rot_z, transform
+from cellengine.geometry import pose, rot_z, transform
 from cellengine.info.mapcsv import MapRow
 from cellengine.info.models_xml import load_models
 from cellengine.info.native import assemble, load_native_platform

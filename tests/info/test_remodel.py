@@ -9,8 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cellengine.arrays import Mat
 from cellengine.errors import InputError
-from cellengine.geometry import Mat, rot_x, rot_y, rot_z, transform
+from cellengine.geometry import rot_x, rot_y, rot_z, transform
 from cellengine.info.platform import Platform
 from cellengine.info.remodel import IdsRow, load_ids, load_jigs, load_remodel_platform
 from tests.conftest import REMODEL

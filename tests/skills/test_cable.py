@@ -238,7 +238,7 @@ def assert_inserted_through_every_slot(plan: Planned, connector_guide: str) -> N
             T_slot = plan.world.pose(guide)
             gap = plan.world.dimensions(guide)["gap"]
             assert cg.segment_distance(T_slot[:3, 3], p_o, p_r, np.zeros(3)) < gap / 2
-            along = abs(float(cg.unit(p_r - p_o) @ T_slot[:3, 0]))
+            along = abs(float(g.unit(p_r - p_o) @ T_slot[:3, 0]))
             assert math.degrees(math.acos(min(along, 1.0))) <= 15.0
         for e in seg.after:
             modes[e.arm] = e.mode
@@ -293,7 +293,7 @@ def test_fingertips_grasp_from_above_with_the_jaw_across_the_cable(plan: Planned
             continue
         for arm, most in lean.items():
             T = plan.end[i][arm]
-            tilt = math.degrees(cg.angle_between(T[:3, 2], down))
+            tilt = math.degrees(g.angle_between(T[:3, 2], down))
             assert tilt <= math.degrees(most) + 1e-6, (seg.label, arm)
             if axis is not None:
                 # (the X3D keypoints' axes carry ~1e-7 of rotation round-off)
@@ -316,7 +316,7 @@ def test_cartesian_steps_are_at_most_5_mm_and_2_deg(plan: Planned) -> None:
             P = path.poses
             dp = np.linalg.norm(np.diff(P[:, :3, 3], axis=0), axis=1)
             assert dp.max() <= ip.MAX_TRANSLATION + 1e-9, (seg.label, path.arm)
-            assert ip.rotation_angles(P).max() <= ip.MAX_ROTATION + 1e-9, (seg.label, path.arm)
+            assert g.rotation_angles(P).max() <= ip.MAX_ROTATION + 1e-9, (seg.label, path.arm)
 
 
 def test_segments_start_where_the_arm_is(plan: Planned) -> None:
@@ -354,7 +354,7 @@ def test_r_cable_and_theta_for_the_reference_guide() -> None:
     P = poses_during(p, slide_index, "left")[:, :3, 3]
     step = P[-1] - P[0]
     assert np.linalg.norm(step) == pytest.approx(83.2166 * MM, abs=1e-7)
-    assert math.degrees(cg.angle_between(step, [0.0, 1.0, 0.0])) == pytest.approx(46.3478, abs=1e-4)
+    assert math.degrees(g.angle_between(step, [0.0, 1.0, 0.0])) == pytest.approx(46.3478, abs=1e-4)
     # It starts X_offset before the near face: slot y -60 mm, minus L / 2 + X_offset = 40 mm.
     assert P[0] * 1000 == pytest.approx([430.0, -100.0, 65.0], abs=1e-3)
     # Lift and insert are on the circle of R_cable + the pull (2 %) about the other hand.
