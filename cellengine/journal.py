@@ -1,8 +1,10 @@
-"""Reading a run's journal.jsonl back: how far the run got, for ``run --resume``.
+"""A run's journal.jsonl: written as the run goes (:func:`append`, by cellengine/runner/),
+read back for ``run --resume`` (:func:`read_progress`): how far the run got.
 
-The journal is append-only, one JSON object per line, flushed at each entry (commands/run.py):
-``start``, then per segment ``sent`` and ``finished`` (with the arms' q and grippers after
-it), ``measured`` (a load cell), ``replanned``, ``fault`` (what stopped the run), ``end``.
+The journal is append-only, one JSON object per line, on disk at each entry (:class:`Entry`):
+``start`` (or ``resume``), ``recovery`` (a move to where a segment starts), then per segment
+``sent`` and ``finished`` (with the arms' q and grippers after it), ``measured`` (a load
+cell), ``replanned``, ``fault`` (what stopped the run), ``timing`` (the servo loop's), ``end``.
 A run killed at any moment leaves whole lines and at most one torn last line, which is
 ignored; any other line that is not a JSON object is an error at its line.
 """
@@ -10,11 +12,38 @@ ignored; any other line that is not a JSON object is an error at its line.
 from __future__ import annotations
 
 import json
+import os
+import time
 from dataclasses import dataclass, field
+from enum import StrEnum
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 from cellengine.errors import InputError, Problem
+
+JOURNAL = "journal.jsonl"  # in the run directory
+
+
+class Entry(StrEnum):
+    """The kinds of journal entry (each line's ``entry``)."""
+
+    START = "start"
+    RESUME = "resume"
+    RECOVERY = "recovery"
+    SENT = "sent"
+    FINISHED = "finished"
+    MEASURED = "measured"
+    REPLANNED = "replanned"
+    FAULT = "fault"
+    TIMING = "timing"
+    END = "end"
+
+
+def append(journal: IO[str], kind: Entry, **fields: Any) -> None:
+    """One journal line, on disk before the next thing happens."""
+    journal.write(json.dumps({"time": time.time(), "entry": kind.value, **fields}) + "\n")
+    journal.flush()
+    os.fsync(journal.fileno())
 
 
 @dataclass(frozen=True)
@@ -73,19 +102,19 @@ def _progress(entries: list[dict[str, Any]]) -> Progress:
     ended, fault = False, None
     for e in entries:
         kind = e["entry"]
-        if kind == "finished":
+        if kind == Entry.FINISHED:
             if int(e["segment"]) != len(labels):
                 labels = labels[: int(e["segment"])]  # a replanned or resumed run goes on
             labels.append(str(e["label"]))
             fault = None  # the run went on after it
             q = tuple(float(v) for v in e["q"])
             grippers = {str(a): (g[0], g[1]) for a, g in e["grippers"].items()}
-        elif kind == "measured":
+        elif kind == Entry.MEASURED:
             measured[str(e["object"])] = float(e["mass_kg"])
-        elif kind == "end":
+        elif kind == Entry.END:
             ended = True
-        elif kind == "fault":
+        elif kind == Entry.FAULT:
             fault = dict(e.get("fault") or {})
-        elif kind == "start":
+        elif kind == Entry.START:
             ended = False
     return Progress(tuple(labels), q, grippers, measured, ended, fault)

@@ -37,11 +37,20 @@ def modules() -> dict[str, Path]:
     return out
 
 
-def imports_at_load(tree: ast.Module) -> set[str]:
-    """cellengine modules imported when a module is loaded: its top-level imports, not those
-    in functions or under ``if TYPE_CHECKING`` (the engine uses absolute imports only)."""
+def imports(tree: ast.Module) -> set[str]:
+    """cellengine modules a module imports, at load or in a function (an import in a
+    function is a dependency all the same), but not under ``if TYPE_CHECKING`` (types only).
+    The engine uses absolute imports only."""
+    typing_only = {
+        id(n)
+        for node in ast.walk(tree)
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
+        for n in ast.walk(node)
+    }
     found: set[str] = set()
-    for node in tree.body:
+    for node in ast.walk(tree):
+        if id(node) in typing_only:
+            continue
         if isinstance(node, ast.Import):
             found |= {a.name for a in node.names}
         elif isinstance(node, ast.ImportFrom):
@@ -64,9 +73,7 @@ def test_every_module_imports() -> None:
 
 
 def test_no_import_cycle_between_cellengine_modules() -> None:
-    graph = {
-        name: imports_at_load(ast.parse(f.read_text())) - {name} for name, f in MODULES.items()
-    }
+    graph = {name: imports(ast.parse(f.read_text())) - {name} for name, f in MODULES.items()}
     state: dict[str, int] = {}
     stack: list[str] = []
     cycles: list[list[str]] = []
@@ -86,6 +93,21 @@ def test_no_import_cycle_between_cellengine_modules() -> None:
         if n not in state:
             visit(n)
     assert cycles == []
+
+
+def test_the_engine_imports_no_skill_module() -> None:
+    """Skills come in through their families: the compiler, the commands, the runner and
+    the report know no skill."""
+    engine = ("cellengine.pipeline", "cellengine.commands", "cellengine.runner",
+              "cellengine.report", "cellengine.execute", "cellengine.motion")  # fmt: skip
+    found = {
+        name: sorted(
+            m for m in imports(ast.parse(f.read_text())) if m.startswith("cellengine.skills")
+        )
+        for name, f in MODULES.items()
+        if name.startswith(engine)
+    }
+    assert {k: v for k, v in found.items() if v} == {}
 
 
 def mutable_globals(tree: ast.Module) -> set[str]:

@@ -174,8 +174,8 @@ def test_a_measured_mass_that_changes_the_choice_replans_the_rest(tmp_path: Path
     """objects.yaml says vial2 is the heavier; the load cell finds vial1 heavier (its mass
     in the simulated cell is 50 g): after the weighings the run is planned again and pours
     vial1, the segments already sent unchanged."""
-    from cellengine.commands.run import _play
     from cellengine.drivers.sim import SimDriver
+    from cellengine.runner.play import play as _play
 
     c = compile_plan(LAB / "plan_pour_heavier.yaml")
     objects = c.world.objects

@@ -11,11 +11,12 @@ import pytest
 
 import cellengine.skills.cable  # noqa: F401  (registers the cable skills)
 from cellengine.cli import main
-from cellengine.commands.run import _play, journaled
 from cellengine.drivers.fault import DriverFault
 from cellengine.drivers.sim import SimDriver
 from cellengine.journal import read_progress
 from cellengine.pipeline import Compiled, compile_plan, write_plan_outputs
+from cellengine.runner.outcome import journaled
+from cellengine.runner.play import play as _play
 from tests.conftest import CELLS
 
 PLAN = CELLS / "cable_routing" / "plan_straight.yaml"
@@ -99,7 +100,7 @@ def test_a_torn_last_line_is_ignored_and_a_bad_one_is_an_error(tmp_path: Path) -
 def test_a_run_begins_with_a_move_to_the_plans_start(tmp_path: Path) -> None:
     """Arms left elsewhere (here 0.3 rad off on two joints of each arm): a planned move to
     where the first segment starts, journaled; arms already there: nothing."""
-    from cellengine.commands.run import move_to
+    from cellengine.runner.move import move_to
 
     c = compile_plan(PLAN)
     joints = {name: arm.joint_names for name, arm in c.cell.arms.items()}

@@ -1,0 +1,57 @@
+"""The driver a run plays on, and the user's word before it moves real arms."""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from cellengine.errors import UsageError
+
+if TYPE_CHECKING:  # the drivers and the motion stack are imported when a run starts
+    from cellengine.drivers.base import Driver
+    from cellengine.pipeline import Compiled
+
+
+@dataclass(frozen=True)
+class DriverOptions:
+    """``kind``: a driver instead of the cell's (e.g. "sim"); ``realtime``: the simulated
+    cell plays in real time."""
+
+    kind: str | None = None
+    realtime: bool = False
+
+
+def open_driver(
+    compiled: Compiled,
+    options: DriverOptions,
+    q0: Any = None,
+    grippers: dict[str, Any] | None = None,
+) -> Driver:
+    """The cell's driver (or ``options.kind``'s), unconfigured. The simulated cell starts
+    where the program does, or at ``q0`` with ``grippers`` (where a journal left it)."""
+    from cellengine.drivers.registry import make_driver
+
+    world, cell = compiled.world, compiled.cell
+    joints = {name: arm.joint_names for name, arm in cell.arms.items()}
+    sim: dict[str, Any] = {}
+    if (options.kind or world.cell.driver.kind) == "sim":
+        start = compiled.program.segments[0].trajectory.q[0] if q0 is None else q0
+        sim = {"realtime": options.realtime, "q0": start}
+        if grippers is not None:
+            sim["grippers"] = grippers
+    return make_driver(world.cell, joints, objects=world.objects, kind=options.kind, **sim)
+
+
+def confirm(driver: Driver, yes: bool) -> None:
+    """Real arms move only when the user says so: ``yes``, or 'yes' typed at a terminal."""
+    if driver.kind == "sim" or yes:
+        return
+    where = ", ".join(f"{arm} at {ip}" for arm, ip in getattr(driver, "addresses", {}).items())
+    if not sys.stdin.isatty():
+        raise UsageError.at(
+            f"refusing to move real arms ({where}) without --yes: no terminal to ask", None
+        )
+    answer = input(f"This moves real arms: {where}. Type 'yes' to go on: ")
+    if answer.strip().lower() != "yes":
+        raise UsageError.at("not confirmed: nothing moved", None)

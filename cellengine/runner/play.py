@@ -1,0 +1,119 @@
+"""Playing a program segment by segment, journaled, and planning the rest again when a
+measurement changes what the plan chooses at run time."""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Sequence
+from pathlib import Path
+from typing import IO, TYPE_CHECKING
+
+from cellengine.journal import Entry, append
+from cellengine.program import Measure
+
+if TYPE_CHECKING:
+    from cellengine.drivers.base import Driver
+    from cellengine.pipeline import Compiled
+    from cellengine.program import CompiledSegment, Segment, TimedEvent
+
+
+def play(
+    compiled: Compiled,
+    driver: Driver,
+    journal: IO[str],
+    quiet: bool,
+    out: Path,
+    start: int = 0,
+    measured: dict[str, float] | None = None,
+) -> None:
+    """Send every segment from ``start``; after a segment that measures, read the load cell.
+    When the masses measured (and ``measured``, read by an earlier run) change what a runtime
+    choice picks, the plan is compiled again with them and the run goes on with the new
+    program from the first segment that differs (the ones before are the same), its
+    trajectory and report written over the first ones."""
+    from cellengine.drivers.play import segment_events
+    from cellengine.pipeline import write_plan_outputs
+
+    program = compiled.program
+    events_of = segment_events(program)
+    measured = dict(measured or {})
+    planned = dict(measured)  # the masses the program was planned with
+    i = start
+    while i < len(program.segments):
+        _send(driver, journal, i, program.segments[i], events_of[i], compiled.cell.arms)
+        if _weigh(driver, journal, program.segments[i].segment, measured):
+            again = _recompiled(compiled, planned, measured, i + 1)
+            if again is not None:
+                compiled, program, planned = again, again.program, dict(measured)
+                events_of = segment_events(program)
+                write_plan_outputs(compiled, out)
+                append(journal, Entry.REPLANNED, reason="measured masses changed a choice")
+                if not quiet:
+                    print("measured masses changed a runtime choice: replanned")
+        i += 1
+
+
+def _send(
+    driver: Driver,
+    journal: IO[str],
+    index: int,
+    segment: CompiledSegment,
+    events: Sequence[TimedEvent],
+    arms: Collection[str],
+) -> None:
+    """Segment ``index`` played, journaled before (sent) and after (finished, with where the
+    arms and grippers are: where ``--resume`` starts from)."""
+    seg = segment.segment
+    append(journal, Entry.SENT, step=seg.step, segment=index, label=seg.label)
+    driver.execute(segment, events)
+    grippers = {arm: list(driver.gripper(arm)) for arm in arms}
+    append(
+        journal,
+        Entry.FINISHED,
+        step=seg.step,
+        segment=index,
+        label=seg.label,
+        q=[round(float(v), 6) for v in driver.joint_state()],
+        grippers=grippers,
+    )
+
+
+def _weigh(driver: Driver, journal: IO[str], seg: Segment, measured: dict[str, float]) -> bool:
+    """After a segment with a :class:`Measure`: each load cell read into ``measured``,
+    journaled. Whether anything was measured."""
+    measures = [a for a in seg.annotations if isinstance(a, Measure)]
+    for m in measures:
+        measured[m.object] = driver.read_mass(m.arm)
+        mass = measured[m.object]
+        append(journal, Entry.MEASURED, step=seg.step, object=m.object, arm=m.arm, mass_kg=mass)
+    return bool(measures)
+
+
+def _recompiled(
+    compiled: Compiled, planned: dict[str, float], measured: dict[str, float], done: int
+) -> Compiled | None:
+    """The plan compiled again with the masses measured, if they change a runtime choice;
+    the first ``done`` segments, already run, must be the same in it."""
+    from cellengine.pipeline import compile_loaded
+
+    if not _choices_changed(compiled, planned, measured):
+        return None
+    again = compile_loaded(
+        compiled.loaded, compiled.strategy, context=compiled.context, masses=measured
+    )
+    before = [s.segment.label for s in compiled.program.segments[:done]]
+    if [s.segment.label for s in again.program.segments[:done]] != before:
+        raise RuntimeError("replanning changed segments already run")  # a bug, not input
+    return again
+
+
+def _choices_changed(
+    compiled: Compiled, planned: dict[str, float], measured: dict[str, float]
+) -> bool:
+    """Whether a runtime choice whose every candidate has now been weighed picks otherwise
+    than the program (planned with ``planned`` over objects.yaml's masses) does."""
+    from cellengine.choices import choices
+
+    world, steps = compiled.world, compiled.loaded.plan.steps
+    now = choices(world, steps, measured, measured_only=True)
+    then = choices(world, steps, planned)
+    return not all(then.get(k) == v for k, v in now.items())

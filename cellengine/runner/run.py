@@ -1,0 +1,143 @@
+"""A run from its start to its end, or from where a stopped run left off: the driver
+opened, the arms moved to where the run goes on, the program played, all journaled.
+
+Resuming compiles the plan again (the same files give the same program; masses the load
+cell had read are used again); it must begin with the segments the journal says were
+finished, so that none is repeated. The journal is appended to; the run directory's
+trajectory and report are the program's.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import IO, TYPE_CHECKING, Any
+
+from cellengine.errors import InputError, Problem, display_path
+from cellengine.journal import JOURNAL, Entry, append
+from cellengine.runner.driver import DriverOptions, confirm, open_driver
+from cellengine.runner.move import move_to
+from cellengine.runner.outcome import journaled, timed
+from cellengine.runner.play import play
+
+if TYPE_CHECKING:
+    from cellengine.drivers.base import Driver
+    from cellengine.journal import Progress
+    from cellengine.pipeline import Compiled
+
+
+def run_plan(
+    compiled: Compiled, out: Path, driver_options: DriverOptions, yes: bool, quiet: bool
+) -> None:
+    """Write the run directory ``out`` and play the program in it from the start."""
+    from cellengine.pipeline import write_plan_outputs
+
+    paths = write_plan_outputs(compiled, out)
+    driver = open_driver(compiled, driver_options)
+    confirm(driver, yes)
+    with (out / JOURNAL).open("a") as journal, driver:
+        append(
+            journal, Entry.START, plan=str(compiled.loaded.plan.file), driver=type(driver).__name__
+        )
+        _drive(compiled, driver, journal, out, quiet)
+    if not quiet:
+        print(
+            f"ran {len(compiled.program.segments)} segments, "
+            f"{compiled.program.duration:.2f} s of motion ({compiled.strategy})"
+        )
+        print(f"report: {display_path(paths['html'])}")
+
+
+def resume_run(
+    run_dir: Path,
+    compile_plan: Callable[[], Compiled],
+    driver_options: DriverOptions,
+    yes: bool,
+    quiet: bool,
+) -> None:
+    """Go on with the run in ``run_dir`` from the last segment it finished, the plan compiled
+    by ``compile_plan`` (only when there is something left to do)."""
+    from cellengine.journal import drop_torn_tail, read_progress
+    from cellengine.pipeline import write_plan_outputs
+
+    journal_path = run_dir / JOURNAL
+    progress = read_progress(journal_path)
+    if progress.ended:
+        if not quiet:
+            print(f"the run in {display_path(run_dir)} is complete: nothing to do")
+        return
+    compiled = _resumable(compile_plan(), progress, run_dir)
+    write_plan_outputs(compiled, run_dir)
+    q0, grippers = _where_left(progress)
+    driver = open_driver(compiled, driver_options, q0=q0, grippers=grippers)
+    confirm(driver, yes)
+    nxt = compiled.program.segments[progress.done].segment.label
+    drop_torn_tail(journal_path)
+    with journal_path.open("a") as journal, driver:
+        append(journal, Entry.RESUME, from_segment=progress.done, label=nxt)
+        _drive(compiled, driver, journal, run_dir, quiet, progress, q0)
+    if not quiet:
+        done = len(compiled.program.segments) - progress.done
+        print(f"resumed at segment {progress.done} ('{nxt}'): ran {done} more")
+
+
+def _drive(
+    compiled: Compiled,
+    driver: Driver,
+    journal: IO[str],
+    out: Path,
+    quiet: bool,
+    progress: Progress | None = None,
+    left: Any = None,
+) -> None:
+    """The driver's life around the program, from the first segment ``progress`` did not
+    finish (and from where the arms were ``left``), to the journal's end."""
+    start, measured = (0, None) if progress is None else (progress.done, progress.measured)
+
+    def go_on() -> None:
+        play(compiled, driver, journal, quiet, out, start, measured)
+
+    with timed(journal, driver, out, quiet):
+        driver.configure()
+        driver.activate()
+        move_to(compiled, driver, journal, start, left)
+        journaled(journal, driver, go_on)
+        driver.deactivate()
+    append(journal, Entry.END, duration=compiled.program.duration)
+
+
+def _resumable(compiled: Compiled, progress: Progress, run_dir: Path) -> Compiled:
+    """``compiled`` again with the masses the run measured; an error unless it begins with
+    the segments the run finished and has more."""
+    from cellengine.pipeline import compile_loaded
+
+    if progress.measured:
+        compiled = compile_loaded(
+            compiled.loaded, compiled.strategy, context=compiled.context, masses=progress.measured
+        )
+    labels = tuple(s.segment.label for s in compiled.program.segments)
+    if labels[: progress.done] != progress.labels:
+        pairs = enumerate(zip(labels, progress.labels, strict=False))
+        k = next((i for i, (a, b) in pairs if a != b), len(labels))
+        now = f"'{labels[k]}'" if k < len(labels) else "missing (the plan is shorter)"
+        raise InputError(
+            Problem(
+                f"the plan no longer compiles to the segments the run in {run_dir} did: "
+                f"segment {k} is now {now}, the run did '{progress.labels[k]}'",
+                str(compiled.loaded.plan.file),
+            )
+        )
+    if progress.done >= len(labels):
+        raise InputError(Problem("every segment was finished; only the end was not journaled"))
+    return compiled
+
+
+def _where_left(progress: Progress) -> tuple[Any, dict[str, Any] | None]:
+    """Where the run left the arms and grippers (the simulated cell starts there): where a
+    fault stopped them, else where the last finished segment left them."""
+    stopped = progress.fault or {}
+    q0 = stopped.get("q", progress.q)
+    grippers: dict[str, Any] | None = dict(progress.grippers) or None
+    if stopped.get("grippers"):
+        grippers = {g["arm"]: (g["mode"], g["holds"]) for g in stopped["grippers"]}
+    return q0, grippers
