@@ -20,7 +20,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from cellengine.motion.robot import Arm, CellModel
+from cellengine.motion.robot import Arm, CellModel, home_configuration
 from cellengine.world import World
 
 PARALLEL = 0.99  # |cos| above which two axes count as parallel
@@ -30,6 +30,7 @@ LEVEL = 0.1  # |cos| with the vertical below which an axis counts as horizontal
 def robot_skills(world: World, cell: CellModel) -> dict[str, frozenset[str]]:
     """Each robot's skills, by name (see the module notes)."""
     out: dict[str, frozenset[str]] = {}
+    home = home_configuration(cell)
     for name, arm in cell.arms.items():
         robot = world.cell.robots[name]
         tool = world.cell.tools.get(robot.tool) if robot.tool is not None else None
@@ -41,7 +42,7 @@ def robot_skills(world: World, cell: CellModel) -> dict[str, frozenset[str]]:
             skills.add("weigh")
         if tool.grasp == "side":
             skills.add("hold")
-        axis, tool_z = _last_axis(arm)
+        axis, tool_z = _last_axis(arm, home[cell.slices[name]])
         if tool.grasp == "top" and abs(float(axis @ tool_z)) > PARALLEL:
             skills.add("turn_cap")
         if arm.nq >= 6 or abs(float(axis[2])) < LEVEL:
@@ -50,9 +51,8 @@ def robot_skills(world: World, cell: CellModel) -> dict[str, frozenset[str]]:
     return out
 
 
-def _last_axis(arm: Arm) -> tuple[np.ndarray, np.ndarray]:
-    """The last joint's axis and the tool's z, unit vectors in the cell frame."""
-    q = arm.home if arm.home is not None else np.zeros(arm.nq)
+def _last_axis(arm: Arm, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The last joint's axis and the tool's z at ``q``, unit vectors in the cell frame."""
     J = arm.jacobian(q)
     w = np.asarray(J[3:6, -1], dtype=float)
     n = float(np.linalg.norm(w))

@@ -45,7 +45,7 @@ class ArmIK:
         self.arm = arm
         self.lower = np.array(arm.limits.lower)
         self.upper = np.array(arm.limits.upper)
-        self.home = _home(arm)
+        self.home = _default_seed(arm)
         # inv(T_cell_base) and inv(T_flange_tcp), applied on both sides of every target
         self.T_base_cell = g.inverse(arm.T_cell_base)
         self.T_tcp_flange = g.inverse(arm.T_flange_tcp)
@@ -194,9 +194,9 @@ def wrap_near(q: Vec, seed: Vec, lower: Vec, upper: Vec) -> Vec | None:
     return out
 
 
-def _home(arm: Arm) -> Vec:
-    """The arm's home, or for an arm without one the middle of each bounded joint (what
-    NumericIK would choose)."""
+def _default_seed(arm: Arm) -> Vec:
+    """Where IK starts when no seed is given: the arm's home, or for an arm without one the
+    middle of each bounded joint (what NumericIK would choose)."""
     if arm.home is not None and len(arm.home) == arm.nq:  # (a continuous joint takes 2)
         return np.array(arm.home, dtype=float)
     if arm.dh is not None:

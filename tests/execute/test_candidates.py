@@ -1,0 +1,106 @@
+"""The compiler's search over a family's candidates (execute/candidates.py), on the reference
+cell: the next candidate where one cannot run, back to an earlier choice when a later one has
+nothing that runs, and the first error when nothing does."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import pytest
+
+from cellengine.errors import InputError, Problem, StepError
+from cellengine.execute import Compiler
+from cellengine.execute.candidates import compile_candidates
+from cellengine.family import Candidate
+from cellengine.program import ArmPath, Segment
+from tests.execute.scenes import cable_cell, home, pose
+
+NEAR = (0.40, 0.15, 0.20)  # the left arm reaches it
+ALSO = (0.35, 0.20, 0.25)
+FAR = (1.50, 0.15, 0.20)  # 1.5 m: out of the left arm's reach
+
+
+def hop(step: int, where: tuple[float, float, float]) -> Segment:
+    return Segment(step, f"to {where}", (ArmPath("left", "transit", pose(where)[None]),))
+
+
+def choice(*options: Candidate) -> Iterator[Candidate]:
+    yield from options
+
+
+def failing(step: int) -> Iterator[Candidate]:
+    raise StepError(Problem(f"steps[{step}]: no way"), step)
+    yield  # a generator
+
+
+def compiler() -> Compiler:
+    world, cell, checker = cable_cell()
+    return Compiler(world, cell, checker, home(cell))
+
+
+def labels(c: Compiler) -> list[str]:
+    return [s.segment.label for s in c.program().segments]
+
+
+def test_one_candidate_per_choice_compiles_them_in_order() -> None:
+    c = compiler()
+    second = Candidate((hop(1, ALSO),))
+    taken = compile_candidates(c, choice(Candidate((hop(0, NEAR),), then=lambda: choice(second))))
+    assert labels(c) == [f"to {NEAR}", f"to {ALSO}"]
+    assert taken[1] is second
+
+
+def test_the_next_candidate_where_the_first_cannot_run() -> None:
+    c = compiler()
+    compile_candidates(c, choice(Candidate((hop(0, FAR),)), Candidate((hop(0, NEAR),))))
+    assert labels(c) == [f"to {NEAR}"]
+
+
+def test_back_to_an_earlier_choice_when_a_later_one_has_nothing() -> None:
+    """Choice 0's first candidate leads to a choice whose only candidate cannot run, its
+    second to one that can; what choice 0's second candidate compiled is kept."""
+    c = compiler()
+    seen: list[str] = []
+    dead_end = Candidate((hop(0, NEAR),), then=lambda: choice(Candidate((hop(1, FAR),))))
+    way = Candidate((hop(0, ALSO),), then=lambda: choice(Candidate((hop(1, NEAR),))))
+    compile_candidates(c, choice(dead_end, way), lambda s: seen.append(s.label))
+    assert labels(c) == [f"to {ALSO}", f"to {NEAR}"]
+    # the first candidates (the unreachable hop retried by the transit search), then the
+    # second candidate of choice 0 and what follows it, once each
+    assert seen[:2] == [f"to {NEAR}", f"to {FAR}"] and set(seen[2:-2]) == {f"to {FAR}"}
+    assert seen[-2:] == [f"to {ALSO}", f"to {NEAR}"]
+
+
+def test_a_family_that_cannot_plan_a_choice_sends_the_search_back() -> None:
+    c = compiler()
+    stuck = Candidate((hop(0, NEAR),), then=lambda: failing(1))
+    way = Candidate((hop(0, ALSO),))
+    compile_candidates(c, choice(stuck, way))
+    assert labels(c) == [f"to {ALSO}"]
+
+
+def test_nothing_runs_the_first_error_is_raised() -> None:
+    c = compiler()
+    with pytest.raises(StepError) as e:
+        compile_candidates(
+            c, choice(Candidate((hop(0, FAR),)), Candidate((hop(0, (1.6, 0.15, 0.2)),)))
+        )
+    assert e.value.step == 0
+    assert str(e.value).startswith(f"<input>: step 1 (to {FAR}): ")
+    assert labels(c) == []
+
+
+def test_a_family_error_before_anything_compiles_is_raised_as_it_is() -> None:
+    with pytest.raises(InputError, match=r"steps\[0\]: no way"):
+        compile_candidates(compiler(), failing(0))
+
+
+def test_what_comes_before_the_choice_changed_is_not_compiled_again() -> None:
+    c = compiler()
+    seen: list[str] = []
+    stuck = Candidate((hop(1, ALSO),), then=lambda: choice(Candidate((hop(2, FAR),))))
+    way = Candidate((hop(1, NEAR),), then=lambda: choice(Candidate((hop(2, ALSO),))))
+    first = Candidate((hop(0, NEAR),), then=lambda: choice(stuck, way))
+    compile_candidates(c, choice(first), lambda s: seen.append(f"{s.step} {s.label}"))
+    assert labels(c) == [f"to {NEAR}", f"to {NEAR}", f"to {ALSO}"]
+    assert seen.count(f"0 to {NEAR}") == 1
