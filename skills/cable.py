@@ -136,25 +136,55 @@ class RouteCable(Skill):
         R_cable more at the sliding angle theta; the other arm grasps the cable where the
         routing gripper stopped; the routing gripper pulls the cable taut, lifts it over the
         guide, swings it over the slot and inserts it on circles about the other hand."""
-        world = ctx.world
-        where = f"steps[{state.step}] RouteCable"
-        r_arm, o_arm = _routing_arms(world, state, self.cable, where)
-        _check_jaw(world, r_arm, where)
-        _check_jaw(world, o_arm, where)
         plans: list[GuidePlan] = []
         sim = state
-        for guide in self.guides:
-            gp = _guide_plan(world, sim, self.cable, guide, r_arm, o_arm)
-            _check_reach(ctx, r_arm, gp.reach_routing(), gp.where)
-            _check_reach(ctx, o_arm, gp.reach_other(), gp.where)
-            _check_length(world, self.cable, _hand(world, r_arm), gp)
-            sim = gp.after(sim, r_arm, o_arm, self.cable)
+        for k in range(len(self.guides)):  # every guide's first way, checked before any motion
+            gp = next(self.guide_plans(ctx, sim, k))
+            sim = gp.after(sim, *self.arms(ctx, state), self.cable)
             plans.append(gp)
         segments: list[Segment] = []
         for gp in plans:
-            more, state = _emit_guide(state, gp, r_arm, o_arm, self.cable)
+            more, state = _emit_guide(state, gp, *self.arms(ctx, state), self.cable)
             segments += more
         return segments, state
+
+    def arms(self, ctx: PlanningContext, state: CableState) -> tuple[str, str]:
+        """(routing arm, other arm), checked to hold the cable with the jaw modes needed."""
+        where = f"steps[{state.step}] RouteCable"
+        r_arm, o_arm = _routing_arms(ctx.world, state, self.cable, where)
+        _check_jaw(ctx.world, r_arm, where)
+        _check_jaw(ctx.world, o_arm, where)
+        return r_arm, o_arm
+
+    def ways(
+        self, ctx: PlanningContext, state: CableState, k: int
+    ) -> Iterator[tuple[list[Segment], CableState]]:
+        """The ways to route guide ``k`` from ``state``, best first, with the state after."""
+        r_arm, o_arm = self.arms(ctx, state)
+        for gp in self.guide_plans(ctx, state, k):
+            yield _emit_guide(state, gp, r_arm, o_arm, self.cable)
+
+    def guide_plans(self, ctx: PlanningContext, state: CableState, k: int) -> Iterator[GuidePlan]:
+        """Guide ``k``'s plans that pass the checks (reach, cable length, a slide clear of
+        the other elements), best first (:func:`guide_ways`); the first way's error when
+        none does."""
+        world, guide = ctx.world, self.guides[k]
+        r_arm, o_arm = self.arms(ctx, state)
+        first: InputError | None = None
+        found = False
+        for way in guide_ways(world, state, guide, r_arm):
+            try:
+                gp = _guide_plan(world, state, self.cable, guide, r_arm, o_arm, way)
+                _check_reach(ctx, r_arm, gp.reach_routing(), gp.where)
+                _check_reach(ctx, o_arm, gp.reach_other(), gp.where)
+                _check_length(world, self.cable, _hand(world, r_arm), gp)
+            except InputError as e:
+                first = first or e
+                continue
+            found = True
+            yield gp
+        if not found:
+            raise first or _error(f"steps[{state.step}] RouteCable {guide}: no way to route it")
 
 
 CableSkill = PickCable | PlaceConnector | RouteCable
@@ -712,9 +742,41 @@ def _point(v: Vec) -> tuple[float, float, float]:
     return (float(v[0]), float(v[1]), float(v[2]))
 
 
-def _guide_plan(
-    world: World, state: CableState, cable: str, guide: str, r_arm: str, o_arm: str
-) -> GuidePlan:
+@dataclass(frozen=True)
+class GuideWay:
+    """The free parameters of routing one guide: the sliding angle and side, and how far
+    each hand tips its flange (see cg.LEAN, cg.PIVOT_LEAN)."""
+
+    theta: float
+    side: float  # +1: slide to the left of the axis (up x axis), -1: to the right
+    lean: float = cg.LEAN
+    pivot_lean: float = cg.PIVOT_LEAN
+
+
+@dataclass(frozen=True)
+class _Basics:
+    """What every way of routing a guide shares: the published quantities."""
+
+    where: str
+    dims: cg.GuideDims
+    hand: cg.Hand
+    up: Vec
+    slot: Vec
+    axis: Vec
+    ap: Vec  # the approach point, X_offset before the near face: the pivot
+    r_lift: float
+    r_insert: float
+    r_cable: float
+    pull: float
+    theta_min: float
+
+    @property
+    def reach(self) -> float:
+        """How far the routing hand slides out from the pivot: R_cable and the pull."""
+        return self.r_cable + self.pull
+
+
+def _basics(world: World, state: CableState, guide: str, r_arm: str) -> _Basics:
     where = f"steps[{state.step}] RouteCable {guide}"
     dims = cg.GuideDims.of(world, guide, where)
     hand = _hand(world, r_arm)
@@ -726,31 +788,79 @@ def _guide_plan(
     axis = cg.horizontal(cg.keypoint_x(world, guide), up)
     if float(axis @ (slot - last)) < 0.0:
         axis = -axis
-    x_off = hand.x_offset
-    a = cg.APPROACH_GAP
-    rl = cg.r_lift(dims.length, dims.height, x_off, cg.Z_OFFSET)
-    ri = cg.r_insert(dims.length, x_off)
+    rl = cg.r_lift(dims.length, dims.height, hand.x_offset, cg.Z_OFFSET)
+    ri = cg.r_insert(dims.length, hand.x_offset)
     r_cable = max(rl, ri)
-    t_min = cg.theta_min(hand.width, dims.width, a)
-    theta = t_min + cg.THETA_MARGIN
-    if theta > cg.THETA_MAX:
+    ap = slot - (dims.length / 2.0 + hand.x_offset) * axis
+    t_min = cg.theta_min(hand.width, dims.width, cg.APPROACH_GAP)
+    pull = cg.tension_pull(r_cable)
+    return _Basics(where, dims, hand, up, slot, axis, ap, rl, ri, r_cable, pull, t_min)
+
+
+def guide_ways(world: World, state: CableState, guide: str, r_arm: str) -> Iterator[GuideWay]:
+    """The ways to route ``guide``, best first: the published sliding angle (its minimum plus
+    THETA_MARGIN) on the side farther from the other elements, with the hands' default
+    tips, first; then every angle up to THETA_MAX in THETA_STEP steps on each side whose
+    slide clears the other elements, and the other tips (LEANS, PIVOT_LEANS), ranked by how
+    much longer the motion gets (a steeper slide swings farther). An error naming what
+    blocks when no angle clears the guide."""
+    b = _basics(world, state, guide, r_arm)
+    theta0 = b.theta_min + cg.THETA_MARGIN
+    if theta0 > cg.THETA_MAX:
         raise _error(
-            f"{where}: no sliding angle clears the guide: theta must exceed "
-            f"atan((W_gripper + W_guide) / (2 A)) = atan(({_mm(hand.width)} + "
-            f"{_mm(dims.width)}) / (2 * {_mm(a)})) = {math.degrees(t_min):.1f} deg, plus "
-            f"{math.degrees(cg.THETA_MARGIN):.0f} deg margin, but beyond "
-            f"{math.degrees(cg.THETA_MAX):.0f} deg the slide hardly moves along the guide"
+            f"{b.where}: no sliding angle clears the guide: theta must exceed "
+            f"atan((W_gripper + W_guide) / (2 A)) = atan(({_mm(b.hand.width)} + "
+            f"{_mm(b.dims.width)}) / (2 * {_mm(cg.APPROACH_GAP)})) = "
+            f"{math.degrees(b.theta_min):.1f} deg, plus {math.degrees(cg.THETA_MARGIN):.0f} "
+            f"deg margin, but beyond {math.degrees(cg.THETA_MAX):.0f} deg the slide hardly "
+            "moves along the guide"
         )
-    ap = slot - (dims.length / 2.0 + x_off) * axis
+    ranked: list[tuple[float, int, GuideWay]] = []
+    first_blocked: list[str] = []
+    n = int((cg.THETA_MAX - theta0) / cg.THETA_STEP + 1e-9) + 1
+    for k in range(n):
+        theta = theta0 + k * cg.THETA_STEP
+        clear, blocked = _slide_sides(world, guide, b, theta)
+        if k == 0:
+            first_blocked = blocked
+        for rank, side in enumerate(clear):
+            for lean in cg.LEANS:
+                for pivot in cg.PIVOT_LEANS:
+                    cost = (theta - theta0) + 0.05 * rank
+                    cost += 0.5 * (abs(lean - cg.LEAN) + abs(pivot - cg.PIVOT_LEAN))
+                    ranked.append((cost, len(ranked), GuideWay(theta, side, lean, pivot)))
+    if not ranked:
+        raise _error(
+            f"{b.where}: no sliding angle clears the guide: sliding at theta = "
+            f"{math.degrees(theta0):.1f} deg is blocked on the "
+            + " and on the ".join(first_blocked)
+            + f", and so is every angle up to {math.degrees(cg.THETA_MAX):.0f} deg: move the "
+            "guides that block it farther from the slide, or use narrower fingers"
+        )
+    yield from (way for _, _, way in sorted(ranked, key=lambda r: (r[0], r[1])))
+
+
+def _guide_plan(
+    world: World,
+    state: CableState,
+    cable: str,
+    guide: str,
+    r_arm: str,
+    o_arm: str,
+    way: GuideWay,
+) -> GuidePlan:
+    b = _basics(world, state, guide, r_arm)
+    up, slot, axis, ap, theta, side = b.up, b.slot, b.axis, b.ap, way.theta, way.side
+    x_off = b.hand.x_offset
+    last = np.asarray(state.route[-1], dtype=float)
     # The routing hand tips forward and towards its base, the other hand back and towards
     # its base (the other hand by more): see cg.LEAN and cg.PIVOT_LEAN.
     tip_r = g.unit(axis + _towards_base(world, r_arm, slot, up))
     tip_o = g.unit(-axis + _towards_base(world, o_arm, slot, up))
     T_r0 = state.tcp[r_arm]
-    T_ap = cg.nearer_turn(T_r0, cg.tcp_frame(ap, axis, up, tip_r, cg.LEAN))
-    T_pivot = cg.nearer_turn(state.tcp[o_arm], cg.tcp_frame(ap, axis, up, tip_o, cg.PIVOT_LEAN))
-    pull_r = cg.tension_pull(r_cable)
-    side = _slide_side(world, guide, where, ap, axis, up, theta, r_cable + pull_r, hand)
+    T_ap = cg.nearer_turn(T_r0, cg.tcp_frame(ap, axis, up, tip_r, way.lean))
+    T_pivot = cg.nearer_turn(state.tcp[o_arm], cg.tcp_frame(ap, axis, up, tip_o, way.pivot_lean))
+    r_cable, pull_r = b.r_cable, b.pull
     left = np.cross(up, axis)
     d = math.cos(theta) * axis + side * math.sin(theta) * left
     reorient = None
@@ -767,6 +877,7 @@ def _guide_plan(
     # elevation at which radius >= R_lift puts the hand over the guide's far face and
     # Z_offset over its top. The hand keeps its orientation: turning with the circle would
     # lean the tool back over the other hand.
+    dims = b.dims
     elevation = math.atan2(dims.height + cg.Z_OFFSET, dims.length + x_off)
     lift = cg.arc(pull_path[-1], ap, np.cross(d, up), elevation, turn=False)
     # Swing about the vertical through the pivot until the cable is over the slot, turning
@@ -777,18 +888,18 @@ def _guide_plan(
     laid = state.route_length() + float(np.linalg.norm(ap - last))
     return GuidePlan(
         guide=guide,
-        where=where,
+        where=b.where,
         dims=dims,
         up=up,
         slot=slot,
         axis=axis,
         side=side,
         x_offset=x_off,
-        a=a,
-        r_lift=rl,
-        r_insert=ri,
+        a=cg.APPROACH_GAP,
+        r_lift=b.r_lift,
+        r_insert=b.r_insert,
         r_cable=r_cable,
-        theta_min=t_min,
+        theta_min=b.theta_min,
         theta=theta,
         pull=pull_r,
         elevation=elevation,
@@ -805,44 +916,46 @@ def _guide_plan(
     )
 
 
-def _slide_side(
-    world: World,
-    guide: str,
-    where: str,
-    ap: Vec,
-    axis: Vec,
-    up: Vec,
-    theta: float,
-    length: float,
-    hand: cg.Hand,
-) -> float:
-    """The side to slide on: of the two slides at theta, one each side of the guide, the
-    one farther from every other element of the platforms that stands up to the hand's
-    height (a base plate does not count) (+1, left of the axis, on a tie); an error if both
-    come within the hand's and the element's radii plus CLEARANCE."""
+def _slide_sides(
+    world: World, guide: str, b: _Basics, theta: float
+) -> tuple[list[float], list[str]]:
+    """The sides the slide at ``theta`` may take, farthest from every other element that
+    stands up to the hand's height first (a base plate does not count; +1, left of the axis,
+    on a tie), and for each blocked side what blocks it: within the hand's and the element's
+    radii plus CLEARANCE."""
+    up, axis, ap, hand = b.up, b.axis, b.ap, b.hand
     left = np.cross(up, axis)
     hand_radius = math.hypot(hand.width, 2.0 * hand.half_length) / 2.0
     height = float(ap @ up) - cg.CLEARANCE
     elements = [f for f in cg.footprints(world, guide, up) if f.top > height]
-    best: tuple[float, float] | None = None
+    clear: list[tuple[float, float]] = []
     blocked: list[str] = []
     for side in (1.0, -1.0):
-        end = ap + length * (math.cos(theta) * axis + side * math.sin(theta) * left)
+        end = ap + b.reach * (math.cos(theta) * axis + side * math.sin(theta) * left)
         margin, nearest = math.inf, ""
         for f in elements:
             m = cg.segment_distance(f.centre, ap, end, up) - f.radius - hand_radius
             if m < margin:
                 margin, nearest = m, f.name
+        name = "left" if side > 0 else "right"
         if margin < cg.CLEARANCE:
-            blocked.append(f"{'left' if side > 0 else 'right'} by {nearest}")
-        elif best is None or margin > best[0] + 1e-9:
+            why = (
+                f"its footprint and the sliding hand's overlap by {_mm(-margin)} mm"
+                if margin < 0.0
+                else f"{_mm(margin)} mm from the hand, {_mm(cg.CLEARANCE)} mm needed"
+            )
+            blocked.append(f"{name} by {nearest} ({why})")
+        else:
+            clear.append((margin, side))
+    # the larger margin first; a tie (within 1e-9 m) keeps the left
+    best: tuple[float, float] | None = None
+    for margin, side in clear:
+        if best is None or margin > best[0] + 1e-9:
             best = (margin, side)
-    if best is None:
-        raise _error(
-            f"{where}: no sliding angle clears the guide: sliding at theta = "
-            f"{math.degrees(theta):.1f} deg is blocked on the " + " and on the ".join(blocked)
-        )
-    return best[1]
+    ordered = [side for _, side in clear]
+    if best is not None and ordered[0] != best[1]:
+        ordered.reverse()
+    return ordered, blocked
 
 
 def _check_length(world: World, name: str, hand: cg.Hand, gp: GuidePlan) -> None:

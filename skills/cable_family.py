@@ -6,8 +6,10 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Iterator, Sequence
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
+from cellengine.errors import at_step
 from cellengine.family import Candidate
 from cellengine.skill import Skill
 from cellengine.skills.cable import (
@@ -34,13 +36,42 @@ class CableFamily:
 def _from(
     ctx: PlanningContext, steps: Sequence[Skill], i: int, state: CableState
 ) -> Iterator[Candidate]:
-    """The candidates for ``steps[i]`` from ``state``; after the last step, the release."""
+    """The candidates for ``steps[i]`` from ``state`` (for a RouteCable, its first guide's);
+    after the last step, the release."""
     if i == len(steps):
         segments, _ = release_and_retract(state)
         yield Candidate(tuple(segments))
         return
+    step = steps[i]
+    if isinstance(step, RouteCable):
+        yield from _guide(ctx, steps, i, replace(state, step=i), 0)
+        return
     for segments, after in step_ways(ctx, steps, i, state):
         yield Candidate(tuple(segments), then=functools.partial(_from, ctx, steps, i + 1, after))
+
+
+def _guide(
+    ctx: PlanningContext, steps: Sequence[Skill], i: int, state: CableState, k: int
+) -> Iterator[Candidate]:
+    """RouteCable ``steps[i]``: the candidates for its guide ``k``, each a choice of its own
+    (a later guide that cannot be routed from where a way left the hands sends the compiler
+    back to this guide's next way)."""
+    step = steps[i]
+    assert isinstance(step, RouteCable)
+    last = k + 1 == len(step.guides)
+    with at_step(i):
+        ways = step.ways(ctx, state, k)
+        while True:
+            try:
+                segments, after = next(ways)
+            except StopIteration:
+                return
+            then = (
+                functools.partial(_from, ctx, steps, i + 1, after)
+                if last
+                else functools.partial(_guide, ctx, steps, i, after, k + 1)
+            )
+            yield Candidate(tuple(segments), then=then)
 
 
 FAMILY = CableFamily()

@@ -96,6 +96,11 @@ LEAN = math.radians(15.0)
 # pivot hand's wrist (plan_one_turn's guide4: 0.9 mm at 15 and 20 deg; free from 25 deg to at
 # least 40 deg on the three reference plans, measured with every execution strategy).
 PIVOT_LEAN = math.radians(30.0)
+# The other values a RouteCable way may take, after the defaults above (guide_ways): the
+# sliding angle in steps up to THETA_MAX, and other tips of the two hands.
+THETA_STEP = math.radians(5.0)
+LEANS = (LEAN, math.radians(25.0), math.radians(5.0))
+PIVOT_LEANS = (PIVOT_LEAN, math.radians(20.0), math.radians(40.0))
 # Pull that puts the cable in tension, per metre between the hands: the sag of a loosely held
 # span. The paper makes it "a function of the distance between grippers and the cable
 # properties"; objects.yaml gives no stiffness, so only the distance is used.

@@ -9,7 +9,6 @@ published quantities worked out by hand for the reference U guide.
 from __future__ import annotations
 
 import math
-import re
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from functools import cache
@@ -482,17 +481,32 @@ def test_a_guide_no_sliding_angle_clears_fails_naming_the_guide() -> None:
     )
 
 
-def test_a_slide_blocked_on_both_sides_fails_naming_what_blocks_it() -> None:
-    """guide2 and guide4 set 60 mm either side of where guide1's slide would end."""
+def test_a_slide_blocked_at_the_published_angle_takes_a_steeper_one() -> None:
+    """guide2 and guide4 set 60 mm either side of where guide1's slide would end at the
+    published angle (46.3 deg): RouteCable's next ways slide steeper, clear of both."""
     world, steps = _world()
     world = _with_element(world, "routing.guide2", xyz=[0.49, -0.05, 0.01])
     world = _with_element(world, "routing.guide4", xyz=[0.37, -0.05, 0.01])
-    message = _fails(world, steps)
-    assert message.startswith(
+    segments, _ = plan_cable_steps(context(world), steps)
+    slides = [s for s in segments if "theta" in s.facts]
+    assert slides[0].label == "RouteCable routing.guide1: slide R_cable"
+    assert math.degrees(slides[0].facts["theta"]) == pytest.approx(46.3478 + 30.0, abs=1e-4)
+    assert [round(math.degrees(s.facts["theta"]), 1) for s in slides[1:]] == [46.3, 46.3]
+
+
+def test_a_slide_blocked_at_every_angle_fails_naming_what_blocks_it() -> None:
+    """guide2 and guide4 45 mm either side of guide1's approach point: every slide from it,
+    at every angle up to 80 deg, runs into one of them."""
+    world, steps = _world()
+    world = _with_element(world, "routing.guide2", xyz=[0.475, -0.075, 0.01])
+    world = _with_element(world, "routing.guide4", xyz=[0.385, -0.075, 0.01])
+    assert _fails(world, steps) == (
         "steps[2] RouteCable routing.guide1: no sliding angle clears the guide: sliding at "
-        "theta = 46.3 deg is blocked on the left by routing."
+        "theta = 46.3 deg is blocked on the left by routing.guide4 (its footprint and the "
+        "sliding hand's overlap by 14.2 mm) and on the right by routing.guide2 (its footprint "
+        "and the sliding hand's overlap by 14.2 mm), and so is every angle up to 80 deg: move "
+        "the guides that block it farther from the slide, or use narrower fingers"
     )
-    assert re.search(r"and on the right by routing\.guide[24]$", message)
 
 
 def test_route_cable_needs_a_placed_connector() -> None:
