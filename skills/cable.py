@@ -34,7 +34,7 @@ from pydantic import Field
 
 from cellengine import geometry as g
 from cellengine.arrays import Mat, Poses, Vec
-from cellengine.errors import InputError, Problem, StepError, known
+from cellengine.errors import InputError, Problem, StepError, at_step, known
 from cellengine.info.units import count
 from cellengine.motion import interpolate as ip
 from cellengine.program import Anchor, Annotation, ArmPath, GripperEvent, Segment
@@ -67,18 +67,40 @@ class PickCable(Skill):
         the connector hand (the cable then slides back against gravity), slides up the
         cable to the connector hand and comes back up on a circle; both grippers' z aligned
         with the routing platform."""
+        return next(self.ways(ctx, state))
+
+    def ways(
+        self, ctx: PlanningContext, state: CableState, either_arm: bool = False
+    ) -> Iterator[tuple[list[Segment], CableState]]:
+        """The ways to pick the cable, best first, each with the state after it: the arm
+        the look-ahead chose takes the connector end (``either_arm``: the PlaceConnector
+        that follows lets either arm place it, so then the other arm too), with each tip of
+        the hands (cg.LEANS, the default first); the first way's error when none reaches."""
         world = ctx.world
         where = f"steps[{state.step}] PickCable {self.cable}"
         arms = _two_arms(world, where)
-        conn_ref, free_ref = self.from_
-        c_arm = state.connector_arm or _nearest_arm(world, arms, conn_ref)
-        f_arm = _other(arms, c_arm)
         for arm in arms:
             _check_jaw(world, arm, where)
-        geo = _pick_geometry(world, state, self.cable, conn_ref, free_ref, c_arm, f_arm)
-        _check_reach(ctx, c_arm, geo.reach(c_arm), where)
-        _check_reach(ctx, f_arm, geo.reach(f_arm), where)
-        return _emit_pick(self, state, geo, c_arm, f_arm)
+        conn_ref, free_ref = self.from_
+        chosen = state.connector_arm or _nearest_arm(world, arms, conn_ref)
+        c_arms = (chosen, _other(arms, chosen)) if either_arm else (chosen,)
+        first: InputError | None = None
+        found = False
+        for c_arm in c_arms:
+            f_arm = _other(arms, c_arm)
+            for lean in cg.LEANS:
+                s = replace(state, lean=lean)
+                geo = _pick_geometry(world, s, self.cable, conn_ref, free_ref, c_arm, f_arm, lean)
+                try:
+                    _check_reach(ctx, c_arm, geo.reach(c_arm), where)
+                    _check_reach(ctx, f_arm, geo.reach(f_arm), where)
+                except InputError as e:
+                    first = first or e
+                    continue
+                found = True
+                yield _emit_pick(self, s, geo, c_arm, f_arm)
+        if not found:
+            raise first or _error(f"{where}: no way to pick it")
 
 
 class PlaceConnector(Skill):
@@ -215,16 +237,17 @@ def step_ways(
     step = steps[i]
     if not isinstance(step, PickCable | PlaceConnector | RouteCable):
         raise TypeError(f"steps[{i}]: {step.skill} is not a cable skill")
-    segments: list[Segment] = []
-    try:
-        if isinstance(step, PickCable):
-            if state.held:
-                segments, state = release_and_retract(state)
-            state = _look_ahead(ctx.world, replace(state, step=i), step, steps[i + 1 :])
-        more, state = step.plan(ctx, replace(state, step=i))
-    except InputError as e:
-        raise StepError.wrap(i, e) from None
-    yield segments + more, state
+    with at_step(i):
+        if not isinstance(step, PickCable):
+            yield step.plan(ctx, replace(state, step=i))
+            return
+        segments: list[Segment] = []
+        if state.held:
+            segments, state = release_and_retract(state)
+        state = _look_ahead(ctx.world, replace(state, step=i), step, steps[i + 1 :])
+        either = _placed_by_either(steps[i + 1 :], step.cable)
+        for more, after in step.ways(ctx, state, either):
+            yield segments + more, after
 
 
 def release_and_retract(state: CableState) -> tuple[list[Segment], CableState]:
@@ -243,7 +266,7 @@ def release_and_retract(state: CableState) -> tuple[list[Segment], CableState]:
     done = replace(
         b.state, cable=None, connector_arm=None, routing_arm=None, place_guide=None, route=()
     )
-    return b.segments, replace(done, guides=(), pull_distance=0.0)
+    return b.segments, replace(done, guides=(), pull_distance=0.0, lean=cg.LEAN)
 
 
 # =========================================================================== building segments
@@ -365,6 +388,7 @@ def _pick_geometry(
     free_ref: str,
     c_arm: str,
     f_arm: str,
+    lean: float,
 ) -> _PickGeometry:
     cable = world.cable(name)
     up = cg.platform_up(world, conn_ref)
@@ -383,13 +407,13 @@ def _pick_geometry(
     reach_a = conn_len / 2.0 if cable.connector is not None else hand_c.x_offset
     # Tipped apart along the cable from the grasp on (the connector hand must keep its tip
     # relative to the connector until it lets go of it).
-    T_c = cg.tcp_frame(K_a[:3, 3] + (half_a + reach_a) * x_a, -x_a, up, x_a, cg.LEAN)
-    T_f = cg.tcp_frame(K_b[:3, 3] + (half_b + hand_f.x_offset) * x_b, x_b, up, x_b, cg.LEAN)
+    T_c = cg.tcp_frame(K_a[:3, 3] + (half_a + reach_a) * x_a, -x_a, up, x_a, lean)
+    T_f = cg.tcp_frame(K_b[:3, 3] + (half_b + hand_f.x_offset) * x_b, x_b, up, x_b, lean)
     T_c_up = cg.lifted(T_c, up, cg.RETRACT_HEIGHT)
     T_f_up = cg.lifted(T_f, up, cg.RETRACT_HEIGHT)
     chord = cg.horizontal(T_f_up[:3, 3] - T_c_up[:3, 3], up)
-    faced_c = cg.turn_in_place(T_c_up, cg.tcp_frame(T_c_up[:3, 3], chord, up, -chord, cg.LEAN))
-    faced_f = cg.turn_in_place(T_f_up, cg.tcp_frame(T_f_up[:3, 3], chord, up, chord, cg.LEAN))
+    faced_c = cg.turn_in_place(T_c_up, cg.tcp_frame(T_c_up[:3, 3], chord, up, -chord, lean))
+    faced_f = cg.turn_in_place(T_f_up, cg.tcp_frame(T_f_up[:3, 3], chord, up, chord, lean))
     # Down on a circle about the connector hand, turning with it (the hand leans away from
     # the connector hand, its x staying along the chord), so the cable slides back against
     # gravity when the hand then moves up the chord (paper, section III-B).
@@ -401,7 +425,7 @@ def _pick_geometry(
     towards = g.unit(lower[-1][:3, 3] - centre)
     slide = cg.line(lower[-1], cg.at(lower[-1], centre + spacing * towards))
     raise_ = cg.arc(slide[-1], centre, axis, down, turn=True)
-    align = _align_z(world, state.place_guide, faced_c[-1], raise_[-1], up)
+    align = _align_z(world, state.place_guide, faced_c[-1], raise_[-1], up, lean)
     return _PickGeometry(
         up=up,
         grasp={c_arm: T_c, f_arm: T_f},
@@ -430,14 +454,14 @@ def _connector_spacing(world: World, guide: str | None, conn_len: float, hand: c
 
 
 def _align_z(
-    world: World, guide: str | None, T_c: Mat, T_f: Mat, up: Vec
+    world: World, guide: str | None, T_c: Mat, T_f: Mat, up: Vec, lean: float
 ) -> tuple[Poses, Poses] | None:
     """Both hands turned as one pair about the connector hand until its z is the routing
     platform's down (tipped back by LEAN, as everywhere); None when it already is (a level
     platform: the circles above turned the far hand back)."""
     platform_up = cg.platform_up(world, guide) if guide is not None else up
     cable = cg.horizontal(T_c[:3, 0], platform_up)
-    T_c1 = cg.tcp_frame(T_c[:3, 3], cable, platform_up, -cable, cg.LEAN)
+    T_c1 = cg.tcp_frame(T_c[:3, 3], cable, platform_up, -cable, lean)
     if g.rotation_angle(T_c, T_c1) < cg.TINY_ANGLE:
         return None
     return cg.pair_line(T_c, T_c1, g.inverse(T_c) @ T_f)
@@ -553,14 +577,14 @@ def _place_geometry(
     T_c0, T_f0 = state.tcp[c_arm], state.tcp[f_arm]
     # Carrying, the other hand holds the cable `spacing` ahead of the connector's centre,
     # both hands leaning apart: that relative pose does not depend on where the pair is.
-    T_c_f = _pair_pose(spacing, up)
+    T_c_f = _pair_pose(spacing, up, state.lean)
     T_f_want = T_c0 @ T_c_f
     adjust = None
     if not _same_pose(T_f0, T_f_want):
         adjust = cg.line(T_f0, T_f_want)
-    T_c_ins = cg.tcp_frame(slot, axis, up, -axis, cg.LEAN)
+    T_c_ins = cg.tcp_frame(slot, axis, up, -axis, state.lean)
     T_c_app = cg.lifted(T_c_ins, up, cg.APPROACH_HEIGHT)
-    T_c_al = cg.tcp_frame(T_c0[:3, 3], axis, up, -axis, cg.LEAN)
+    T_c_al = cg.tcp_frame(T_c0[:3, 3], axis, up, -axis, state.lean)
     align = cg.pair_line(T_c0, T_c_al, T_c_f)
     approach = cg.pair_line(T_c_al, T_c_app, T_c_f)
     insert = cg.pair_line(T_c_app, T_c_ins, T_c_f)
@@ -588,12 +612,12 @@ def _place_geometry(
     )
 
 
-def _pair_pose(spacing: float, up: Vec) -> Mat:
+def _pair_pose(spacing: float, up: Vec, lean: float) -> Mat:
     """T_connector-hand_other-hand when both hold the cable ``spacing`` apart, leaning apart."""
     x = cg.horizontal(_any_normal(up), up)
     origin = np.zeros(3)
-    T_c = cg.tcp_frame(origin, x, up, -x, cg.LEAN)
-    return g.inverse(T_c) @ cg.tcp_frame(origin + spacing * x, x, up, x, cg.LEAN)
+    T_c = cg.tcp_frame(origin, x, up, -x, lean)
+    return g.inverse(T_c) @ cg.tcp_frame(origin + spacing * x, x, up, x, lean)
 
 
 def _any_normal(up: Vec) -> Vec:
@@ -1136,6 +1160,17 @@ def _check_reach(
                 f"{where}: out of reach of arm '{arm}': the {what} pose at ({x}, {y}, {z}) "
                 "mm has no inverse kinematics solution within its joint limits"
             )
+
+
+def _placed_by_either(rest: Sequence[Skill], cable: str) -> bool:
+    """Whether the PlaceConnector of ``cable`` that follows (before the next PickCable)
+    leaves the arm to the planner: then either arm may take the connector end."""
+    for step in rest:
+        if isinstance(step, PickCable):
+            break
+        if isinstance(step, PlaceConnector) and step.cable == cable:
+            return step.arm == "auto"
+    return False
 
 
 def _look_ahead(

@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from cellengine.arrays import Mat
 from cellengine.program import GripperEvent
+from cellengine.skills.cable_geometry import LEAN
 
 if TYPE_CHECKING:
     from cellengine.context import PlanningContext
@@ -59,6 +60,8 @@ class CableState:
     rear face to the last guide's slot. ``pull_distance``: the cable (m) between the last of
     those points and the routing fingertips, which the routing hand pulls through the next
     guide; set by PlaceConnector, updated by every routed guide (published Algorithm 1).
+    ``lean``: the tip the hands keep along the cable (cable_geometry.LEAN unless PickCable
+    took another way).
     """
 
     tcp: Mapping[str, Mat]
@@ -72,6 +75,9 @@ class CableState:
     guides: tuple[str, ...] = ()
     route: tuple[Point, ...] = ()
     pull_distance: float = 0.0
+    # how far both hands tip their flanges apart along the cable while they hold it (the
+    # connector hand keeps it until the connector is placed): PickCable's way sets it
+    lean: float = LEAN
 
     def __post_init__(self) -> None:
         object.__setattr__(
