@@ -23,6 +23,7 @@ and the guide.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -330,15 +331,15 @@ def _up(T: Mat, arm: str, up: Vec, height: float) -> ArmPath:
     return _cartesian(arm, cg.line(T, cg.lifted(T, up, height)))
 
 
-def _stand_back(state: CableState, arm: str, up: Vec) -> Poses:
-    """Up by RETRACT_HEIGHT, then STAND_BACK back along the route (its last two points: the
+def _stand_back(state: CableState, arm: str, up: Vec, distance: float) -> Poses:
+    """Up by RETRACT_HEIGHT, then ``distance`` back along the route (its last two points: the
     pivot and the slot of the last guide)."""
     T = state.tcp[arm]
     T_up = cg.lifted(T, up, cg.RETRACT_HEIGHT)
     last = np.asarray(state.route[-2:], dtype=float)
     back = -cg.horizontal(last[-1] - last[0], up)
     return ip.concatenate(
-        [cg.line(T, T_up), cg.line(T_up, cg.at(T_up, T_up[:3, 3] + cg.STAND_BACK * back))]
+        [cg.line(T, T_up), cg.line(T_up, cg.at(T_up, T_up[:3, 3] + distance * back))]
     )
 
 
@@ -726,6 +727,7 @@ class GuidePlan:
     swing: Poses
     insert: Poses
     laid: float  # route length from the connector's rear face to Ap
+    stand_back: float  # the other hand, released at the previous guide, backs off this far
 
     @property
     def radius(self) -> float:
@@ -775,6 +777,7 @@ class GuideWay:
     side: float  # +1: slide to the left of the axis (up x axis), -1: to the right
     lean: float = cg.LEAN
     pivot_lean: float = cg.PIVOT_LEAN
+    stand_back: float = cg.STAND_BACK  # the other hand, released, backs off this far first
 
 
 @dataclass(frozen=True)
@@ -848,11 +851,10 @@ def guide_ways(world: World, state: CableState, guide: str, r_arm: str) -> Itera
         if k == 0:
             first_blocked = blocked
         for rank, side in enumerate(clear):
-            for lean in cg.LEANS:
-                for pivot in cg.PIVOT_LEANS:
-                    cost = (theta - theta0) + 0.05 * rank
-                    cost += 0.5 * (abs(lean - cg.LEAN) + abs(pivot - cg.PIVOT_LEAN))
-                    ranked.append((cost, len(ranked), GuideWay(theta, side, lean, pivot)))
+            for lean, pivot, back in itertools.product(cg.LEANS, cg.PIVOT_LEANS, cg.STAND_BACKS):
+                cost = (theta - theta0) + 0.05 * rank + abs(back - cg.STAND_BACK)
+                cost += 0.5 * (abs(lean - cg.LEAN) + abs(pivot - cg.PIVOT_LEAN))
+                ranked.append((cost, len(ranked), GuideWay(theta, side, lean, pivot, back)))
     if not ranked:
         raise _error(
             f"{b.where}: no sliding angle clears the guide: sliding at theta = "
@@ -937,6 +939,7 @@ def _guide_plan(
         swing=swing,
         insert=insert,
         laid=laid,
+        stand_back=way.stand_back,
     )
 
 
@@ -1010,7 +1013,7 @@ def _emit_guide(
         # passes on its way to the next guide (a collision on plan_one_turn).
         b.add(
             f"{label}: release the previous guide",
-            [_cartesian(o_arm, _stand_back(b.state, o_arm, gp.up))],
+            [_cartesian(o_arm, _stand_back(b.state, o_arm, gp.up, gp.stand_back))],
             before=[GripperEvent(o_arm, OPEN)],
         )
     if gp.reorient is not None:

@@ -101,6 +101,7 @@ PIVOT_LEAN = math.radians(30.0)
 THETA_STEP = math.radians(5.0)
 LEANS = (LEAN, math.radians(25.0), math.radians(5.0))
 PIVOT_LEANS = (PIVOT_LEAN, math.radians(20.0), math.radians(40.0))
+STAND_BACKS = (STAND_BACK, 0.050, 0.150)
 # Pull that puts the cable in tension, per metre between the hands: the sag of a loosely held
 # span. The paper makes it "a function of the distance between grippers and the cable
 # properties"; objects.yaml gives no stiffness, so only the distance is used.
