@@ -51,6 +51,7 @@ class Outcome:
 
 _CLASSES: tuple[tuple[str, str], ...] = (
     (r"Cartesian path stops at", "Cartesian path stops"),
+    (r"closed chain .* stops at", "closed-chain path stops"),
     (r"no sliding angle clears the guide", "no sliding angle clears the guide"),
     (r"out of reach|no inverse kinematics|no IK branch reaches", "out of reach"),
     (r"every IK solution .* is in collision", "every IK solution in collision"),
@@ -85,7 +86,7 @@ def _after_waypoint(message: str) -> str:
 
 
 def _part_kind(name: str) -> str:
-    name = name.strip("(),'")
+    name = re.sub(r"#\d+$", "", name.strip("(),'"))  # a link's second capsule
     if "/" in name:  # an arm's link: left/wrist_1_link
         return "arm " + re.sub(r"_\d+_link|_link", "", name.split("/", 1)[1])
     if name.startswith("routing.") or name.startswith("platform."):
