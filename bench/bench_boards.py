@@ -1,0 +1,235 @@
+"""Success rate of the cable skills on generated boards nobody tuned for (issue #13, point 5).
+
+Run: .venv/bin/python bench/bench_boards.py --boards 50 --seed 1 [--strategies split,sync,async]
+     [--remodel] [--out DIR] [--jobs 2]
+
+Board k is drawn from seed S + k by bench/boards.py (its docstring says what a board is and
+what is rejected); with --remodel the REMODEL sample is added at 8 placements. Each board
+is compiled with each strategy by ``cellengine.pipeline.compile_plan`` and each compiled
+program checked by bench/board_check.py (independent of the skills). Printed and written to
+DIR/results.json: the success rate per strategy, a histogram of the failure reasons
+(messages normalised into classes) and the compile times. The folders of the boards that
+failed with some strategy stay in DIR/boards/; the others are deleted. Results do not depend
+on --jobs: every task is a pure function of its board and strategy.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import time
+from collections import Counter
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from bench.boards import make_board, remodel_placements  # noqa: E402
+
+STRATEGIES = ("split", "sync", "async")
+
+
+@dataclass(frozen=True)
+class Outcome:
+    board: str
+    strategy: str
+    ok: bool
+    reason: str  # the failure class ("" when ok)
+    message: str  # the first failure as the engine or the checker says it
+    compile_s: float
+    min_arm_distance_mm: float | None
+
+
+# ----------------------------------------------------------------------------- classes
+
+_CLASSES: tuple[tuple[str, str], ...] = (
+    (r"Cartesian path stops at", "Cartesian path stops"),
+    (r"closed chain .* stops at", "closed-chain path stops"),
+    (r"no sliding angle clears the guide", "no sliding angle clears the guide"),
+    (r"out of reach|no inverse kinematics|no IK branch reaches", "out of reach"),
+    (r"every IK solution .* is in collision", "every IK solution in collision"),
+    (r"too short|cable .* (long|length)", "cable too short"),
+    (r"no collision-free|transit|OMPL|could not plan", "no transit path"),
+)
+
+
+def classify(message: str) -> str:
+    """A failure message as a class: the fixed phrases above, a collision by the kinds of the
+    parts (arm link, guide, holder, table...), else the message with numbers and names
+    blanked."""
+    for pattern, name in _CLASSES:
+        if re.search(pattern, message):
+            if name == "Cartesian path stops":
+                return f"{name}: {classify(_after_waypoint(message))}"
+            return name
+    m = re.search(r"collision between (\S+) and (\S+)", message) or re.search(
+        r"(\S+) / (\S+): collision", message
+    )
+    if m:
+        a, b = sorted((_part_kind(m.group(1)), _part_kind(m.group(2))))
+        return f"collision between {a} and {b}"
+    tail = message.split(": ", 2)[-1]
+    return re.sub(r"-?\d+(\.\d+)?", "N", re.sub(r"'[^']*'", "'X'", tail))[:90]
+
+
+def _after_waypoint(message: str) -> str:
+    """Why a Cartesian path stopped: what follows 'waypoint N: '."""
+    m = re.search(r"waypoint \d+: (.*)", message)
+    return m.group(1) if m else "why unknown"
+
+
+def _part_kind(name: str) -> str:
+    name = re.sub(r"#\d+$", "", name.strip("(),'"))  # a link's second capsule
+    if "/" in name:  # an arm's link: left/wrist_1_link
+        return "arm " + re.sub(r"_\d+_link|_link", "", name.split("/", 1)[1])
+    if name.startswith("routing.") or name.startswith("platform."):
+        return "guide" if "connector" not in name else "connector guide"
+    if name.startswith("holder.") or name.startswith("combs."):
+        return "comb"
+    if "cable" in name or "connector" in name:
+        return "cable"
+    return re.sub(r"\d+", "", name)
+
+
+# ------------------------------------------------------------------------------- tasks
+
+
+def run_one(plan: str, board: str, strategy: str) -> Outcome:
+    """Compile and check one board with one strategy (in a worker process)."""
+    import cellengine.skills.cable  # noqa: F401  (registers the cable skills)
+    from bench.board_check import check_compiled
+    from cellengine.errors import InputError
+    from cellengine.pipeline import compile_plan
+
+    t0 = time.perf_counter()
+    try:
+        compiled = compile_plan(Path(plan), strategy)
+    except InputError as e:
+        dt = time.perf_counter() - t0
+        msg = str(e).split("\n")[0]
+        return Outcome(board, strategy, False, classify(msg), msg, dt, None)
+    dt = time.perf_counter() - t0
+    result = check_compiled(compiled)
+    d = None if result.min_arm_distance is None else round(result.min_arm_distance * 1000, 1)
+    if result.ok:
+        return Outcome(board, strategy, True, "", "", dt, d)
+    first = result.failures[0]
+    reason = f"check: {first.kind}" + (
+        f" ({first.message.split(': ', 1)[1].split(' ')[0]})" if first.kind == "insert" else ""
+    )
+    return Outcome(board, strategy, False, reason, first.message, dt, d)
+
+
+def make_boards(n: int, seed: int, remodel: bool, out: Path) -> dict[str, Path]:
+    """Each board's plan file, written under out/boards/."""
+    plans: dict[str, Path] = {}
+    for k in range(n):
+        name = f"board_{seed + k}"
+        make_board(seed + k, out / "boards" / name)
+        plans[name] = out / "boards" / name / "plan.yaml"
+    if remodel:
+        plans.update(_remodel_boards(out))
+    return plans
+
+
+def _remodel_boards(out: Path) -> dict[str, Path]:
+    from cellengine.info.load import load_world
+    from tests.conftest import REMODEL
+
+    probe = out / "boards" / "remodel_probe"
+    _import_remodel(REMODEL, probe, "0 0 0 0 0 0")
+    kps = load_world(probe / "cell.yaml").keypoints()
+    shutil.rmtree(probe)
+    plans = {}
+    for name, pose in remodel_placements([(float(T[0, 3]) * 1000, float(T[1, 3]) * 1000)
+                                          for T in kps.values()]):  # fmt: skip
+        _import_remodel(REMODEL, out / "boards" / name, pose)
+        plans[name] = out / "boards" / name / "plan.yaml"
+    return plans
+
+
+def _import_remodel(src: Path, dest: Path, pose: str) -> None:
+    cmd = [sys.executable, "-m", "cellengine", "import", "remodel", str(src), str(dest)]
+    subprocess.run([*cmd, f"--pose={pose}"], check=True, capture_output=True)
+
+
+# ----------------------------------------------------------------------------- summary
+
+
+def summarise(outcomes: list[Outcome], strategies: tuple[str, ...]) -> dict[str, object]:
+    per: dict[str, object] = {}
+    for s in strategies:
+        mine = [o for o in outcomes if o.strategy == s]
+        times = [o.compile_s for o in mine]
+        dists = [o.min_arm_distance_mm for o in mine if o.min_arm_distance_mm is not None]
+        per[s] = {
+            "boards": len(mine),
+            "succeeded": sum(o.ok for o in mine),
+            "success_rate": round(sum(o.ok for o in mine) / max(1, len(mine)), 3),
+            "failures": dict(Counter(o.reason for o in mine if not o.ok).most_common()),
+            "compile_s_median": round(statistics.median(times), 2) if times else None,
+            "compile_s_max": round(max(times), 2) if times else None,
+            "min_arm_distance_mm": min(dists) if dists else None,
+            "arms_under_10mm": sum(d < 10.0 for d in dists),
+        }
+    return per
+
+
+def _print(summary: dict[str, object], outcomes: list[Outcome]) -> None:
+    for s, v in summary.items():
+        assert isinstance(v, dict)
+        print(
+            f"{s}: {v['succeeded']}/{v['boards']} ({100 * v['success_rate']:.0f} %), compile "
+            f"median {v['compile_s_median']} s, max {v['compile_s_max']} s, least arm "
+            f"distance {v['min_arm_distance_mm']} mm ({v['arms_under_10mm']} compiled programs "
+            "under 10 mm)"
+        )
+    print("failure reasons (all strategies):")
+    for reason, n in Counter(o.reason for o in outcomes if not o.ok).most_common():
+        example = next(o for o in outcomes if o.reason == reason)
+        print(f"  {n:4d}  {reason}   e.g. {example.board} {example.strategy}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--boards", type=int, default=50)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--strategies", default=",".join(STRATEGIES))
+    ap.add_argument("--remodel", action="store_true")
+    ap.add_argument("--out", type=Path, default=Path("bench_boards_out"))
+    ap.add_argument("--jobs", type=int, default=2)
+    args = ap.parse_args(argv)
+    strategies = tuple(args.strategies.split(","))
+    shutil.rmtree(args.out / "boards", ignore_errors=True)
+    plans = make_boards(args.boards, args.seed, args.remodel, args.out)
+    tasks = [(str(p), b, s) for b, p in plans.items() for s in strategies]
+    t0 = time.perf_counter()
+    with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+        outcomes = list(pool.map(run_one, *zip(*tasks, strict=True)))
+    wall = time.perf_counter() - t0
+    summary = summarise(outcomes, strategies)
+    _print(summary, outcomes)
+    print(f"{len(tasks)} compiles in {wall:.0f} s wall time, {args.jobs} jobs")
+    failed = {o.board for o in outcomes if not o.ok}
+    for b in set(plans) - failed:
+        shutil.rmtree(plans[b].parent)
+    result = {
+        "command": " ".join(["bench/bench_boards.py", *(argv or sys.argv[1:])]),
+        "wall_s": round(wall, 1),
+        "per_strategy": summary,
+        "outcomes": [asdict(o) for o in outcomes],
+    }
+    (args.out / "results.json").write_text(json.dumps(result, indent=1) + "\n")
+    print(f"written {args.out / 'results.json'}; failed boards in {args.out / 'boards'}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

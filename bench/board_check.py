@@ -1,0 +1,173 @@
+"""An independent check of a compiled cable-routing program (issue #13, point 5).
+
+Written without the skills' code: it reads only the compiled Program (segments' labels and
+timed trajectories, the gripper events), the world's keypoints and dimensions, forward
+kinematics (cellengine.motion.robot) and the engine's trajectory gate. It checks:
+
+- ``insert``: for each RouteCable guide, in plan order, a segment labelled
+  "RouteCable <guide>: insert"; at its end both hands hold the cable, the guide's slot lies
+  on the segment between the two fingertips within the slot's gap / 2 and that segment is
+  within 15 deg of the guide's x (the cable runs through the slot);
+- ``order``: the inserts come in the plan's order;
+- ``limits``: joint position, velocity and acceleration at 1 ms samples (the gate);
+- the least distance between the two arms (every 10 ms): reported, with ``below_target``
+  when under 10 mm, but not a failure (the reference plans come within 3.7 mm, at the pick).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from cellengine.arrays import Vec
+from cellengine.motion.gate import ArmDistance, check_trajectory
+from cellengine.motion.robot import CellModel
+from cellengine.motion.trajectory import concatenate
+from cellengine.pipeline import Compiled
+from cellengine.program import CompiledSegment, Program
+from cellengine.world import World
+
+ANGLE_MAX = 15.0  # deg between the cable and the guide's x
+MIN_ARM_DISTANCE = 0.010  # m
+
+
+@dataclass(frozen=True)
+class Failure:
+    kind: str  # insert | order | limits
+    message: str
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    failures: tuple[Failure, ...]
+    min_arm_distance: float | None  # m
+    closest_pair: tuple[str, str] | None
+
+    @property
+    def ok(self) -> bool:
+        return not self.failures
+
+    @property
+    def below_target(self) -> bool:
+        """The arms come closer than the 10 mm target."""
+        return self.min_arm_distance is not None and self.min_arm_distance < MIN_ARM_DISTANCE
+
+
+def route_guides(compiled: Compiled) -> list[str]:
+    """The guides of the plan's RouteCable steps, in plan order (from the plan, not a skill)."""
+    out: list[str] = []
+    for step in compiled.loaded.plan.steps:
+        if step.skill == "RouteCable":
+            out += [str(g) for g in getattr(step, "guides")]  # noqa: B009 (plan model field)
+    return out
+
+
+def check_compiled(compiled: Compiled, world: World | None = None) -> CheckResult:
+    """Check ``compiled`` against ``world`` (default: its own; another one moves keypoints)."""
+    cell = compiled.cell
+    arms = tuple(cell.arms)
+    checker = compiled.context.checker
+
+    def distance(q: Vec) -> tuple[float, tuple[str, str]]:
+        return checker.distance(q, (arms[0], arms[1]))
+
+    return check_program(
+        compiled.program, world or compiled.world, cell, route_guides(compiled), distance
+    )
+
+
+def check_program(
+    program: Program, world: World, cell: CellModel, guides: Sequence[str], distance: ArmDistance
+) -> CheckResult:
+    cables = world.objects.cables
+    cable = next(iter(cables)) if cables else ""
+    failures = _inserts(program, world, cell, guides, cable)
+    report = check_trajectory(
+        concatenate([s.trajectory for s in program.segments]),
+        cell.joint_names,
+        cell.limits,
+        arm_distance=distance,
+    )
+    failures += [Failure("limits", f"{v.kind} limit: {v}") for v in report.violations]
+    return CheckResult(tuple(failures), report.min_arm_distance, report.closest_pair)
+
+
+def _inserts(
+    program: Program, world: World, cell: CellModel, guides: Sequence[str], cable: str
+) -> list[Failure]:
+    ends = _insert_ends(program)
+    out: list[Failure] = []
+    last = -math.inf
+    for guide in guides:
+        times = ends.get(guide, [])
+        if not times:
+            out.append(Failure("insert", f"{guide}: no insert"))
+            continue
+        seg = times[0]
+        t = seg.trajectory.end_time
+        if t <= last:
+            out.append(Failure("order", f"{guide}: inserted before the guide planned before it"))
+        last = max(last, t)
+        problem = _through_slot(program, world, cell, guide, cable, seg)
+        if problem:
+            out.append(Failure("insert", f"{guide}: {problem}"))
+    return out
+
+
+def _insert_ends(program: Program) -> dict[str, list[CompiledSegment]]:
+    """Each guide's insert segments, by the guide named in the label."""
+    ends: dict[str, list[CompiledSegment]] = {}
+    for seg in program.segments:
+        label = seg.segment.label
+        if label.startswith("RouteCable ") and label.endswith(": insert"):
+            guide = label[len("RouteCable ") : -len(": insert")]
+            ends.setdefault(guide, []).append(seg)
+    return ends
+
+
+def _through_slot(
+    program: Program, world: World, cell: CellModel, guide: str, cable: str, seg: CompiledSegment
+) -> str | None:
+    """Why the cable between the fingertips does not run through ``guide``'s slot at the end
+    of its insert ``seg``."""
+    t = seg.trajectory.end_time
+    not_holding = [a for a in cell.arms if _holds(program, a, t) != cable]
+    if not_holding:
+        return f"not held by {', '.join(not_holding)} at the end of the insert"
+    pose = world.pose(guide)
+    slot, axis = np.asarray(pose[:3, 3], dtype=float), np.asarray(pose[:3, 0], dtype=float)
+    gap = float(world.dimensions(guide)["gap"])
+    a, b = _tips(seg, cell)
+    d = b - a
+    lateral = _point_segment(slot, a, b)
+    angle = math.degrees(math.acos(min(1.0, abs(float(d @ axis)) / float(np.linalg.norm(d)))))
+    if lateral > gap / 2:
+        return f"slot {lateral * 1000:.1f} mm off the cable (gap/2 {gap * 500:.1f} mm)"
+    if angle > ANGLE_MAX:
+        return f"cable {angle:.1f} deg off the guide's x"
+    return None
+
+
+def _holds(program: Program, arm: str, t: float) -> str | None:
+    """What ``arm`` holds just before t, from the gripper events (a sliding hand holds)."""
+    held: str | None = None
+    for e in program.events:
+        if e.event.arm == arm and e.time < t - 1e-9:
+            held = e.event.holds if e.event.mode in ("grasp", "slide") else None
+    return held
+
+
+def _tips(seg: CompiledSegment, cell: CellModel) -> tuple[Vec, Vec]:
+    """Both fingertips (cell frame, m) at the end of ``seg``."""
+    parts = cell.split(seg.trajectory.q[-1])
+    a, b = (np.asarray(cell.arms[arm].fk(parts[arm])[:3, 3], dtype=float) for arm in cell.arms)
+    return a, b
+
+
+def _point_segment(p: Vec, a: Vec, b: Vec) -> float:
+    ab = b - a
+    s = float(np.clip((p - a) @ ab / float(ab @ ab), 0.0, 1.0))
+    return float(np.linalg.norm(p - (a + s * ab)))

@@ -1,0 +1,97 @@
+"""The board generator and the independent checker of bench/bench_boards.py (issue #13 point 5):
+the same seed writes the same files, every board loads and validates, the checker accepts the
+compiled reference plan and rejects it against a world whose slot moved by 20 mm."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+
+import cellengine.skills.cable  # noqa: F401  (the real skills package registers the cable skills)
+from bench.bench_boards import classify
+from bench.board_check import check_compiled
+from bench.boards import Guide, make_board, rejection
+from cellengine.info.load import load_plan
+from cellengine.pipeline import Compiled, compile_plan
+from tests.conftest import CELLS
+
+ROUTING = CELLS / "cable_routing"
+
+
+def _files(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
+
+
+def test_same_seed_same_files(tmp_path: Path) -> None:
+    make_board(7, tmp_path / "a")
+    make_board(7, tmp_path / "b")
+    make_board(8, tmp_path / "c")
+    assert _files(tmp_path / "a") == _files(tmp_path / "b")
+    assert (
+        _files(tmp_path / "a")["routing/routing.x3d"]
+        != _files(tmp_path / "c")["routing/routing.x3d"]
+    )
+
+
+def test_every_board_loads_and_validates(tmp_path: Path) -> None:
+    for seed in range(20):
+        board = make_board(seed, tmp_path / str(seed))
+        loaded = load_plan(tmp_path / str(seed) / "plan.yaml")
+        world = loaded.world
+        assert 3 <= len(board.guides) <= 8
+        assert rejection(board.conn_guide, board.guides, board.base_distance) is None
+        for g in board.guides:
+            slot = world.pose(f"routing.{g.name}")
+            assert slot[:2, 3] * 1000 == pytest.approx([g.x, g.y], abs=1e-3)  # X3D rounding
+            assert world.dimensions(f"routing.{g.name}")["gap"] * 1000 > board.cable_diameter
+        assert world.cable("cable1").length * 1000 > board.route_length + 149
+
+
+def test_overlapping_guides_are_rejected() -> None:
+    a = Guide("guide1", 400.0, 0.0, 0.0, 10.0, 24.0, 40.0, 10.0, 10.0)
+    b = Guide("guide2", 405.0, 0.0, 0.0, 10.0, 24.0, 40.0, 10.0, 10.0)
+    far = Guide("guide3", 900.0, 0.0, 0.0, 10.0, 24.0, 40.0, 10.0, 10.0)
+    assert rejection(a, (b,), 700.0) == "guide1 overlaps guide2"
+    assert rejection(a, (far,), 700.0) == "guide3 out of both arms' reach"
+
+
+@pytest.fixture(scope="module")
+def straight() -> Compiled:
+    return compile_plan(ROUTING / "plan_straight.yaml", "split")
+
+
+def test_checker_accepts_the_reference_plan(straight: Compiled) -> None:
+    result = check_compiled(straight)
+    assert result.ok, result.failures
+    assert result.min_arm_distance is not None
+
+
+def test_checker_rejects_a_moved_slot(straight: Compiled, tmp_path: Path) -> None:
+    """guide2's slot 20 mm across the cable (its gap is 10 mm): the program no longer
+    passes the cable through it."""
+    cell = tmp_path / "cable_routing"
+    shutil.copytree(ROUTING, cell)
+    x3d = cell / "routing" / "routing.x3d"
+    text = x3d.read_text()
+    assert text.count('translation="150.000000 260.000000 10.000000"') == 1
+    x3d.write_text(
+        text.replace("150.000000 260.000000 10.000000", "170.000000 260.000000 10.000000")
+    )
+    moved = load_plan(cell / "plan_straight.yaml").world
+    result = check_compiled(straight, moved)
+    assert [f.kind for f in result.failures] == ["insert"]
+    assert result.failures[0].message.startswith("routing.guide2: slot 20.0 mm off the cable")
+
+
+def test_failure_classes() -> None:
+    msg = (
+        "plan.yaml:7:5: step 1 (PickCable CA1: approach and grasp): the left arm's Cartesian "
+        "path stops at 17 % of its length: waypoint 3: collision between 'left/upper_arm_link' "
+        "and 'right/wrist_2_link' (within 0.98 mm)"
+    )
+    assert classify(msg) == "Cartesian path stops: collision between arm upper_arm and arm wrist"
+    assert classify("x: no sliding angle clears the guide: theta 3") == (
+        "no sliding angle clears the guide"
+    )
