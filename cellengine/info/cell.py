@@ -93,7 +93,7 @@ class Tool(Frozen):
     # coordinates in the file's length unit, in the flange frame), parts and fingers, in that
     # order. None of them: a box from the flange to the TCP, finger_width square.
     mesh: str | None = None
-    shape: tuple[ToolPart, ...] | None = Field(None, min_length=1)
+    shape: tuple[ToolPart, ...] | None = None
     fingers: Fingers | None = None
     mass: Mass | None = Field(None, ge=0)
     # How the fingers meet an upright object: from above (the tool's z down) or from the
@@ -103,6 +103,8 @@ class Tool(Frozen):
 
     @model_validator(mode="after")
     def _parts(self) -> Tool:
+        if self.shape == ():
+            raise ValueError("shape: give at least one part, or leave shape out")
         if self.fingers is not None and not self.jaw:
             raise ValueError("fingers need the jaw's openings (jaw: {open: ..., ...})")
         names = [p.name or f"part{k + 1}" for k, p in enumerate(self.shape or ())]
