@@ -17,9 +17,10 @@ from cellengine.info.cell import Robot, Tool
 from cellengine.info.load import load_world
 from cellengine.info.units import Units
 from cellengine.motion.collision import CollisionChecker
-from cellengine.motion.robot import build_arm, build_cell_model, is_tool, tool_parts
-from cellengine.motion.scene import build_scene, with_jaw
+from cellengine.motion.robot import CellModel, build_arm, build_cell_model, is_tool, tool_parts
+from cellengine.motion.scene import CollisionScene, StaticShape, build_scene, rearranged, with_jaw
 from cellengine.motion.tool import tool_solids
+from cellengine.world import World
 from tests.conftest import CELLS
 
 MM = {"length": 1e-3, "angle": 1.0, "mass": 1.0}
@@ -73,7 +74,7 @@ def test_bad_shapes_are_refused(change: dict[str, object], message: str) -> None
         tool({**GRIPPER, **change})
 
 
-def solids(t: Tool) -> dict[str, tuple[np.ndarray, object]]:
+def solids(t: Tool) -> dict[str, tuple[np.ndarray, coal.CollisionGeometry]]:
     return {s.name: (s.T_flange_solid, s.shape) for s in tool_solids(t, t.tcp.matrix(), str)}
 
 
@@ -131,27 +132,30 @@ def test_is_tool() -> None:
 # ------------------------------------------------------------------ in the reference cell
 
 
+Cable = tuple[World, CellModel, CollisionScene]
+
+
 @pytest.fixture(scope="module")
-def cable() -> tuple[object, object, object]:
+def cable() -> Cable:
     world = load_world(CELLS / "cable_routing" / "cell.yaml")
     cell = build_cell_model(world)
     scene = build_scene(cell, world, samples=200)
     return world, cell, scene
 
 
-def placed(scene: object, q: np.ndarray) -> dict[str, pin.SE3]:
-    geometry = scene.geometry  # type: ignore[attr-defined]
-    model = scene.cell.model  # type: ignore[attr-defined]
+def placed(scene: CollisionScene, q: np.ndarray) -> dict[str, pin.SE3]:
+    geometry = scene.geometry
+    model = scene.cell.model
     data, gdata = model.createData(), pin.GeometryData(geometry)
     pin.updateGeometryPlacements(model, data, geometry, gdata, q)
     return {str(o.name): gdata.oMg[i] for i, o in enumerate(geometry.geometryObjects)}
 
 
-def test_fingertips_follow_the_jaw(cable: tuple[object, object, object]) -> None:
+def test_fingertips_follow_the_jaw(cable: Cable) -> None:
     _, cell, scene = cable
-    q = cell.join({n: a.home for n, a in cell.arms.items()})  # type: ignore[attr-defined]
+    q = cell.join({n: a.home for n, a in cell.arms.items()})
     for opening in (0.060, 0.004):
-        at = placed(with_jaw(scene, {"left": opening}), q)  # type: ignore[arg-type]
+        at = placed(with_jaw(scene, {"left": opening}), q)
         gap = at["left/tool/finger_left"].translation - at["left/tool/finger_right"].translation
         # centre to centre: the opening plus a finger's 6 mm along the jaw
         assert float(np.linalg.norm(gap)) == pytest.approx(opening + 0.006)
@@ -160,17 +164,18 @@ def test_fingertips_follow_the_jaw(cable: tuple[object, object, object]) -> None
         assert float(np.linalg.norm(right)) == pytest.approx(0.066)
 
 
-def post_between_the_fingers(cell: object, world: object, size: tuple[float, float, float]):
-    """A world whose only obstacle is a box ``size`` centred 40 mm above the left TCP."""
-    q = cell.join({n: a.home for n, a in cell.arms.items()})  # type: ignore[attr-defined]
-    T_tcp = cell.arms["left"].fk(q[:6])  # type: ignore[attr-defined]
+def post_between_the_fingers(cell: CellModel) -> tuple[np.ndarray, np.ndarray]:
+    """The arms at home, and a pose 40 mm above the left TCP, between its fingers."""
+    q = cell.join({n: a.home for n, a in cell.arms.items()})
+    T_tcp = cell.arms["left"].fk(q[:6])
     T = T_tcp @ g.transform(np.eye(3), (0, 0, -0.04))
     return q, T
 
 
-def checker_with_post(world, cell, size, T, tool_shape: bool) -> CollisionChecker:
-    from cellengine.motion.scene import StaticShape, rearranged
-
+def checker_with_post(
+    world: World, cell: CellModel, size: tuple[float, float, float], T: np.ndarray
+) -> CollisionChecker:
+    """The cell with a box ``size`` at ``T`` as its only environment."""
     base = build_scene(cell, world, samples=200)
     post = coal.Box(*size)
     statics = [StaticShape("post", T, post, post, True)]
@@ -178,42 +183,44 @@ def checker_with_post(world, cell, size, T, tool_shape: bool) -> CollisionChecke
 
 
 def test_fingers_touch_where_the_stand_in_box_would_not_and_vice_versa(
-    cable: tuple[object, object, object], tmp_path: Path
+    cable: Cable, tmp_path: Path
 ) -> None:
     world, cell, _ = cable
-    q, T = post_between_the_fingers(cell, world, (0.01, 0.01, 0.01))
+    q, T = post_between_the_fingers(cell)
     # a 10 mm post between the open fingers: free, the old 20 mm box would collide
-    free = checker_with_post(world, cell, (0.01, 0.01, 0.01), T, True)
+    free = checker_with_post(world, cell, (0.01, 0.01, 0.01), T)
     assert free.check(q) is None
     old = tool_solids(
         Tool.model_validate({"kind": "parallel_gripper", "tcp": {"xyz": [0, 0, 0.2]}}),
-        np.array(cell.arms["left"].T_flange_tcp),  # type: ignore[attr-defined]
+        np.array(cell.arms["left"].T_flange_tcp),
         str,
     )[0]
-    T_flange = cell.arms["left"].fk_flange(q[:6])  # type: ignore[attr-defined]
+    T_flange = cell.arms["left"].fk_flange(q[:6])
     assert _collide(old.shape, T_flange @ old.T_flange_solid, coal.Box(0.01, 0.01, 0.01), T)
     # a post 40 mm to the side along the jaw axis: the open left finger touches it, the
     # body does not, and the stand-in box would not
     T_side = T @ g.transform(np.eye(3), (0, 0.04, 0))
-    hit = checker_with_post(world, cell, (0.01, 0.01, 0.01), T_side, True).check(q)
+    hit = checker_with_post(world, cell, (0.01, 0.01, 0.01), T_side).check(q)
     assert hit is not None and hit.pair == ("left/tool/finger_left", "post")
     assert not _collide(
         old.shape, T_flange @ old.T_flange_solid, coal.Box(0.01, 0.01, 0.01), T_side
     )
 
 
-def _collide(a: object, Ta: np.ndarray, b: object, Tb: np.ndarray) -> bool:
+def _collide(
+    a: coal.CollisionGeometry, Ta: np.ndarray, b: coal.CollisionGeometry, Tb: np.ndarray
+) -> bool:
     request, result = coal.CollisionRequest(), coal.CollisionResult()
     T1 = coal.Transform3s(Ta[:3, :3], Ta[:3, 3])
     T2 = coal.Transform3s(Tb[:3, :3], Tb[:3, 3])
     return bool(coal.collide(a, T1, b, T2, request, result))
 
 
-def test_holding_places_the_fingers_at_the_mode(cable: tuple[object, object, object]) -> None:
+def test_holding_places_the_fingers_at_the_mode(cable: Cable) -> None:
     world, cell, scene = cable
-    holding = Holding(world, scene)  # type: ignore[arg-type]
-    q = cell.join({n: a.home for n, a in cell.arms.items()})  # type: ignore[attr-defined]
-    T = cell.arms["left"].fk(q[:6])  # type: ignore[attr-defined]
+    holding = Holding(world, scene)
+    q = cell.join({n: a.home for n, a in cell.arms.items()})
+    T = cell.arms["left"].fk(q[:6])
     holding.set("left", "cable1", T, "grasp")
     assert holding.state.jaw == {"left": pytest.approx(0.004)}
     at = placed(holding.checker.scene, q)
@@ -221,16 +228,16 @@ def test_holding_places_the_fingers_at_the_mode(cable: tuple[object, object, obj
     assert float(np.linalg.norm(gap)) == pytest.approx(0.010)
     # every tool part holds the cable: none is checked against it
     acm = holding.checker.scene.acm
-    for part in tool_parts(cell.arms["left"]):  # type: ignore[attr-defined]
+    for part in tool_parts(cell.arms["left"]):
         assert acm.reason(part, "cable1@left") == "held"
     holding.set("left", "cable1", T, "open")
     assert holding.state.jaw == {"left": pytest.approx(0.060)}
 
 
-def test_contacts_cover_every_tool_part(cable: tuple[object, object, object]) -> None:
+def test_contacts_cover_every_tool_part(cable: Cable) -> None:
     world, cell, scene = cable
-    holding = Holding(world, scene)  # type: ignore[arg-type]
+    holding = Holding(world, scene)
     holding.touch([("left", "routing.guide1")])
     acm = holding.checker.scene.acm
-    for part in tool_parts(cell.arms["left"]):  # type: ignore[attr-defined]
+    for part in tool_parts(cell.arms["left"]):
         assert acm.reason(part, "routing.guide1") == "contact"
