@@ -19,7 +19,7 @@ from cellengine.arrays import Mat
 from cellengine.context import PlanningContext
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.ik import ArmIK
-from cellengine.motion.robot import TOOL_GEOMETRY, CellModel
+from cellengine.motion.robot import CellModel, tool_parts
 from cellengine.motion.scene import CollisionScene, pair_key, rearranged
 from cellengine.skills import lab_geometry as lg
 
@@ -47,7 +47,7 @@ def blockers(
         base = world.cell.robots[arm].base.matrix()[:3, 3]
         ik = ctx.iks[arm]
         # the tool may touch the target it closes on
-        allow = {pair_key(f"{arm}/{TOOL_GEOMETRY}", target): "contact"}
+        allow = {pair_key(part, target): "contact" for part in tool_parts(cell.arms[arm])}
         for T in lg.grasp_candidates(grasp, T_at, body, base):
             found = _in_the_way(
                 cell, scene, ik, arm, home, (T, lg.approach_of(T)), containers, allow, checkers

@@ -202,7 +202,7 @@ class Compiler:
             arm = self.cell.arms[e.arm]
             T_cell_tcp = arm.fk(self.cell.split(q)[e.arm])
             try:
-                self.holding.set(e.arm, e.holds, T_cell_tcp)
+                self.holding.set(e.arm, e.holds, T_cell_tcp, e.mode)
             except (ValueError, KeyError) as err:
                 raise Refused(f"the {e.arm} gripper cannot hold '{e.holds}': {err}") from None
             self.events.append(TimedEvent(t, e))

@@ -9,6 +9,9 @@ it, is a cube of the cable's diameter at the fingertips (the cable beyond the fi
 and deformable: the executor does not model it). Names are ``<object>@<arm>``, since both hands
 can hold one cable.
 
+Each gripper's fingers are placed at the opening of its last jaw mode (part of :class:`Held`,
+so a scene is kept per opening too).
+
 A held object may touch the platform elements (combs, guides, the connector guide): putting
 the cable or the connector into them is the task, with the clearances of a few millimetres the
 guides are made with. The arms themselves are still checked against every element.
@@ -17,14 +20,14 @@ guides are made with. The arms themselves are still checked against every elemen
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from cellengine import geometry as g
 from cellengine.arrays import Mat
 from cellengine.motion.collision import CollisionChecker
-from cellengine.motion.robot import TOOL_GEOMETRY
+from cellengine.motion.robot import tool_parts
 from cellengine.motion.scene import (
     CollisionScene,
     HeldObject,
@@ -35,6 +38,7 @@ from cellengine.motion.scene import (
     pair_key,
     rearranged,
     standing_container,
+    with_jaw,
 )
 from cellengine.world import RefError, World
 
@@ -73,12 +77,15 @@ class Held:
     container (its centre in the fingertip frame, where it was grasped). ``standing``:
     container -> T_cell_base of each container standing somewhere. ``contacts``: (arm,
     object) pairs whose contact the current segment expects (a gripper closing on, or
-    letting go of, a container): that arm's tool is not checked against that object."""
+    letting go of, a container): that arm's tool is not checked against that object.
+    ``jaw``: arm -> its fingers' opening (m) in its last mode; an arm not named (no mode set
+    yet, or a tool without fingers) has them at the widest."""
 
     by_arm: Mapping[str, str]
     grips: Mapping[str, tuple[tuple[float, ...], ...]]
     standing: Mapping[str, tuple[tuple[float, ...], ...]]
     contacts: frozenset[tuple[str, str]] = frozenset()
+    jaw: Mapping[str, float] = field(default_factory=dict)
 
     def key(self) -> tuple[object, ...]:
         return (
@@ -86,6 +93,7 @@ class Held:
             tuple(sorted(self.grips.items())),
             tuple(sorted(self.standing.items())),
             tuple(sorted(self.contacts)),
+            tuple(sorted(self.jaw.items())),
         )
 
 
@@ -124,12 +132,18 @@ class Holding:
     def restore(self, state: Held, checker: CollisionChecker) -> None:
         self.state, self.checker = state, checker
 
-    def set(self, arm: str, obj: str | None, T_cell_tcp: Mat | None = None) -> None:
+    def set(
+        self, arm: str, obj: str | None, T_cell_tcp: Mat | None = None, mode: str | None = None
+    ) -> None:
         """``arm`` holds ``obj`` from now on (None: nothing), its fingertips at
-        ``T_cell_tcp`` (needed when a container is grasped or let go). ValueError when the
-        object cannot ride on the gripper (it intersects the wrist)."""
+        ``T_cell_tcp`` (needed when a container is grasped or let go), its jaw in ``mode``
+        (None: as it was). ValueError when the object cannot ride on the gripper (it
+        intersects the wrist)."""
         s = self.state
+        jaw = self._jaw(arm, mode)
         if s.by_arm.get(arm) == obj:
+            if jaw != s.jaw:
+                self._use(replace(s, jaw=jaw))
             return
         by_arm, grips, standing = dict(s.by_arm), dict(s.grips), dict(s.standing)
         was = by_arm.pop(arm, None)
@@ -143,12 +157,17 @@ class Holding:
             if obj in standing:
                 T_centre = _mat(standing.pop(obj)) @ _half_height(self.world, obj, 1.0)
                 grips[arm] = _rows(g.inverse(_need(T_cell_tcp, arm, obj)) @ T_centre)
-        self._use(Held(by_arm, grips, standing, s.contacts))
+        self._use(Held(by_arm, grips, standing, s.contacts, jaw))
+
+    def _jaw(self, arm: str, mode: str | None) -> Mapping[str, float]:
+        fingers = self.base.cell.arms[arm].fingers
+        if mode is None or fingers is None:
+            return self.state.jaw
+        return {**self.state.jaw, arm: fingers.opening(mode)}
 
     def touch(self, contacts: Iterable[tuple[str, str]]) -> None:
         """The contacts the next segment expects (see :class:`Held`)."""
-        s = self.state
-        self._use(Held(s.by_arm, s.grips, s.standing, frozenset(contacts)))
+        self._use(replace(self.state, contacts=frozenset(contacts)))
 
     def _use(self, state: Held) -> None:
         key = state.key()
@@ -158,8 +177,9 @@ class Holding:
         self.checker = CollisionChecker(self.scenes[key])
 
     def _scene(self, state: Held) -> CollisionScene:
+        base = with_jaw(self.base, state.jaw) if state.jaw else self.base
         if not state.grips and not state.contacts and self._standing_as_built(state):
-            scene = self.base
+            scene = base
             for arm, obj in sorted(state.by_arm.items()):
                 scene = attach(scene, held_object(self.world, scene, arm, obj))
             return scene
@@ -178,14 +198,14 @@ class Holding:
         for arm, obj in state.contacts:
             # the arm's tool, and what it holds (a cap coming off), against the object
             # standing or in either hand
-            mine = [f"{arm}/{TOOL_GEOMETRY}"]
+            mine = list(tool_parts(self.base.cell.arms[arm]))
             if arm in state.by_arm:
                 mine.append(held_name(arm, state.by_arm[arm]))
             for name in (obj, *(held_name(a, obj) for a in state.by_arm)):
                 for m in mine:
                     if m != name:
                         allowed[pair_key(m, name)] = "contact"
-        return rearranged(self.base, statics, held, allowed)
+        return rearranged(base, statics, held, allowed)
 
     def _standing_as_built(self, state: Held) -> bool:
         containers = self.world.objects.containers

@@ -40,17 +40,79 @@ class Robot(Frozen):
     srdf: str | None = None  # an SRDF whose <disable_collisions> pairs are never checked
 
 
+class Cylinder(Frozen):
+    radius: Length = Field(gt=0)
+    length: Length = Field(gt=0)
+
+
+class ToolPart(Frozen):
+    """One solid of a tool, in the flange frame: a box or a cylinder (its axis along the
+    part's z), centred at ``pose``."""
+
+    name: Name | None = None
+    box: Vec3Length | None = None
+    cylinder: Cylinder | None = None
+    pose: Pose = Pose()
+
+    @model_validator(mode="after")
+    def _one_shape(self) -> ToolPart:
+        given = [k for k in ("box", "cylinder") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError(
+                "give exactly one shape of box, cylinder" + (" (got both)" if given else "")
+            )
+        if self.box is not None and min(self.box) <= 0:
+            raise ValueError("box sizes must be greater than 0")
+        return self
+
+
+class Fingers(Frozen):
+    """Two boxes ``size`` = (thickness along x, width along y, length along z) whose inner
+    faces are jaw[mode]/2 either side of the TCP along its y (the jaw axis), ending at the
+    TCP along its z."""
+
+    size: Vec3Length
+
+    @model_validator(mode="after")
+    def _positive(self) -> Fingers:
+        if min(self.size) <= 0:
+            raise ValueError("finger sizes must be greater than 0")
+        return self
+
+
+FINGER_NAMES = ("finger_left", "finger_right")  # +y, -y of the TCP
+
+
 class Tool(Frozen):
     kind: Literal["parallel_gripper"]
     tcp: Pose = Pose()  # fingertip centre in the flange frame
     finger_width: Length | None = Field(None, gt=0)
     finger_thickness: Length | None = Field(None, gt=0)
     jaw: dict[Name, Annotated[Length, Field(ge=0)]] = {}
+    # The collision shape: a mesh (path inside the cell folder; its convex hull, its
+    # coordinates in the file's length unit, in the flange frame), parts and fingers, in that
+    # order. None of them: a box from the flange to the TCP, finger_width square.
+    mesh: str | None = None
+    shape: tuple[ToolPart, ...] | None = None
+    fingers: Fingers | None = None
     mass: Mass | None = Field(None, ge=0)
     # How the fingers meet an upright object: from above (the tool's z down) or from the
     # side (the tool's z horizontal). Lab skills choose grasps by it.
     grasp: Literal["top", "side"] = "top"
     load_cell: bool = False  # the tool weighs what it holds (gives the Weigh skill)
+
+    @model_validator(mode="after")
+    def _parts(self) -> Tool:
+        if self.shape == ():
+            raise ValueError("shape: give at least one part, or leave shape out")
+        if self.fingers is not None and not self.jaw:
+            raise ValueError("fingers need the jaw's openings (jaw: {open: ..., ...})")
+        names = [p.name or f"part{k + 1}" for k, p in enumerate(self.shape or ())]
+        names += list(FINGER_NAMES) if self.fingers is not None else []
+        twice = sorted({n for n in names if names.count(n) > 1})
+        if twice:
+            raise ValueError(f"shape: part name '{twice[0]}' is used twice")
+        return self
 
 
 class PlatformSpec(Frozen):
@@ -70,11 +132,6 @@ class PlatformSpec(Frozen):
         if getattr(self, other) is not None:
             raise ValueError(f"'{other}' is not used by format '{self.format}'; remove it")
         return self
-
-
-class Cylinder(Frozen):
-    radius: Length = Field(gt=0)
-    length: Length = Field(gt=0)
 
 
 class Sphere(Frozen):

@@ -90,6 +90,13 @@ def _check_cell(cell: Cell, doc: YamlDoc) -> list[Problem]:
                 name,
                 "home",
             )
+    for tname, tool in cell.tools.items():
+        if tool.mesh is not None:
+            try:
+                where = _at(doc, ("tools", tname, "mesh"))
+                resolve_inside(doc.file.parent, tool.mesh, doc.file, *where)
+            except InputError as e:
+                out.extend(e.problems)
     for zname, zone in cell.zones.items():
         for i, robot_name in enumerate(zone.robots):
             if robot_name not in cell.robots:

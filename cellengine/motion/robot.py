@@ -10,7 +10,9 @@ controller base frame (for the built-in UR models, the frame the controller repo
 in), placed at ``T_cell_base``; ``tool0`` (or the user's ``tip`` link) is the flange; the TCP
 frame is ``T_flange_tcp`` from the tool. Names inside the models are prefixed with the robot's
 name (``left_shoulder_pan_joint``, ``left_tool0``, ``left_tcp``); collision objects are named
-``<robot>/<link>`` (``left/forearm_link``, ``left/forearm_link#2``, ``left/tool``).
+``<robot>/<link>`` (``left/forearm_link``, ``left/forearm_link#2``), the tool's solids
+``<robot>/tool`` and ``<robot>/tool/<part>`` (:mod:`cellengine.motion.tool`; every code path
+treats them alike through :func:`tool_parts` and :func:`is_tool`).
 
 Limits (SI): position, velocity from the URDF. Acceleration: URDF has none. For the built-in
 UR models it is :data:`UR_ACCELERATION`, 5 rad/s^2 on every joint, the value Universal Robots'
@@ -22,26 +24,35 @@ it is :data:`ACCELERATION_PER_VELOCITY` times the velocity limit (full speed in 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Literal
 
-import coal
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from cellengine import geometry as g
 from cellengine.arrays import Mat, Vec
 from cellengine.errors import InputError, Problem, known
 from cellengine.info.cell import Robot, Tool, UrdfModel
 from cellengine.info.files import resolve_inside
 from cellengine.info.units import Units
 from cellengine.info.yamlio import load_yaml
+from cellengine.motion.tool import DEFAULT_FINGER_WIDTH as DEFAULT_FINGER_WIDTH
+from cellengine.motion.tool import TOOL_GEOMETRY as TOOL_GEOMETRY
+from cellengine.motion.tool import Fingers, Solid, fingers_of, tool_solids
+from cellengine.motion.tool import is_tool as is_tool
 from cellengine.motion.ur_ik import DH, UR_DH
-from cellengine.motion.urdf import Urdf, build_geometry, build_model, check_chain, read_urdf
+from cellengine.motion.urdf import (
+    Urdf,
+    build_geometry,
+    build_model,
+    check_chain,
+    mesh_hull,
+    read_urdf,
+)
 from cellengine.world import World
 
 BUILTIN_DIR = Path(__file__).resolve().parent / "urdf"
@@ -53,9 +64,7 @@ UR_ACCELERATION: dict[str, tuple[float, ...]] = {
     "ur5": (5.0,) * 6,
 }
 ACCELERATION_PER_VELOCITY = 2.0  # 1/s: a user URDF's joints reach full speed in 0.5 s
-DEFAULT_FINGER_WIDTH = 0.02  # m, the tool's collision box when the tool gives none
 TCP_FRAME = "tcp"
-TOOL_GEOMETRY = "tool"
 
 
 def builtin_urdf(model: str) -> Path:
@@ -105,6 +114,7 @@ class Arm:
     T_flange_tcp: Mat
     dh: DH | None  # the DH table of a built-in UR model (closed-form IK), else None
     home: Vec | None = None  # cell.yaml's home configuration, if given
+    fingers: Fingers | None = None  # the tool's fingers, held in `collision` at their widest
     _data: Any = field(init=False, repr=False, compare=False)
     # its inverse kinematics, built on first use by motion.ik.arm_ik (which owns the type)
     solver: Any = field(init=False, default=None, repr=False, compare=False)
@@ -247,7 +257,7 @@ def build_arm(
     name: str, robot: Robot, tool: Tool | None, cell_file: Path, units: Units | None = None
 ) -> Arm:
     """One robot of ``cell_file``'s cell: its URDF (built-in or the user's, resolved inside
-    the cell folder), placed at its base pose, with its tool's TCP frame and collision box."""
+    the cell folder), placed at its base pose, with its tool's TCP frame and collision solids."""
     prefix = f"{name}_"
     units = units or Units()
     if isinstance(robot.model, UrdfModel):
@@ -272,8 +282,11 @@ def build_arm(
     T_flange_tcp = tool.tcp.matrix() if tool is not None else np.eye(4)
     _add_tcp_frame(raw, urdf, prefix, tool0, T_flange_tcp)
     geom = build_geometry(raw, urdf, prefix, name)
-    if tool is not None:
-        _add_tool_geometry(raw, geom, tool0, T_flange_tcp, tool, name)
+    fingers = None
+    if tool is not None and robot.tool is not None:
+        read = _mesh_reader(cell_file, robot.tool, units)
+        _add_tool_geometry(raw, geom, tool0, tool_solids(tool, T_flange_tcp, read), name)
+        fingers = fingers_of(tool, T_flange_tcp)
     T_cell_base = robot.base.matrix()
     model, collision = pin.appendModel(
         pin.Model(), raw, pin.GeometryModel(), geom, 0, pin.SE3(T_cell_base)
@@ -292,6 +305,7 @@ def build_arm(
         T_flange_tcp=T_flange_tcp,
         dh=dh,
         home=_home(robot, name, len(joint_names), cell_file, model, units),
+        fingers=fingers,
     )
 
 
@@ -309,22 +323,48 @@ def _add_tcp_frame(model: Any, urdf: Urdf, prefix: str, tool0: int, T_flange_tcp
 
 
 def _add_tool_geometry(
-    model: Any, geom: Any, tool0: int, T_flange_tcp: Mat, tool: Tool, owner: str
+    model: Any, geom: Any, tool0: int, solids: Sequence[Solid], owner: str
 ) -> None:
-    """A box from the flange to the TCP, finger_width square, on the flange's joint: a
-    stand-in for the gripper until tools carry their own geometry."""
-    p_tcp = T_flange_tcp[:3, 3]
-    length = float(np.linalg.norm(p_tcp))
-    if length < 1e-6:  # a TCP on the flange: no volume to add
-        return
-    width = tool.finger_width or DEFAULT_FINGER_WIDTH
-    T_flange_box = g.transform(g.z_along(p_tcp / length), p_tcp / 2)
+    """The tool's solids on the flange's joint."""
     flange = model.frames[tool0]
-    placement = flange.placement * pin.SE3(T_flange_box)
-    box = coal.Box(width, width, length)
-    geom.addGeometryObject(
-        pin.GeometryObject(f"{owner}/{TOOL_GEOMETRY}", flange.parentJoint, tool0, placement, box)
-    )
+    for s in solids:
+        placement = flange.placement * pin.SE3(s.T_flange_solid)
+        geom.addGeometryObject(
+            pin.GeometryObject(f"{owner}/{s.name}", flange.parentJoint, tool0, placement, s.shape)
+        )
+
+
+def _mesh_reader(cell_file: Path, tool_name: str, units: Units) -> Callable[[str], Any]:
+    """Reads a tool's mesh (inside the cell folder, in the file's length unit) as its hull."""
+
+    def read(ref: str) -> Any:
+        loc = ("tools", tool_name, "mesh")
+        try:
+            path = resolve_inside(cell_file.parent, ref, cell_file)
+        except InputError as e:
+            raise _cell_error(cell_file, e.problems[0].message, loc) from None
+        scale = (units.context()["length"],) * 3
+        return mesh_hull(path, ref, scale, cell_file, _where(cell_file, loc)[0])
+
+    return read
+
+
+def tool_parts(arm: Arm) -> tuple[str, ...]:
+    """The names of ``arm``'s tool's collision objects (``left/tool``, ``left/tool/...``)."""
+    names = (str(o.name) for o in arm.collision.geometryObjects)
+    return tuple(n for n in names if is_tool(n, arm.name))
+
+
+def finger_placements(arm: Arm, opening: float) -> dict[str, Any]:
+    """Object name -> placement (pin.SE3, in the flange's joint frame) of ``arm``'s fingers at
+    ``opening``; empty for a tool without fingers."""
+    if arm.fingers is None:
+        return {}
+    T_joint_flange = arm.model.frames[arm.tool0].placement
+    return {
+        f"{arm.name}/{name}": T_joint_flange * pin.SE3(T)
+        for name, T in zip(arm.fingers.names, arm.fingers.placements(opening), strict=True)
+    }
 
 
 def _limits(urdf: Urdf, tip: str, robot: Robot) -> Limits:

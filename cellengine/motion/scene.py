@@ -64,7 +64,7 @@ from cellengine.info.files import resolve_inside
 from cellengine.info.mesh import Mesh
 from cellengine.info.xmlsafe import parse_xml
 from cellengine.motion.hull import convex_hull
-from cellengine.motion.robot import TOOL_GEOMETRY, Arm, CellModel
+from cellengine.motion.robot import Arm, CellModel, finger_placements, is_tool
 from cellengine.world import World
 
 Pair = tuple[str, str]  # two object names, sorted
@@ -187,6 +187,8 @@ class CollisionScene:
     held: Mapping[str, HeldObject]
     fixed_reasons: Mapping[Pair, str]  # sampled, SRDF and user pairs, kept across attach
     notes: tuple[str, ...]
+    # arm -> its fingers' opening (m); an arm not named has them at its tool's widest
+    jaw: Mapping[str, float] = field(default_factory=dict)
     _ids: Mapping[str, int] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -253,14 +255,20 @@ def attach(scene: CollisionScene, obj: HeldObject) -> CollisionScene:
     if obj.name in scene.names:
         raise ValueError(f"an object named '{obj.name}' is already in the scene")
     held = {**scene.held, obj.name: obj}
-    return assemble(scene.cell, scene.statics, held, scene.fixed_reasons, scene.notes)
+    return assemble(scene.cell, scene.statics, held, scene.fixed_reasons, scene.notes, scene.jaw)
 
 
 def detach(scene: CollisionScene, name: str) -> CollisionScene:
     if name not in scene.held:
         raise KeyError(f"no held object '{name}' (held: {', '.join(scene.held) or 'none'})")
     held = {k: v for k, v in scene.held.items() if k != name}
-    return assemble(scene.cell, scene.statics, held, scene.fixed_reasons, scene.notes)
+    return assemble(scene.cell, scene.statics, held, scene.fixed_reasons, scene.notes, scene.jaw)
+
+
+def with_jaw(scene: CollisionScene, jaw: Mapping[str, float]) -> CollisionScene:
+    """The scene with each named arm's fingers at its opening (m); the others as they were."""
+    merged = {**scene.jaw, **jaw}
+    return assemble(scene.cell, scene.statics, scene.held, scene.fixed_reasons, scene.notes, merged)
 
 
 def assemble(
@@ -269,11 +277,15 @@ def assemble(
     held: Mapping[str, HeldObject],
     fixed_reasons: Mapping[Pair, str],
     notes: tuple[str, ...],
+    jaw: Mapping[str, float] | None = None,
 ) -> CollisionScene:
-    """Both geometry models, the ACM and the checked pairs: cheap (no sampling)."""
+    """Both geometry models, the ACM and the checked pairs: cheap (no sampling). ``jaw``: arm
+    -> its fingers' opening (m), else the widest."""
+    jaw = dict(jaw or {})
     geometry, bounds = cell.collision.copy(), cell.collision.copy()
     for gm in (geometry, bounds):
         gm.removeAllCollisionPairs()  # pin.appendModel adds pairs of its own: ours replace them
+        place_fingers(cell, gm, jaw)
     objects = list(_objects_of(cell))
     exact = [True] * len(objects)
     for s in statics:
@@ -321,7 +333,15 @@ def assemble(
         held=MappingProxyType(dict(held)),
         fixed_reasons=MappingProxyType(dict(fixed_reasons)),
         notes=notes,
+        jaw=MappingProxyType(jaw),
     )
+
+
+def place_fingers(cell: CellModel, geometry: Any, jaw: Mapping[str, float]) -> None:
+    """Each named arm's fingers in ``geometry`` (a copy of the cell's) at its opening (m)."""
+    for arm, opening in jaw.items():
+        for name, placement in finger_placements(cell.arms[arm], opening).items():
+            geometry.geometryObjects[geometry.getGeometryId(name)].placement = placement
 
 
 def _objects_of(cell: CellModel) -> list[SceneObject]:
@@ -367,7 +387,7 @@ def _refuse_held_overlaps(
 
 
 def _is_gripper(obj: SceneObject, h: HeldObject) -> bool:
-    return obj.kind == "link" and obj.name == f"{h.arm}/{TOOL_GEOMETRY}"
+    return obj.kind == "link" and is_tool(obj.name, h.arm)
 
 
 def _collide(geometry: Any, gdata: Any, i: int, j: int) -> bool:
@@ -510,7 +530,7 @@ def rearranged(
     """``scene`` with other environment objects (containers put elsewhere), held objects
     and more pairs never checked (``allowed``: pair -> reason); its sampled pairs kept."""
     fixed = {**scene.fixed_reasons, **allowed}
-    return assemble(scene.cell, statics, held, fixed, scene.notes)
+    return assemble(scene.cell, statics, held, fixed, scene.notes, scene.jaw)
 
 
 def _obstacle_shape(o: Obstacle) -> Any:
@@ -614,7 +634,8 @@ def _srdf_reasons(
     for n in names:
         owner, _, rest = n.partition("/")
         if owner == robot:
-            by_link.setdefault(rest.split("#", 1)[0], []).append(n)
+            # every solid of the tool ('tool', 'tool/finger_left') is the link 'tool'
+            by_link.setdefault(rest.split("#", 1)[0].split("/", 1)[0], []).append(n)
     out: dict[Pair, str] = {}
     for a, b in pairs:
         if a not in by_link or b not in by_link:
@@ -768,7 +789,7 @@ def sampled_self_pairs(
 def _sample_self_pairs(
     arm: Arm, samples: int, margin: float, seed: int
 ) -> tuple[tuple[Pair, float], ...]:
-    model, geometry = arm.model, arm.collision.copy()
+    model, geometry = arm.model, _swept_fingers(arm)
     geometry.removeAllCollisionPairs()
     parents = [int(p) for p in model.parents]
     names = [str(o.name).split("/", 1)[1] for o in geometry.geometryObjects]
@@ -797,6 +818,21 @@ def _sample_self_pairs(
     )
 
 
+def _swept_fingers(arm: Arm) -> Any:
+    """A copy of the arm's geometry with each finger as the box of its travel over the jaw's
+    openings: a pair never near it is never near the finger at any opening."""
+    geometry = arm.collision.copy()
+    if arm.fingers is None:
+        return geometry
+    (T_left, T_right), size = arm.fingers.swept()
+    T_joint_flange = arm.model.frames[arm.tool0].placement
+    for name, T in zip(arm.fingers.names, (T_left, T_right), strict=True):
+        obj = geometry.geometryObjects[geometry.getGeometryId(f"{arm.name}/{name}")]
+        obj.placement = T_joint_flange * pin.SE3(T)
+        obj.geometry = coal.Box(*size)
+    return geometry
+
+
 def _arm_signature(arm: Arm) -> str:
     """A hash of what the self pairs depend on: shapes, joints and limits, all relative to the
     arm's base (the base pose moves every object of the arm together)."""
@@ -806,7 +842,7 @@ def _arm_signature(arm: Arm) -> str:
     def add(M: Any) -> None:
         h.update(np.asarray(M.homogeneous).round(12).tobytes())
 
-    for obj in arm.collision.geometryObjects:
+    for obj in _swept_fingers(arm).geometryObjects:
         shape = obj.geometry
         shape.computeLocalAABB()
         h.update(

@@ -337,7 +337,7 @@ class _Reader:
                 raise self.fail(f"{what}: <mesh> needs a filename", shape_el)
             scale = self.floats(shape_el, "scale", 3, f"{what} mesh", "1 1 1")
             mesh = resolve_mesh(ref, self.path, self.cell_dir, shape_el.sourceline)
-            shape, kind = _convex_hull(mesh, ref, scale, self.path, shape_el.sourceline), "convex"
+            shape, kind = mesh_hull(mesh, ref, scale, self.path, shape_el.sourceline), "convex"
         else:
             raise self.fail(
                 f"{what}: unknown shape <{kind}>; use box, sphere, cylinder or mesh", shape_el
@@ -403,7 +403,8 @@ def _package_candidates(package: str, rest: str, urdf_dir: Path, cell_dir: Path)
         folder = folder.parent
 
 
-def _convex_hull(path: Path, ref: str, scale: Sequence[float], urdf: Path, line: int | None) -> Any:
+def mesh_hull(path: Path, ref: str, scale: Sequence[float], urdf: Path, line: int | None) -> Any:
+    """The convex hull of a mesh file (errors at ``urdf``:``line``, the file naming it)."""
     ext = path.suffix.lower().lstrip(".")
     if ext not in MESH_FORMATS:
         raise InputError.at(

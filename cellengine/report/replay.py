@@ -28,6 +28,7 @@ from cellengine.info import primitives
 from cellengine.info.cell import Obstacle
 from cellengine.info.mesh import Mesh
 from cellengine.motion.robot import CellModel, home_configuration
+from cellengine.motion.scene import place_fingers
 from cellengine.program import Anchor, Program, TimedEvent
 from cellengine.report.data import event_entry, step_names
 from cellengine.report.distance import ArmDistance
@@ -58,7 +59,7 @@ def replay_data(
         q, qd = sample_program(program, times, joint_order(program, cell.joint_names))
     else:  # nothing moves: the cell at home
         q, qd = home_configuration(cell)[None], np.zeros((1, cell.nq))
-    geometry, tcp = placements(cell, q)
+    geometry, tcp = placements(cell, q, jaw_openings(program, cell, times))
     distance = ArmDistance(cell).series(q)
     start, end = program_span(program)
     limits = cell.limits
@@ -97,15 +98,38 @@ def _round(a: Any, decimals: int) -> Any:
 # ---------------------------------------------------------------------------------- arms
 
 
-def placements(cell: CellModel, Q: Vec) -> tuple[Vec, dict[str, Vec]]:
+def jaw_openings(program: Program, cell: CellModel, times: Vec) -> list[dict[str, float]]:
+    """Per sample, each fingered arm's opening (m) in its last gripper mode (the widest before
+    its first event)."""
+    out: list[dict[str, float]] = []
+    events = sorted(program.events, key=lambda e: e.time)
+    state = {a: arm.fingers.widest for a, arm in cell.arms.items() if arm.fingers is not None}
+    k = 0
+    for t in times:
+        while k < len(events) and events[k].time <= t:
+            e = events[k].event
+            fingers = cell.arms[e.arm].fingers if e.arm in cell.arms else None
+            if fingers is not None:
+                state[e.arm] = fingers.opening(e.mode)
+            k += 1
+        out.append(dict(state))
+    return out
+
+
+def placements(
+    cell: CellModel, Q: Vec, jaw: Sequence[Mapping[str, float]] | None = None
+) -> tuple[Vec, dict[str, Vec]]:
     """Every collision object's placement (S, G, 4, 4) and each arm's TCP position (S, 3) at
-    the rows of Q, by pinocchio's forward kinematics."""
-    model, geometry = cell.model, cell.collision
+    the rows of Q, by pinocchio's forward kinematics; the fingers at ``jaw[s]``'s openings
+    (else at their widest)."""
+    model, geometry = cell.model, cell.collision.copy()
     data, gdata = model.createData(), pin.GeometryData(geometry)
     n = int(geometry.ngeoms)
     M = np.empty((len(Q), n, 4, 4))
     tcp = {arm: np.empty((len(Q), 3)) for arm in cell.arms}
     for s, q in enumerate(Q):
+        if jaw is not None:
+            place_fingers(cell, geometry, jaw[s])
         pin.framesForwardKinematics(model, data, q)
         pin.updateGeometryPlacements(model, data, geometry, gdata)
         for i in range(n):

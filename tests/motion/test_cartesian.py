@@ -301,7 +301,7 @@ def test_an_obstacle_thinner_than_a_step_is_caught_on_the_segment(cell: CellMode
 def test_the_left_tcp_driven_into_the_table_stops_there(
     cell: CellModel, checker: CollisionChecker
 ) -> None:
-    """The tool's box ends at the TCP and the table's top is z = 0; the checker refuses
+    """The tool's fingers end at the TCP and the table's top is z = 0; the checker refuses
     anything within its 1 mm clearance. TCP z = 0.30125 - 0.0025 i: waypoint 120 is 1.25 mm
     above the table, 121 is 1.25 mm into it."""
     arm = cell.arms["left"]
@@ -312,7 +312,7 @@ def test_the_left_tcp_driven_into_the_table_stops_there(
     for segments in (True, False):
         r = cartesian_path(arm, W, q0, check=check, segments=segments)
         assert r.stop is not None and r.stop.kind == "collision"
-        assert r.stop.waypoint == 121 and r.stop.pair == ("left/tool", "table")
+        assert r.stop.waypoint == 121 and r.stop.pair == ("left/tool/finger_left", "table")
         assert r.stop.arm == "left"
         assert r.fraction == pytest.approx(120 / 200, abs=1e-12)
 

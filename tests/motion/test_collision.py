@@ -5,6 +5,7 @@ an obstacle between free end points, the ACM and SRDF pairs, determinism."""
 from __future__ import annotations
 
 import math
+import shutil
 from collections.abc import Callable
 from pathlib import Path
 from types import MappingProxyType
@@ -50,8 +51,17 @@ DOWN = g.rot_x(math.pi)  # the TCP's z (the approach) pointing down
 
 
 @pytest.fixture(scope="module")
-def world() -> World:
-    return load_world(CELL / "cell.yaml", CELL / "objects.yaml")
+def world(tmp_path_factory: pytest.TempPathFactory) -> World:
+    """The reference cell with its tools as the stand-in box (flange to TCP, 20 mm square):
+    the postures below were chosen for it (tests/motion/test_tool.py checks the real shape)."""
+    folder = tmp_path_factory.mktemp("stand_in") / "cable_routing"
+    shutil.copytree(CELL, folder)
+    text = (folder / "cell.yaml").read_text()
+    start = text.index("    shape:\n")
+    end = text.index("    fingers:")
+    end = text.index("\n", end) + 1
+    (folder / "cell.yaml").write_text(text[:start] + text[end:])
+    return load_world(folder / "cell.yaml", folder / "objects.yaml")
 
 
 @pytest.fixture(scope="module")

@@ -247,18 +247,19 @@ def test_cell_limits_stack_both_arms(cable_cell: CellModel) -> None:
 
 def test_collision_geometry_names_and_shapes(cable_cell: CellModel) -> None:
     objs = {o.name: o for o in cable_cell.collision.geometryObjects}
-    assert len(objs) == 20
+    assert len(objs) == 24  # per arm: 9 link objects, the tool's body and two fingers
     assert {"left/base", "left/upper_arm_link", "left/forearm_link#2", "right/tool"} <= set(objs)
+    assert {"left/tool/finger_left", "right/tool/finger_right"} <= set(objs)
     upper = objs["left/upper_arm_link"].geometry
     assert isinstance(upper, coal.Capsule)  # a URDF cylinder, read as a capsule
     assert upper.radius == pytest.approx(0.055) and 2 * upper.halfLength == pytest.approx(0.425)
     assert isinstance(objs["left/base"].geometry, coal.Sphere)
     tool = objs["left/tool"].geometry
     assert isinstance(tool, coal.Box)
-    np.testing.assert_allclose(2 * tool.halfSide, [0.02, 0.02, 0.2])  # finger_width, flange-TCP
+    np.testing.assert_allclose(2 * tool.halfSide, [0.05, 0.09, 0.11])  # the body of cell.yaml
 
 
-def test_tool_box_spans_flange_to_tcp(cable_cell: CellModel) -> None:
+def test_tool_body_from_the_flange(cable_cell: CellModel) -> None:
     model, geom = cable_cell.model, cable_cell.collision
     q = cable_cell.join({n: a.home for n, a in cable_cell.arms.items() if a.home is not None})
     data, gdata = model.createData(), pin.GeometryData(geom)
@@ -267,7 +268,9 @@ def test_tool_box_spans_flange_to_tcp(cable_cell: CellModel) -> None:
     box = gdata.oMg[geom.getGeometryId("left/tool")]
     arm = cable_cell.arms["left"]
     np.testing.assert_allclose(
-        box.translation, (arm.fk_flange(q[:6])[:3, 3] + arm.fk(q[:6])[:3, 3]) / 2, atol=1e-12
+        box.translation,
+        arm.fk_flange(q[:6])[:3, :3] @ [0, 0, 0.055] + arm.fk_flange(q[:6])[:3, 3],
+        atol=1e-12,
     )
 
 

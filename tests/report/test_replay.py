@@ -10,10 +10,11 @@ import pytest
 
 from cellengine.info import primitives
 from cellengine.info.cell import Obstacle
+from cellengine.motion.robot import finger_placements
 from cellengine.motion.trajectory import Trajectory
 from cellengine.program import CompiledSegment, GripperEvent, Program, Segment, TimedEvent
 from cellengine.report import replay_data
-from cellengine.report.replay import REPLAY_RATE, cables, decimate, obstacle_mesh
+from cellengine.report.replay import REPLAY_RATE, cables, decimate, jaw_openings, obstacle_mesh
 from cellengine.report.sampling import sample_program, sample_times
 from tests.report.programs import cable_cell, home, trajectory
 from tests.report.programs import sample_program as make_program
@@ -94,9 +95,13 @@ def test_box_and_sphere_placements(replay: dict) -> None:
     data = cell.model.createData()
     pin.forwardKinematics(cell.model, data, q)
     by_name = {link["name"]: link for link in replay["links"]}
+    # the fingers at the opening of each gripper's mode at sample k
+    program = make_program(cell)
+    jaw = jaw_openings(program, cell, np.array(replay["times"]))[k]
+    fingers = {n: M for a, o in jaw.items() for n, M in finger_placements(cell.arms[a], o).items()}
     for obj in cell.collision.geometryObjects:
         link = by_name[str(obj.name)]
-        M = data.oMi[obj.parentJoint] * obj.placement
+        M = data.oMi[obj.parentJoint] * fingers.get(str(obj.name), obj.placement)
         if isinstance(obj.geometry, coal.Box):
             got = np.array(link["points"][12 * k : 12 * k + 12]).reshape(4, 3)
             half = np.asarray(obj.geometry.halfSide)
