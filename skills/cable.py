@@ -778,6 +778,7 @@ class GuideWay:
     lean: float = cg.LEAN
     pivot_lean: float = cg.PIVOT_LEAN
     stand_back: float = cg.STAND_BACK  # the other hand, released, backs off this far first
+    gap: float = cg.APPROACH_GAP  # A: the routing hand stops this far before the guide
 
 
 @dataclass(frozen=True)
@@ -787,6 +788,8 @@ class _Basics:
     where: str
     dims: cg.GuideDims
     hand: cg.Hand
+    gap: float  # A
+    x_offset: float  # A and the hand's half length along the cable
     up: Vec
     slot: Vec
     axis: Vec
@@ -803,7 +806,9 @@ class _Basics:
         return self.r_cable + self.pull
 
 
-def _basics(world: World, state: CableState, guide: str, r_arm: str) -> _Basics:
+def _basics(
+    world: World, state: CableState, guide: str, r_arm: str, gap: float = cg.APPROACH_GAP
+) -> _Basics:
     where = f"steps[{state.step}] RouteCable {guide}"
     dims = cg.GuideDims.of(world, guide, where)
     hand = _hand(world, r_arm)
@@ -815,13 +820,14 @@ def _basics(world: World, state: CableState, guide: str, r_arm: str) -> _Basics:
     axis = cg.horizontal(cg.keypoint_x(world, guide), up)
     if float(axis @ (slot - last)) < 0.0:
         axis = -axis
-    rl = cg.r_lift(dims.length, dims.height, hand.x_offset, cg.Z_OFFSET)
-    ri = cg.r_insert(dims.length, hand.x_offset)
+    x_off = gap + hand.half_length
+    rl = cg.r_lift(dims.length, dims.height, x_off, cg.Z_OFFSET)
+    ri = cg.r_insert(dims.length, x_off)
     r_cable = max(rl, ri)
-    ap = slot - (dims.length / 2.0 + hand.x_offset) * axis
-    t_min = cg.theta_min(hand.width, dims.width, cg.APPROACH_GAP)
+    ap = slot - (dims.length / 2.0 + x_off) * axis
+    t_min = cg.theta_min(hand.width, dims.width, gap)
     pull = cg.tension_pull(r_cable)
-    return _Basics(where, dims, hand, up, slot, axis, ap, rl, ri, r_cable, pull, t_min)
+    return _Basics(where, dims, hand, gap, x_off, up, slot, axis, ap, rl, ri, r_cable, pull, t_min)
 
 
 def guide_ways(world: World, state: CableState, guide: str, r_arm: str) -> Iterator[GuideWay]:
@@ -831,37 +837,45 @@ def guide_ways(world: World, state: CableState, guide: str, r_arm: str) -> Itera
     slide clears the other elements, and the other tips (LEANS, PIVOT_LEANS), ranked by how
     much longer the motion gets (a steeper slide swings farther). An error naming what
     blocks when no angle clears the guide."""
-    b = _basics(world, state, guide, r_arm)
-    theta0 = b.theta_min + cg.THETA_MARGIN
+    b0 = _basics(world, state, guide, r_arm)
+    theta0 = b0.theta_min + cg.THETA_MARGIN
     if theta0 > cg.THETA_MAX:
         raise _error(
-            f"{b.where}: no sliding angle clears the guide: theta must exceed "
-            f"atan((W_gripper + W_guide) / (2 A)) = atan(({_mm(b.hand.width)} + "
-            f"{_mm(b.dims.width)}) / (2 * {_mm(cg.APPROACH_GAP)})) = "
-            f"{math.degrees(b.theta_min):.1f} deg, plus {math.degrees(cg.THETA_MARGIN):.0f} "
+            f"{b0.where}: no sliding angle clears the guide: theta must exceed "
+            f"atan((W_gripper + W_guide) / (2 A)) = atan(({_mm(b0.hand.width)} + "
+            f"{_mm(b0.dims.width)}) / (2 * {_mm(cg.APPROACH_GAP)})) = "
+            f"{math.degrees(b0.theta_min):.1f} deg, plus {math.degrees(cg.THETA_MARGIN):.0f} "
             f"deg margin, but beyond {math.degrees(cg.THETA_MAX):.0f} deg the slide hardly "
             "moves along the guide"
         )
     ranked: list[tuple[float, int, GuideWay]] = []
     first_blocked: list[str] = []
-    n = int((cg.THETA_MAX - theta0) / cg.THETA_STEP + 1e-9) + 1
-    for k in range(n):
-        theta = theta0 + k * cg.THETA_STEP
-        clear, blocked = _slide_sides(world, guide, b, theta)
-        if k == 0:
-            first_blocked = blocked
-        for rank, side in enumerate(clear):
-            for lean, pivot, back in itertools.product(cg.LEANS, cg.PIVOT_LEANS, cg.STAND_BACKS):
-                cost = (theta - theta0) + 0.05 * rank + abs(back - cg.STAND_BACK)
-                cost += 0.5 * (abs(lean - cg.LEAN) + abs(pivot - cg.PIVOT_LEAN))
-                ranked.append((cost, len(ranked), GuideWay(theta, side, lean, pivot, back)))
+    for gap in cg.APPROACH_GAPS:
+        b = _basics(world, state, guide, r_arm, gap)
+        start = b.theta_min + cg.THETA_MARGIN
+        n = int((cg.THETA_MAX - start) / cg.THETA_STEP + 1e-9) + 1 if start <= cg.THETA_MAX else 0
+        for k in range(n):
+            theta = start + k * cg.THETA_STEP
+            clear, blocked = _slide_sides(world, guide, b, theta)
+            if not first_blocked:
+                first_blocked = blocked
+            for rank, side in enumerate(clear):
+                for lean, pivot, back in itertools.product(
+                    cg.LEANS, cg.PIVOT_LEANS, cg.STAND_BACKS
+                ):
+                    cost = (theta - theta0) + 0.05 * rank + abs(back - cg.STAND_BACK)
+                    cost += 0.5 * (abs(lean - cg.LEAN) + abs(pivot - cg.PIVOT_LEAN))
+                    way = GuideWay(theta, side, lean, pivot, back, gap)
+                    ranked.append((cost, len(ranked), way))
     if not ranked:
         raise _error(
-            f"{b.where}: no sliding angle clears the guide: sliding at theta = "
+            f"{b0.where}: no sliding angle clears the guide: sliding at theta = "
             f"{math.degrees(theta0):.1f} deg is blocked on the "
             + " and on the ".join(first_blocked)
-            + f", and so is every angle up to {math.degrees(cg.THETA_MAX):.0f} deg: move the "
-            "guides that block it farther from the slide, or use narrower fingers"
+            + f", and so is every angle up to {math.degrees(cg.THETA_MAX):.0f} deg with the "
+            f"hand stopping {_mm(min(cg.APPROACH_GAPS))}-{_mm(cg.APPROACH_GAP)} mm before "
+            "the guide: move the guides that block it farther from the slide, or use "
+            "narrower fingers"
         )
     yield from (way for _, _, way in sorted(ranked, key=lambda r: (r[0], r[1])))
 
@@ -875,9 +889,9 @@ def _guide_plan(
     o_arm: str,
     way: GuideWay,
 ) -> GuidePlan:
-    b = _basics(world, state, guide, r_arm)
+    b = _basics(world, state, guide, r_arm, way.gap)
     up, slot, axis, ap, theta, side = b.up, b.slot, b.axis, b.ap, way.theta, way.side
-    x_off = b.hand.x_offset
+    x_off = b.x_offset
     last = np.asarray(state.route[-1], dtype=float)
     # The routing hand tips forward and towards its base, the other hand back and towards
     # its base (the other hand by more): see cg.LEAN and cg.PIVOT_LEAN.
@@ -921,7 +935,7 @@ def _guide_plan(
         axis=axis,
         side=side,
         x_offset=x_off,
-        a=cg.APPROACH_GAP,
+        a=b.gap,
         r_lift=b.r_lift,
         r_insert=b.r_insert,
         r_cable=r_cable,
@@ -952,7 +966,9 @@ def _slide_sides(
     radii plus CLEARANCE."""
     up, axis, ap, hand = b.up, b.axis, b.ap, b.hand
     left = np.cross(up, axis)
-    hand_radius = math.hypot(hand.width, 2.0 * hand.half_length) / 2.0
+    # the hand turns with the slide (its x along it): half its extent across the motion,
+    # the collision checks' stand-in being square
+    hand_radius = max(hand.width, 2.0 * hand.half_length) / 2.0
     height = float(ap @ up) - cg.CLEARANCE
     elements = [f for f in cg.footprints(world, guide, up) if f.top > height]
     clear: list[tuple[float, float]] = []
@@ -961,7 +977,7 @@ def _slide_sides(
         end = ap + b.reach * (math.cos(theta) * axis + side * math.sin(theta) * left)
         margin, nearest = math.inf, ""
         for f in elements:
-            m = cg.segment_distance(f.centre, ap, end, up) - f.radius - hand_radius
+            m = f.distance(ap, end, up) - hand_radius
             if m < margin:
                 margin, nearest = m, f.name
         name = "left" if side > 0 else "right"

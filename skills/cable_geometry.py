@@ -102,6 +102,9 @@ THETA_STEP = math.radians(5.0)
 LEANS = (LEAN, math.radians(25.0), math.radians(5.0))
 PIVOT_LEANS = (PIVOT_LEAN, math.radians(20.0), math.radians(40.0))
 STAND_BACKS = (STAND_BACK, 0.050, 0.150)
+# A, the routing hand's stop before a guide, smaller where guides stand close together (the
+# slide then starts nearer the guide, and must be steeper: theta > atan((W + W_g) / 2A))
+APPROACH_GAPS = (APPROACH_GAP, 0.015, 0.010)
 # Pull that puts the cable in tension, per metre between the hands: the sag of a loosely held
 # span. The paper makes it "a function of the distance between grippers and the cable
 # properties"; objects.yaml gives no stiffness, so only the distance is used.
@@ -318,13 +321,18 @@ def keypoint_x(world: World, ref: str) -> Vec:
 
 @dataclass(frozen=True)
 class Footprint:
-    """An element as a disc on its platform, with its top, for clearance checks of moves
-    beside guides: the disc holds the element's bounding box (cell frame) seen from above."""
+    """An element seen from above, with its top, for clearance checks of moves beside
+    guides: ``outline`` is the convex outline (k, 3; cell frame, projected on the plane
+    normal to up) of its bounding box."""
 
     name: str
-    centre: Vec
-    radius: float
+    outline: Vec
     top: float  # highest point, along up
+
+    def distance(self, a: Vec, b: Vec, up: Vec) -> float:
+        """Horizontal distance from the segment ``a``-``b`` to the outline (0 when they
+        overlap)."""
+        return outline_distance(self.outline, a, b, up)
 
 
 def footprints(world: World, exclude: str, up: Vec) -> list[Footprint]:
@@ -342,16 +350,81 @@ def footprints(world: World, exclude: str, up: Vec) -> list[Footprint]:
             P = g.transform_points(T, corners)
             heights = P @ up
             flat = P - np.outer(heights, up)
-            lo, hi = flat.min(axis=0), flat.max(axis=0)
-            out.append(
-                Footprint(
-                    f"{pname}.{element.name}",
-                    (lo + hi) / 2.0,
-                    float(np.linalg.norm(hi - lo)) / 2.0,
-                    float(heights.max()),
-                )
-            )
+            name = f"{pname}.{element.name}"
+            out.append(Footprint(name, _convex(flat, up), float(heights.max())))
     return out
+
+
+def _plane(up: Vec) -> tuple[Vec, Vec]:
+    e1 = g.any_perpendicular(up)
+    return e1, np.cross(up, e1)
+
+
+def _convex(points: Vec, up: Vec) -> Vec:
+    """The convex outline of points on the plane normal to ``up``, counter-clockwise about
+    up (Andrew's monotone chain)."""
+    e1, e2 = _plane(up)
+    pts = sorted({(round(float(p @ e1), 12), round(float(p @ e2), 12)) for p in points})
+
+    def half(seq: list[tuple[float, float]]) -> list[tuple[float, float]]:
+        h: list[tuple[float, float]] = []
+        for p in seq:
+            while len(h) >= 2 and _cross2(h[-2], h[-1], p) <= 0.0:
+                h.pop()
+            h.append(p)
+        return h[:-1]
+
+    ring = half(pts) + half(pts[::-1]) if len(pts) > 2 else pts
+    return np.array([x * e1 + y * e2 for x, y in ring])
+
+
+def _cross2(o: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
+    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+
+def outline_distance(outline: Vec, a: Vec, b: Vec, up: Vec) -> float:
+    """Horizontal distance from segment ``a``-``b`` to a convex outline; 0 when the segment
+    enters it."""
+    e1, e2 = _plane(up)
+
+    def flat(v: Vec) -> tuple[float, float]:
+        return float(v @ e1), float(v @ e2)
+
+    ring = [flat(p) for p in outline]
+    p, q = flat(a), flat(b)
+    if _inside(ring, p) or _inside(ring, q):
+        return 0.0
+    best = math.inf
+    for i, r in enumerate(ring):
+        s = ring[(i + 1) % len(ring)]
+        best = min(best, _segments_2d(p, q, r, s))
+    return best
+
+
+def _inside(ring: list[tuple[float, float]], p: tuple[float, float]) -> bool:
+    return len(ring) > 2 and all(
+        _cross2(ring[i], ring[(i + 1) % len(ring)], p) >= 0.0 for i in range(len(ring))
+    )
+
+
+def _segments_2d(
+    p: tuple[float, float], q: tuple[float, float], r: tuple[float, float], s: tuple[float, float]
+) -> float:
+    """Distance between segments p-q and r-s in the plane (0 when they cross)."""
+    d1, d2 = _cross2(r, s, p), _cross2(r, s, q)
+    d3, d4 = _cross2(p, q, r), _cross2(p, q, s)
+    if d1 * d2 < 0.0 and d3 * d4 < 0.0:
+        return 0.0
+    return min(_point_segment(p, r, s), _point_segment(q, r, s),
+               _point_segment(r, p, q), _point_segment(s, p, q))  # fmt: skip
+
+
+def _point_segment(p: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
+    ab = (b[0] - a[0], b[1] - a[1])
+    ap = (p[0] - a[0], p[1] - a[1])
+    denom = ab[0] ** 2 + ab[1] ** 2
+    t = 0.0 if denom == 0.0 else min(max((ap[0] * ab[0] + ap[1] * ab[1]) / denom, 0.0), 1.0)
+    return math.hypot(ap[0] - t * ab[0], ap[1] - t * ab[1])
 
 
 def _corners(element: Element) -> Vec | None:
@@ -375,16 +448,3 @@ def _corners(element: Element) -> Vec | None:
         box: Vec = unit_box * size + np.array([0.0, 0.0, dims["height"] / 2.0])
         return box
     return None
-
-
-def segment_distance(p: Vec, a: Vec, b: Vec, up: Vec) -> float:
-    """Horizontal distance (normal to ``up``) from point ``p`` to segment ``a``-``b``."""
-
-    def flat(v: Vec) -> Vec:
-        out: Vec = v - up * float(v @ up)
-        return out
-
-    pa, ab = flat(p - a), flat(b - a)
-    denom = float(ab @ ab)
-    t = 0.0 if denom == 0.0 else min(max(float(pa @ ab) / denom, 0.0), 1.0)
-    return float(np.linalg.norm(pa - t * ab))

@@ -26,7 +26,8 @@ if TYPE_CHECKING:
     from cellengine.execute.compile import Compiler, Mark
     from cellengine.family import Candidate
 
-MAX_TRIES = 64  # candidates taken after the first ones, per compile
+MAX_TRIES = 16  # candidates taken after the first ones, per compile: a failing plan is
+# refused within tens of seconds, not minutes (bench/bench_boards.py measures it)
 
 
 @dataclass
