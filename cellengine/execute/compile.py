@@ -36,7 +36,6 @@ from cellengine.execute.schedule import SCHEDULE_DT, schedule
 from cellengine.execute.search import add_all
 from cellengine.execute.split import SPLIT_THRESHOLD
 from cellengine.execute.strategies import STRATEGIES, Part, Strategy, solve_segment
-from cellengine.info.cell import DEFAULT_CLEARANCE
 from cellengine.motion.clearance import least
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.gate import SAMPLE_DT, GateReport
@@ -73,7 +72,7 @@ class Compiler:
         *,
         merge: Merge = "joint",
         split_threshold: float = SPLIT_THRESHOLD,
-        clearance: float = DEFAULT_CLEARANCE,
+        clearance: float | None = None,
     ) -> None:
         if strategy not in STRATEGIES:
             raise ValueError(f"unknown strategy '{strategy}'; known: {', '.join(STRATEGIES)}")
@@ -86,7 +85,8 @@ class Compiler:
         self.strategy: Strategy = strategy
         self.merge: Merge = merge
         self.split_threshold = split_threshold
-        self.clearance = clearance  # m: the gate's and the async schedule's
+        # m: the gate's and the async schedule's; cell.yaml's unless given
+        self.clearance = world.cell.clearance if clearance is None else clearance
         # checkers of its own: attaching held objects must not change the caller's
         self.holding = Holding(world, checker.scene)
         self.q = q
