@@ -16,14 +16,19 @@ alone moves (a UR's shoulder, 5 mm over the table it stands on) against the envi
 where the distance is the cell's layout, the same in every plan. Pairs out of each other's
 reach (``out_of_reach``: they cannot collide) may still pass close, so they are measured.
 
-Where: the gate's 1 ms samples are too many to measure every pair at (~0.15 ms per state on
-the cable-routing cell, 36 000 states in the four-guide plan), so every ``MEASURE_EVERY``-th
-sample is measured, in windows of ``WINDOW`` of them, and then the 1 ms samples around the
-closest one. A window is first bounded from its middle state: anywhere in it a pair is at least
-its (convex bound's) distance there less ``motion @ max |q - q_mid|`` apart (how far its two
-objects can move relative to each other, scene.py); windows are visited lowest bound first, and
-only pairs whose bound is below the least distance found so far are measured. Most pairs are
-far from everything most of the time, so few are ever measured exactly.
+Where: at every ``MEASURE_EVERY``-th of the gate's 1 ms samples (10 ms), then at the 1 ms
+samples between the closest one's neighbours for its pair: measuring every pair at every 1 ms
+sample costs ~0.15 ms per state on the cable-routing cell (meshes are slow in coal), 5 s for
+the four-guide plan's 36 000 states. The least at 10 ms samples is within 5 ms of motion of
+the least at 1 ms, and the 1 ms pass around it finds that one when both lie in the same dip
+(tests/execute/test_clearance.py checks it against every 1 ms sample).
+
+How: per kind, the states in a fixed shuffled order; a collision check on the exact shapes
+with every pair's security margin at the least distance found so far (through the broad
+phase, ~13 us) rules out a state where no pair is closer, and a state it lets through is
+measured: convex bounds (meshes' hulls) in one call, then the meshes whose bound is below the
+least exact distance. In a shuffled order the least distance falls fast (a state is a new
+least with probability 1/k at the k-th), so few states are measured.
 
 A model holds pinocchio and coal data: not thread-safe (like the checker).
 """
@@ -45,7 +50,6 @@ from cellengine.motion.collision import _Checked
 from cellengine.motion.scene import CollisionScene, Pair, SceneObject, pair_key
 
 MEASURE_EVERY = 10  # gate samples (1 ms) between measured states: 10 ms
-WINDOW = 50  # measured states bounded together (500 ms)
 RESOLUTION = 1e-6  # m: a state closer by less than this is not measured again
 # ACM reasons of pairs that may come close without touching on purpose: they are measured
 MEASURED_REASONS = frozenset({"out_of_reach"})
