@@ -14,7 +14,7 @@ from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 
 from cellengine.arrays import Mat
-from cellengine.execute.schedule import SCHEDULE_CLEARANCE
+from cellengine.info.cell import DEFAULT_CLEARANCE
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.ik import ArmIK, arm_ik
 from cellengine.motion.robot import CellModel, build_cell_model, home_configuration
@@ -30,8 +30,9 @@ class PlanningContext:
     checker: CollisionChecker  # on ``scene``; the compiler attaches held objects to its own
     iks: Mapping[str, ArmIK]  # by arm
     masses: Mapping[str, float] = field(default_factory=lambda: MappingProxyType({}))
-    # the least distance (m) between two arms moving on their own (the async schedule's)
-    clearance: float = SCHEDULE_CLEARANCE
+    # cell.yaml's clearance (m): the gate's least distance between the arms and from the
+    # environment, and the async schedule's between two arms moving on their own
+    clearance: float = DEFAULT_CLEARANCE
 
     @property
     def home(self) -> Mat:
@@ -58,4 +59,5 @@ def build_context(world: World, masses: Mapping[str, float] | None = None) -> Pl
         CollisionChecker(scene),
         MappingProxyType({name: arm_ik(arm) for name, arm in cell.arms.items()}),
         MappingProxyType(dict(masses or {})),
+        world.cell.clearance,
     )

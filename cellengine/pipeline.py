@@ -111,6 +111,7 @@ def compile_loaded(
         ctx.home,
         chosen,  # type: ignore[arg-type]
         merge=merge,  # type: ignore[arg-type]
+        clearance=ctx.clearance,
     )
     shown: set[int] = set()
 
@@ -201,6 +202,7 @@ def write_plan_outputs(compiled: Compiled, out: Path) -> dict[str, Path]:
         "plan": str(plan.file),
         "execution": compiled.strategy,
         "duration": compiled.program.duration,
+        "clearance_m": compiled.context.clearance,
     }
     extra.update(compiled.report)
     labels = {i: step_label(step) for i, step in enumerate(plan.steps)}

@@ -1,7 +1,8 @@
 """The checks every compiled piece must pass before it joins the program.
 
 - the gate (:func:`~cellengine.motion.gate.check_cell_trajectory`): limits at 1 ms samples,
-  collisions, the distance between the arms;
+  collisions, the distance between the arms; given the cell's clearance, the clearance
+  between the arms and to the environment (:mod:`~cellengine.motion.clearance`);
 - a kept distance: the two fingertips (the arms' TCPs) at a constant distance, within
   ``KEEP_DISTANCE_TOLERANCE``, all along the timed motion (a taut cable between the hands).
 """
@@ -24,11 +25,17 @@ KEEP_DISTANCE_TOLERANCE = 0.001  # m: the fingertips' distance may vary by this 
 KEEP_DISTANCE_DT = 0.005  # s between the samples where it is measured
 
 
-def gate(traj: Trajectory, cell: CellModel, checker: CollisionChecker) -> GateReport:
-    """The gate's report; Refused naming every violation when it fails."""
-    report = check_cell_trajectory(traj, cell, checker)
+def gate(
+    traj: Trajectory, cell: CellModel, checker: CollisionChecker, clearance: float | None = None
+) -> GateReport:
+    """The gate's report; Refused naming every violation when it fails (a clearance
+    shortfall as it is: its message is already in plan terms)."""
+    report = check_cell_trajectory(traj, cell, checker, clearance)
     if not report.ok:
-        raise Refused("the trajectory fails the gate: " + "; ".join(map(str, report.violations)))
+        unsafe = [str(v) for v in report.violations if v.kind != "clearance"]
+        short = [str(v) for v in report.violations if v.kind == "clearance"]
+        failed = ["the trajectory fails the gate: " + "; ".join(unsafe)] if unsafe else []
+        raise Refused("; ".join(failed + short))
     return report
 
 

@@ -36,6 +36,7 @@ from cellengine.execute.schedule import SCHEDULE_DT, schedule
 from cellengine.execute.search import add_all
 from cellengine.execute.split import SPLIT_THRESHOLD
 from cellengine.execute.strategies import STRATEGIES, Part, Strategy, solve_segment
+from cellengine.motion.clearance import least
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.gate import SAMPLE_DT, GateReport
 from cellengine.motion.robot import CellModel
@@ -71,6 +72,7 @@ class Compiler:
         *,
         merge: Merge = "joint",
         split_threshold: float = SPLIT_THRESHOLD,
+        clearance: float | None = None,
     ) -> None:
         if strategy not in STRATEGIES:
             raise ValueError(f"unknown strategy '{strategy}'; known: {', '.join(STRATEGIES)}")
@@ -83,6 +85,8 @@ class Compiler:
         self.strategy: Strategy = strategy
         self.merge: Merge = merge
         self.split_threshold = split_threshold
+        # m: the gate's and the async schedule's; cell.yaml's unless given
+        self.clearance = world.cell.clearance if clearance is None else clearance
         # checkers of its own: attaching held objects must not change the caller's
         self.holding = Holding(world, checker.scene)
         self.q = q
@@ -216,13 +220,15 @@ class Compiler:
         again at the gate's resolution."""
         if self.strategy != "async" or part.solved != "apart" or len(merged.alone) < 2:
             traj = merged.trajectory.shifted(t)
-            return traj, gate(traj, self.cell, self.checker), {}
+            return traj, gate(traj, self.cell, self.checker, self.clearance), {}
         refused = Refused("unreachable")
         for dt in (SCHEDULE_DT, SAMPLE_DT):
-            starts = schedule(self.cell, q, merged.alone, self.checker, dt=dt)
+            starts = schedule(
+                self.cell, q, merged.alone, self.checker, dt=dt, clearance=self.clearance
+            )
             traj = on_one_axis(self.cell, q, merged.alone, starts).shifted(t)
             try:
-                return traj, gate(traj, self.cell, self.checker), starts
+                return traj, gate(traj, self.cell, self.checker, self.clearance), starts
             except Refused as e:
                 refused = e
         raise refused
@@ -296,6 +302,7 @@ def _report(
         "time_optimal_bound_s": sum(f.bound for _, f, _, _ in figures),
         "jerk_limited_bound_s": sum(f.bound_jerk for _, f, _, _ in figures),
         "min_arm_distance_m": min(distances) if distances else None,
+        "clearance": least([r.clearance for _, _, r, _ in figures if r.clearance]).figures(),
         "closest_pair": list(closest.closest_pair or ()) if closest is not None else None,
         "keep_distance": None
         if kept is None

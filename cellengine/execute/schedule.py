@@ -26,12 +26,12 @@ import numpy as np
 from cellengine.arrays import Vec
 from cellengine.execute.merge import on_one_axis
 from cellengine.execute.refused import Refused
+from cellengine.info.cell import DEFAULT_CLEARANCE
 from cellengine.motion.robot import CellModel
 from cellengine.motion.trajectory import Trajectory
 
 SCHEDULE_DT = 0.01  # s between the states checked for each candidate start
 DELAY_STEP = 0.05  # s by which an arm's start is pushed back
-SCHEDULE_CLEARANCE = 0.01  # m: the least distance between two arms moving on their own
 
 
 class ArmDistance(Protocol):
@@ -48,7 +48,7 @@ def schedule(
     *,
     dt: float = SCHEDULE_DT,
     step: float = DELAY_STEP,
-    clearance: float = SCHEDULE_CLEARANCE,
+    clearance: float = DEFAULT_CLEARANCE,  # m: cell.yaml's, through the compiler
 ) -> dict[str, float]:
     """Each arm's start time (s from the part's start), in ``alone``'s order."""
     starts: dict[str, float] = {}

@@ -16,6 +16,8 @@ from cellengine.info.units import Angle, Frozen, Length, Mass, Units, Vec3Angle,
 Name = Annotated[str, StringConstraints(pattern=r"^[A-Za-z_][A-Za-z0-9_-]*$")]
 
 BUILTIN_ROBOTS = ("ur3e", "ur5", "ur5e", "ur10e")
+# m: the least distance between the arms, and from an arm to what it is not meant to touch
+DEFAULT_CLEARANCE = 0.010
 
 
 class Pose(Frozen):
@@ -231,3 +233,6 @@ class Cell(Frozen):
     obstacles: dict[Name, Obstacle] = {}
     zones: dict[Name, Zone] = {}
     driver: DriverSpec = SimDriver(kind="sim")
+    # every compiled segment keeps the arms this far apart, and from what they do not touch
+    # on purpose (the gate refuses a segment passing closer); 0: measured and reported only
+    clearance: Length = Field(DEFAULT_CLEARANCE, ge=0)

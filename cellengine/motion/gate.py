@@ -3,7 +3,9 @@
 A trajectory passes when, sampled every millisecond, its times strictly increase, every
 value is finite, every joint stays within its position, velocity and acceleration limits,
 and no sampled state collides. Each violation names the joint or the pair of objects, the
-time and the value; the minimum distance between the arms is reported either way.
+time and the value; the minimum distance between the arms is reported either way. Given the
+cell's clearance, the whole cell's gate also measures the arms' clearance (clearance.py) and
+refuses a trajectory passing closer than it.
 """
 
 from __future__ import annotations
@@ -16,7 +18,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from cellengine.arrays import Vec
+from cellengine.motion.clearance import Clearance, measure
 from cellengine.motion.robot import CellModel, Limits
+from cellengine.motion.scene import CollisionScene
 from cellengine.motion.trajectory import Trajectory
 
 SAMPLE_DT = 0.001  # seconds between checked samples
@@ -38,7 +42,7 @@ class ArmDistance(Protocol):
 
 @dataclass(frozen=True)
 class Violation:
-    kind: str  # finite | position | velocity | acceleration | collision
+    kind: str  # finite | position | velocity | acceleration | collision | clearance
     time: float
     what: str  # the joint, or the colliding pair
     value: float | None = None
@@ -48,6 +52,8 @@ class Violation:
         at = f"t={self.time:.3f} s"
         if self.kind == "collision":
             return f"{at}: collision between {self.what}"
+        if self.kind == "clearance":
+            return self.what  # said in full, time included
         if self.kind == "finite":
             return f"{at}: {self.what}"
         unit = {"position": "", "velocity": "/s", "acceleration": "/s^2"}[self.kind]
@@ -63,6 +69,7 @@ class GateReport:
     samples: int
     min_arm_distance: float | None = None
     closest_pair: tuple[str, str] | None = None
+    clearance: Clearance | None = None
 
     @property
     def ok(self) -> bool:
@@ -78,6 +85,19 @@ def check_trajectory(
     dt: float = SAMPLE_DT,
 ) -> GateReport:
     """Check ``traj`` whose joints must be ``joint_names`` (the model's order)."""
+    t, q, violations = _sampled(traj, joint_names, limits, checker, dt)
+    d, pair = _arm_distance(q, arm_distance)
+    return GateReport(tuple(violations), len(t), d, pair)
+
+
+def _sampled(
+    traj: Trajectory,
+    joint_names: Sequence[str],
+    limits: Limits,
+    checker: Checker | None,
+    dt: float,
+) -> tuple[Vec, Vec, list[Violation]]:
+    """The sample times and states, and the violations found at them."""
     if tuple(traj.joint_names) != tuple(joint_names):
         raise ValueError(
             f"trajectory joints {list(traj.joint_names)} differ from the model's "
@@ -90,8 +110,7 @@ def check_trajectory(
     violations = _finite(t, q, qd, qdd) or _limits(t, q, qd, qdd, joint_names, limits)
     if checker is not None:
         violations += _collisions(t, q, checker)
-    d, pair = _arm_distance(q, arm_distance)
-    return GateReport(tuple(violations), len(t), d, pair)
+    return t, q, violations
 
 
 def _finite(t: Vec, q: Vec, qd: Vec, qdd: Vec) -> list[Violation]:
@@ -168,10 +187,19 @@ def _arm_distance(
 class CellChecker(Checker, Protocol):
     def distance(self, q: Vec, between: tuple[str, str] | None = None) -> Distance: ...
 
+    @property
+    def scene(self) -> CollisionScene: ...
 
-def check_cell_trajectory(traj: Trajectory, cell: CellModel, checker: CellChecker) -> GateReport:
+
+def check_cell_trajectory(
+    traj: Trajectory, cell: CellModel, checker: CellChecker, clearance: float | None = None
+) -> GateReport:
     """The gate for a whole cell: its joint order and limits, its collision checker, and the
-    minimum distance between its two arms (when it has two)."""
+    minimum distance between its two arms (when it has two). Given ``clearance`` (m), the
+    trajectory's clearance is measured instead (the arms' distance is then its ``arms``) and a
+    trajectory passing closer than it is refused."""
+    if clearance is not None:
+        return _with_clearance(traj, cell, checker, clearance)
     arms = tuple(cell.arms)
     distance: ArmDistance | None = None
     if len(arms) == 2:
@@ -181,3 +209,22 @@ def check_cell_trajectory(traj: Trajectory, cell: CellModel, checker: CellChecke
             return checker.distance(q, between)
 
     return check_trajectory(traj, cell.joint_names, cell.limits, checker, distance)
+
+
+def _with_clearance(
+    traj: Trajectory, cell: CellModel, checker: CellChecker, clearance: float
+) -> GateReport:
+    t, q, violations = _sampled(traj, cell.joint_names, cell.limits, checker, SAMPLE_DT)
+    measured = measure(checker.scene, t, q)
+    short = [
+        Violation("clearance", c.time, why, c.distance, clearance)
+        for c, why in measured.shortfalls(clearance)
+    ]
+    arms = measured.arms
+    return GateReport(
+        (*violations, *short),
+        len(t),
+        None if arms is None else arms.distance,
+        None if arms is None else arms.pair,
+        measured,
+    )

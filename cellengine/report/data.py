@@ -24,7 +24,9 @@ measured every DISTANCE_DT s along the segment (``distance_source``: ``computed`
 Per step: the same figures over its segments (planning times summed, the smallest distance,
 checks passed when all passed). ``totals``: ``cycle_time_s``, ``cycle_time_by_merge_s``
 (the cycle had every segment used each merge of its ``durations_s``), counts,
-``planning_time_s``, ``min_arm_distance_m``, ``closest_pair``, ``checks_passed``.
+``planning_time_s``, ``min_arm_distance_m``, ``closest_pair``, ``checks_passed``, and
+``clearance``: of the segments' ``clearance`` (the executor's: ``{arms, environment}``, each
+``{distance_m, pair, time_s}``), the least of each kind with its segment's index and label.
 """
 
 from __future__ import annotations
@@ -292,7 +294,21 @@ def _totals(
         "min_arm_distance_m": d,
         "closest_pair": pair,
         "checks_passed": _all(s.get("checks_passed") for s in segments),
+        "clearance": {k: _least_clearance(segments, k) for k in ("arms", "environment")},
     }
+
+
+def _least_clearance(segments: Sequence[Mapping[str, Any]], kind: str) -> dict[str, Any] | None:
+    """The least ``clearance[kind]`` over the segments, with the segment's index and label."""
+    found = [
+        (s, c[kind])
+        for s in segments
+        if isinstance(c := s.get("clearance"), Mapping) and isinstance(c.get(kind), Mapping)
+    ]
+    if not found:
+        return None
+    s, least = min(found, key=lambda f: float(f[1]["distance_m"]))
+    return {**least, "segment": int(s["index"]), "label": s.get("label")}
 
 
 def _by_merge(cycle: float, segments: Sequence[Mapping[str, Any]]) -> dict[str, float]:

@@ -10,8 +10,9 @@ from cellengine.execute import Compiler
 from cellengine.execute.merge import on_one_axis
 from cellengine.execute.refused import Refused
 from cellengine.execute.retime import timed
-from cellengine.execute.schedule import SCHEDULE_CLEARANCE, schedule
+from cellengine.execute.schedule import schedule
 from cellengine.execute.strategies import _apart, solve_segment
+from cellengine.info.cell import DEFAULT_CLEARANCE
 from cellengine.motion.gate import check_cell_trajectory
 from cellengine.motion.trajectory import Trajectory
 from cellengine.program import ArmPath, Segment
@@ -56,7 +57,7 @@ def test_async_delays_the_right_arm_until_it_is_safe(swept: tuple[Compiler, np.n
     assert seg.report["merge"] == "async" and seg.report["solved"] == ["apart"]
     gate = check_cell_trajectory(seg.trajectory, cell, checker)
     assert gate.ok and gate.min_arm_distance is not None
-    assert gate.min_arm_distance >= 0.5 * SCHEDULE_CLEARANCE  # 10 ms samples, then 1 ms
+    assert gate.min_arm_distance >= 0.5 * DEFAULT_CLEARANCE  # 10 ms samples, then 1 ms
     # the right arm stands until its start, then moves
     start = seg.trajectory.start_time
     _, qd, _ = seg.trajectory.sample(np.array([start + 0.5 * delays["right"]]))
@@ -83,7 +84,7 @@ def test_one_step_earlier_would_come_too_close(swept: tuple[Compiler, np.ndarray
     t = np.arange(starts["right"] - 0.05, earlier.end_time, 0.01)
     s, _, _ = earlier.sample(t)
     closest = min(checker.distance(x, ("left", "right"))[0] for x in s)
-    assert closest < SCHEDULE_CLEARANCE
+    assert closest < DEFAULT_CLEARANCE
 
 
 def _collide_at_the_end() -> Segment:

@@ -134,3 +134,20 @@ def test_platform_file_outside_cell_folder(write, tmp_path: Path) -> None:
 def test_platform_format_needs_its_files(write) -> None:
     text = CELL + "platforms:\n  p: {format: remodel, cad: a.x3d, models: m.xml, map: m.csv}\n"
     assert errors(write, text) == [":23:6: platforms.p: format 'remodel' needs 'ids'"]
+
+
+def test_clearance_in_the_files_length_unit(write) -> None:
+    assert load(write, CELL).clearance == pytest.approx(0.010)  # the default: 10 mm
+    assert load(write, CELL + "clearance: 4\n").clearance == pytest.approx(0.004)
+    metres = CELL.replace("units: {length: mm, angle: deg}", "units: {angle: deg}")
+    metres = metres.replace("[1400, 1400, 20]", "[1.4, 1.4, 0.02]").replace(
+        "500, 0, -10", "0.5, 0, -0.01"
+    )
+    assert load(write, metres + "clearance: 0.02\n").clearance == pytest.approx(0.02)
+    assert load(write, CELL + "clearance: 0\n").clearance == 0.0
+
+
+def test_negative_clearance_refused(write) -> None:
+    assert errors(write, CELL + "clearance: -1\n") == [
+        ":22:12: clearance: must be greater than or equal to 0, got -1"
+    ]

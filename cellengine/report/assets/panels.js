@@ -162,10 +162,27 @@ function fractions(fr) {
     arm + ' ' + (isNum(v) ? fmt(100 * v, 0) + '%' : DASH));
   return parts.length ? parts.join(' \u00b7 ') : DASH;
 }
+// A segment's least clearance, arms and environment, in mm; red under the cell's clearance
+function clearanceCell(c) {
+  const limit = RE.clearance_m;
+  const parts = [];
+  let under = false;
+  for (const [kind, short] of [['arms', 'arms'], ['environment', 'env']]) {
+    const f = c && c[kind];
+    if (!f || !isNum(f.distance_m)) continue;
+    under = under || (isNum(limit) && f.distance_m < limit);
+    parts.push(short + ' ' + fmt(1000 * f.distance_m, 1));
+  }
+  const title = ['arms', 'environment'].filter((k) => c && c[k])
+    .map((k) => k + ': ' + pairText(c[k].pair)).join('; ');
+  return el('td', { class: 'nowrap' + (under ? ' fail' : ''), title },
+    parts.length ? parts.join(' \u00b7 ') : DASH);
+}
 function buildTable() {
   const table = $('steps');
   const heads = ['Step / segment', 'Strategy', 'Merge', 'Start (s)', 'Duration (s)',
-    'Cartesian', 'Planning (s)', 'Min. distance (mm)', 'Closest pair', 'Checks'];
+    'Cartesian', 'Planning (s)', 'Min. distance (mm)', 'Closest pair', 'Clearance (mm)',
+    'Checks'];
   const num = new Set([3, 4, 6, 7]);
   table.append(el('tr', {},
     ...heads.map((h, k) => el('th', num.has(k) ? { class: 'num' } : {}, h))));
@@ -175,7 +192,7 @@ function buildTable() {
     const row = el('tr', { class: 'step-row clickable' }, td('#' + st.step + ' ' + st.label),
       td((st.strategies || []).join(', ')), td(''), td(fmt(st.start_s, 2), 'num'),
       td(fmt(st.duration_s, 2), 'num'), td(''), td(fmt(st.planning_time_s, 3), 'num'),
-      td(mm(st.min_arm_distance_m), 'num'), td(pairText(st.closest_pair)),
+      td(mm(st.min_arm_distance_m), 'num'), td(pairText(st.closest_pair)), td(''),
       checksCell(st.checks_passed));
     row.addEventListener('click', () => seek(st.start_s));
     table.append(row);
@@ -186,7 +203,7 @@ function buildTable() {
         td(valueText(sg.merge)), td(fmt(sg.start_s, 2), 'num'), td(fmt(sg.duration_s, 2), 'num'),
         td(fractions(sg.cartesian_fraction), 'nowrap'), td(fmt(sg.planning_time_s, 3), 'num'),
         td(mm(sg.min_arm_distance_m), 'num'), td(pairText(sg.closest_pair)),
-        checksCell(sg.checks_passed));
+        clearanceCell(sg.clearance), checksCell(sg.checks_passed));
       r.addEventListener('click', () => seek(sg.start_s));
       table.append(r);
       rows.push([sg, r, 'segment']);
@@ -217,6 +234,14 @@ function buildHeader() {
   if (isNum(tot.min_arm_distance_m)) {
     chip('min. arm distance', fmt(1000 * tot.min_arm_distance_m, 1, 'mm'));
   }
+  for (const [kind, label] of [['arms', 'arms'], ['environment', 'environment']]) {
+    const c = (tot.clearance || {})[kind];
+    if (!c || !isNum(c.distance_m)) continue;
+    const under = isNum(RE.clearance_m) && c.distance_m < RE.clearance_m;
+    chip('min. clearance, ' + label, fmt(1000 * c.distance_m, 1, 'mm') + ' (' +
+      pairText(c.pair) + ')', under ? 'bad' : '');
+  }
+  if (isNum(RE.clearance_m)) chip("cell's clearance", fmt(1000 * RE.clearance_m, 0, 'mm'));
   if (tot.checks_passed === true) chip('checks', 'passed', 'ok');
   else if (tot.checks_passed === false) chip('checks', 'FAILED', 'bad');
 }
