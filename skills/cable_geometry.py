@@ -448,3 +448,16 @@ def _corners(element: Element) -> Vec | None:
         box: Vec = unit_box * size + np.array([0.0, 0.0, dims["height"] / 2.0])
         return box
     return None
+
+
+def segment_distance(p: Vec, a: Vec, b: Vec, up: Vec) -> float:
+    """Horizontal distance (normal to ``up``) from point ``p`` to segment ``a``-``b``."""
+
+    def flat(v: Vec) -> Vec:
+        out: Vec = v - up * float(v @ up)
+        return out
+
+    pa, ab = flat(p - a), flat(b - a)
+    denom = float(ab @ ab)
+    t = 0.0 if denom == 0.0 else min(max(float(pa @ ab) / denom, 0.0), 1.0)
+    return float(np.linalg.norm(pa - t * ab))

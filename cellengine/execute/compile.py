@@ -36,6 +36,7 @@ from cellengine.execute.schedule import SCHEDULE_DT, schedule
 from cellengine.execute.search import add_all
 from cellengine.execute.split import SPLIT_THRESHOLD
 from cellengine.execute.strategies import STRATEGIES, Part, Strategy, solve_segment
+from cellengine.info.cell import DEFAULT_CLEARANCE
 from cellengine.motion.clearance import least
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.gate import SAMPLE_DT, GateReport
@@ -223,9 +224,10 @@ class Compiler:
             return traj, gate(traj, self.cell, self.checker, self.clearance), {}
         refused = Refused("unreachable")
         for dt in (SCHEDULE_DT, SAMPLE_DT):
-            starts = schedule(
-                self.cell, q, merged.alone, self.checker, dt=dt, clearance=self.clearance
-            )
+            # two arms moving on their own keep at least the default apart, even in a cell
+            # that lowers its clearance to get its plans past the gate
+            margin = max(self.clearance, DEFAULT_CLEARANCE)
+            starts = schedule(self.cell, q, merged.alone, self.checker, dt=dt, clearance=margin)
             traj = on_one_axis(self.cell, q, merged.alone, starts).shifted(t)
             try:
                 return traj, gate(traj, self.cell, self.checker, self.clearance), starts
