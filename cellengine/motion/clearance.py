@@ -39,7 +39,6 @@ import math
 from dataclasses import dataclass
 from itertools import combinations
 from typing import Any, Literal
-from weakref import WeakKeyDictionary
 
 import numpy as np
 import pinocchio as pin
@@ -117,14 +116,13 @@ def measure(scene: CollisionScene, t: Vec, Q: Vec) -> Clearance:
     return _model(scene).measure(np.asarray(t, dtype=float), np.asarray(Q, dtype=float))
 
 
-_MODELS: WeakKeyDictionary[CollisionScene, ClearanceModel] = WeakKeyDictionary()
-
-
 def _model(scene: CollisionScene) -> ClearanceModel:
-    """One model per scene (a compile comes back to the same held states again and again)."""
-    model = _MODELS.get(scene)
-    if model is None:
-        model = _MODELS[scene] = ClearanceModel(scene)
+    """One model per scene, kept on it (a compile comes back to the same held states again
+    and again)."""
+    model = scene.clearance_model
+    if not isinstance(model, ClearanceModel):
+        model = ClearanceModel(scene)
+        object.__setattr__(scene, "clearance_model", model)
     return model
 
 

@@ -34,7 +34,7 @@ steps:
     cable: cable1
     guide: routing.connector
 """
-AT = 5.0  # s after the first RTDE connection: a second or two into the motion
+AT = 9.0  # s after the first RTDE connection: past the first segment (6.6 s), mid-run
 
 # (emulated fault, the driver's fault kind, what the message says), each on either arm; the
 # protective stop on the right arm is in test_ur_emulated.py
