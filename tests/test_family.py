@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+from cellengine.errors import InputError
 from tests.conftest import CELLS, DATA, ROOT
 
 PLAN = """\
@@ -95,3 +96,26 @@ def test_every_candidate_failing_gives_the_first_error(site: Path, tmp_path: Pat
     assert done.returncode == 1
     assert f"{plan}:4:5: step 1 (Hover routing.guide1: 1500 mm over): " in done.stderr
     assert not (tmp_path / "out").exists()
+
+
+def test_a_plan_mixing_families_is_refused_at_the_step(tmp_path: Path) -> None:
+    from cellengine.pipeline import compile_plan
+
+    cell = tmp_path / "cell"
+    shutil.copytree(CELLS / "lab_bench", cell)
+    objects = cell / "objects.yaml"
+    objects.write_text(objects.read_text() + "cables:\n  cable1: {length: 650, diameter: 6}\n")
+    plan = cell / "mixed.yaml"
+    plan.write_text(
+        "cell: cell.yaml\nobjects: objects.yaml\nsteps:\n"
+        "  - skill: Weigh\n    object: vial1\n"
+        "  - skill: PickCable\n    cable: cable1\n    from: [bench.rack1, bench.rack1]\n"
+    )
+    with pytest.raises(InputError) as e:
+        compile_plan(plan)
+    (problem,) = e.value.problems
+    assert (problem.file, problem.line) == (str(plan), 6)
+    assert problem.message.startswith(
+        "steps[1]: PickCable cannot be compiled to motion in a plan with lab skills (a plan's "
+        "skills are all of one family: "
+    )

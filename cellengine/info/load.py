@@ -53,6 +53,13 @@ def _check_cell(cell: Cell, doc: YamlDoc) -> list[Problem]:
     def err(message: str, *loc: str | int, key: bool = False) -> None:
         out.append(doc.error(message, loc, key).problems[0])
 
+    def inside(ref: str, *loc: str | int) -> None:
+        """A file the cell names must be inside the cell's folder."""
+        try:
+            resolve_inside(doc.file.parent, ref, doc.file, *_at(doc, loc))
+        except InputError as e:
+            out.extend(e.problems)
+
     for name, robot in cell.robots.items():
         if robot.tool is not None and robot.tool not in cell.tools:
             err(
@@ -62,17 +69,9 @@ def _check_cell(cell: Cell, doc: YamlDoc) -> list[Problem]:
                 "tool",
             )
         if robot.srdf is not None:
-            try:
-                where = _at(doc, ("robots", name, "srdf"))
-                resolve_inside(doc.file.parent, robot.srdf, doc.file, *where)
-            except InputError as e:
-                out.extend(e.problems)
+            inside(robot.srdf, "robots", name, "srdf")
         if isinstance(robot.model, UrdfModel):
-            urdf = ("robots", name, "model", "urdf")
-            try:
-                resolve_inside(doc.file.parent, robot.model.urdf, doc.file, *_at(doc, urdf))
-            except InputError as e:
-                out.extend(e.problems)
+            inside(robot.model.urdf, "robots", name, "model", "urdf")
         elif robot.model not in BUILTIN_ROBOTS:
             err(
                 f"robots.{name}.model: unknown robot model '{robot.model}'"
@@ -92,11 +91,7 @@ def _check_cell(cell: Cell, doc: YamlDoc) -> list[Problem]:
             )
     for tname, tool in cell.tools.items():
         if tool.mesh is not None:
-            try:
-                where = _at(doc, ("tools", tname, "mesh"))
-                resolve_inside(doc.file.parent, tool.mesh, doc.file, *where)
-            except InputError as e:
-                out.extend(e.problems)
+            inside(tool.mesh, "tools", tname, "mesh")
     for zname, zone in cell.zones.items():
         for i, robot_name in enumerate(zone.robots):
             if robot_name not in cell.robots:

@@ -635,3 +635,40 @@ def test_the_remodel_sample_plans_end_to_end(tmp_path: Path) -> None:
     (down,) = p.segments[labels(p).index("PickCable CA1: down")].paths
     assert (down.poses[0][2, 3] - down.poses[-1][2, 3]) == pytest.approx(60.0 * MM, abs=1e-9)
     assert np.allclose(p.end[i]["left"][:3, 3], p.world.pose("platform.J8.1")[:3, 3])
+
+
+def test_pick_cable_ways_vary_the_tip_then_the_arm() -> None:
+    """PickCable's ways, in order: the default tip first, then the other tips; with either
+    arm allowed, then the other arm on the connector end. The state after keeps the tip."""
+    world, steps = _world()
+    home = replace(CableState.at_home(context(world)), connector_arm="right")
+    pick = steps[0]
+    assert isinstance(pick, PickCable)
+    one = list(pick.ways(context(world), home))
+    assert [s.lean for _, s in one] == list(cg.LEANS)
+    assert {s.connector_arm for _, s in one} == {"right"}
+    both = list(pick.ways(context(world), home, either_arm=True))
+    arms = [s.connector_arm for _, s in both]
+    assert arms[: len(one)] == ["right"] * len(one) and set(arms[len(one) :]) <= {"left"}
+    first, _ = one[0]
+    assert [s.label for s in first] == [s.label for s in pick.plan(context(world), home)[0]]
+
+
+def test_route_cable_first_way_is_the_published_one() -> None:
+    """The first way of a guide: theta_min + THETA_MARGIN, the default tips, stand-back and
+    approach gap; later ways never at a smaller angle for the same approach gap."""
+    from cellengine.skills.cable import guide_ways
+
+    plan = planned("plan_straight")
+    state = plan.home  # only the route's start matters for the ways: the connector's rear
+    state = replace(state, route=((0.43, -0.19, 0.065),))
+    ways = list(guide_ways(plan.world, state, "routing.guide1", "left"))
+    first = ways[0]
+    assert math.degrees(first.theta) == pytest.approx(46.3478, abs=1e-4)
+    assert (first.lean, first.pivot_lean, first.stand_back, first.gap) == (
+        cg.LEAN, cg.PIVOT_LEAN, cg.STAND_BACK, cg.APPROACH_GAP
+    )  # fmt: skip
+    assert all(w.theta >= first.theta - 1e-12 for w in ways if w.gap == first.gap)
+    assert len({(w.theta, w.side, w.lean, w.pivot_lean, w.stand_back, w.gap) for w in ways}) == len(
+        ways
+    )
