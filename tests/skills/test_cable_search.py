@@ -1,0 +1,193 @@
+"""The compiler's search over the cable skills' ways (execute/candidates.py, issue #13) on real
+boards: copies of cells/cable_routing with a guide moved in the routing platform's X3D or the
+cable shortened in objects.yaml, compiled by `cellengine plan` (in this process, so the
+family's choices can be watched).
+
+Watching: the cable family is wrapped so that every choice's iterator records, for each
+candidate taken, the choice (the path of candidate indices that led to it: its depth is the
+choice's place in the plan, PickCable 0, PlaceConnector 1, RouteCable's guides 2.., the
+release last) and the candidate's index in that choice.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import shutil
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from cellengine import pipeline
+from cellengine.cli import main
+from cellengine.family import Candidate, SkillFamily
+from cellengine.skill import Skill
+from tests.conftest import CELLS
+
+# The routing platform's X3D: a Transform per element, its translation in the plate's own
+# frame (mm); the plate sits at (280, -210) mm in the cell with its axes along the cell's
+# (cell.yaml), so cell x = 280 + x and cell y = -210 + y.
+X3D = Path("routing") / "routing.x3d"
+GUIDE4 = "Guide_U_003"  # routing.guide4 (routing/map.csv)
+GUIDE1 = "Guide_U"  # routing.guide1
+
+
+def board(tmp_path: Path, moves: dict[str, tuple[float, float]], cable_mm: int = 650) -> Path:
+    """A copy of the reference cell with the X3D Transforms ``moves`` names put at (x, y) mm
+    in the plate's frame, and a cable ``cable_mm`` long."""
+    cell = tmp_path / "cell"
+    shutil.copytree(CELLS / "cable_routing", cell)
+    x3d = cell / X3D
+    text = x3d.read_text()
+    for name, (x, y) in moves.items():
+        text, n = re.subn(
+            rf'(<Transform DEF="{name}"\s+translation=")[^"]*"',
+            rf'\g<1>{x:.6f} {y:.6f} 10.000000"',
+            text,
+        )
+        assert n == 1, name
+    x3d.write_text(text)
+    objects = cell / "objects.yaml"
+    before = objects.read_text()
+    after = before.replace("length: 650 ", f"length: {cable_mm} ")
+    assert (after != before) == (cable_mm != 650)
+    objects.write_text(after)
+    return cell
+
+
+@dataclass
+class Watch:
+    """Every candidate the compiler took: (choice, index in it, the candidate)."""
+
+    taken: list[tuple[tuple[int, ...], int, Candidate]] = field(default_factory=list)
+
+    def at(self, depth: int) -> list[int]:
+        """The indices taken at the choices ``depth`` deep, in the order taken."""
+        return [n for path, n, _ in self.taken if len(path) == depth]
+
+    def wrap(self, options: Iterator[Candidate], path: tuple[int, ...]) -> Iterator[Candidate]:
+        for n, c in enumerate(options):
+            self.taken.append((path, n, c))
+            then = c.then
+            yield Candidate(
+                c.segments,
+                then=None if then is None else self._then(then, (*path, n)),
+                report=c.report,
+            )
+
+    def _then(self, then: Any, path: tuple[int, ...]) -> Any:
+        return lambda: self.wrap(then(), path)
+
+
+class Watched:
+    def __init__(self, family: SkillFamily, watch: Watch) -> None:
+        self.family, self.watch = family, watch
+        self.name, self.skills = family.name, family.skills
+
+    def plan(self, ctx: Any, steps: Sequence[Skill]) -> Iterator[Candidate]:
+        return self.watch.wrap(self.family.plan(ctx, steps), ())
+
+
+@pytest.fixture
+def watch(monkeypatch: pytest.MonkeyPatch) -> Watch:
+    w = Watch()
+    family_of = pipeline.family_of
+    monkeypatch.setattr(pipeline, "family_of", lambda steps: Watched(family_of(steps), w))
+    return w
+
+
+def plan(path: Path, out: Path) -> int:
+    return main(["plan", str(path), "-q", "--out", str(out)])
+
+
+def slide_facts(segments: Sequence[Any], guide: str) -> dict[str, Any]:
+    """The facts of the guide's 'slide R_cable' segment (report.json's or the candidate's)."""
+    label = f"RouteCable {guide}: slide R_cable"
+    (facts,) = [
+        dict(s["facts"] if isinstance(s, dict) else s.facts)
+        for s in segments
+        if (s["label"] if isinstance(s, dict) else s.label) == label
+    ]
+    return facts
+
+
+# ------------------------------------------------------------------ (a) a later way at a guide
+
+
+def test_only_a_later_way_of_the_last_guide_compiles(
+    tmp_path: Path, watch: Watch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """plan_one_turn with guide4 at (500, 120) mm in the cell (62 mm to the left of where it
+    is): guide4's first three ways, sliding at the published angle to the right of the cable
+    (stand-back 100, 50, 150 mm), cannot be compiled (today: the other arm's transit to the
+    cable has every IK solution in collision); the fourth, the published angle to the left,
+    can. The search moves only at guide4: the choices before keep their first way."""
+    cell = board(tmp_path, {GUIDE4: (220.0, 330.0)})
+    out = tmp_path / "out"
+    assert plan(cell / "plan_one_turn.yaml", out) == 0, capsys.readouterr().err
+    # choices: PickCable, PlaceConnector, guide1, guide2, guide4, release
+    assert [watch.at(d) for d in range(4)] == [[0], [0], [0], [0]]
+    assert watch.at(4) == [0, 1, 2, 3]
+    firsts = [c for path, n, c in watch.taken if len(path) == 4 and n == 0]
+    report = json.loads((out / "report.json").read_text())
+    chosen = slide_facts(report["segments"], "routing.guide4")
+    first = slide_facts(firsts[0].segments, "routing.guide4")
+    assert chosen["guide"] == first["guide"] == "routing.guide4"
+    assert math.degrees(first["theta"]) == pytest.approx(46.3478, abs=1e-4)  # the published
+    assert chosen["theta"] == pytest.approx(first["theta"], abs=1e-12)
+    assert (first["side"], chosen["side"]) == (-1.0, 1.0)
+    assert watch.taken[-1][:2] == ((0, 0, 0, 0, 3), 0)  # the release after the fourth way
+
+
+# ------------------------------------------------------------------ (c) boards nothing can do
+
+
+def refused(path: Path, out: Path, capsys: pytest.CaptureFixture[str]) -> str:
+    """What `cellengine plan` prints when it refuses the plan: exit 1, nothing in ``out``."""
+    capsys.readouterr()
+    assert plan(path, out) == 1
+    assert not out.exists()
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    return captured.err
+
+
+def test_a_cable_too_short_for_the_route_is_refused_at_the_step(
+    tmp_path: Path, watch: Watch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """plan_straight with a 150 mm cable: guide1 needs 52.5 mm laid from the connector's rear
+    face to its approach point, R_cable 83.2 mm, the pull 1.7 mm and 15 mm for the fingers:
+    152.4 mm. No way of any choice helps; the first error is printed at the RouteCable step
+    (plan_straight.yaml line 15, column 5)."""
+    cell = board(tmp_path, {}, cable_mm=150)
+    path = cell / "plan_straight.yaml"
+    assert refused(path, tmp_path / "out", capsys) == (
+        f"{path}:15:5: steps[2] RouteCable routing.guide1: cable 'cable1' is too short for the "
+        "route: this guide needs 152.4 mm (52.5 mm laid from the connector's rear face to the "
+        "approach point, R_cable 83.2 mm slid past it, 1.7 mm pulled to tension, 15.0 mm for "
+        "the fingers to hold) but the cable is 150.0 mm long\n"
+    )
+    # guide1 had no way: the search went back to PickCable's every way (3 tips x 2 arms)
+    assert watch.at(0) == [0, 1, 2, 3, 4, 5]
+    assert watch.at(2) == []
+
+
+def test_a_guide_out_of_reach_of_both_arms_is_refused_at_the_step(
+    tmp_path: Path, watch: Watch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """plan_straight with guide1 at (1150, 0) mm in the cell: 1.2 m from both bases. The
+    routing arm of PickCable's first ways (left) cannot reach it, nor the right one when
+    PickCable gives the connector to the left; the first error is printed."""
+    cell = board(tmp_path, {GUIDE1: (870.0, 210.0)})
+    path = cell / "plan_straight.yaml"
+    assert refused(path, tmp_path / "out", capsys) == (
+        f"{path}:15:5: steps[2] RouteCable routing.guide1: out of reach of arm 'left': the "
+        "approach pose at (1150.0, -40.0, 65.0) mm has no inverse kinematics solution within "
+        "its joint limits\n"
+    )
+    assert watch.at(0) == [0, 1, 2, 3, 4, 5]
+    assert watch.at(2) == []
