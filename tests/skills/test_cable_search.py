@@ -24,6 +24,7 @@ import pytest
 
 from cellengine import pipeline
 from cellengine.cli import main
+from cellengine.errors import InputError
 from cellengine.family import Candidate, SkillFamily
 from cellengine.skill import Skill
 from tests.conftest import CELLS
@@ -64,13 +65,22 @@ class Watch:
     """Every candidate the compiler took: (choice, index in it, the candidate)."""
 
     taken: list[tuple[tuple[int, ...], int, Candidate]] = field(default_factory=list)
+    refused: list[tuple[tuple[int, ...], str]] = field(default_factory=list)  # and why
 
     def at(self, depth: int) -> list[int]:
         """The indices taken at the choices ``depth`` deep, in the order taken."""
         return [n for path, n, _ in self.taken if len(path) == depth]
 
     def wrap(self, options: Iterator[Candidate], path: tuple[int, ...]) -> Iterator[Candidate]:
-        for n, c in enumerate(options):
+        n = 0
+        while True:
+            try:
+                c = next(options)
+            except StopIteration:
+                return
+            except InputError as e:  # the family cannot plan this choice
+                self.refused.append((path, e.problems[0].message))
+                raise
             self.taken.append((path, n, c))
             then = c.then
             yield Candidate(
@@ -78,6 +88,7 @@ class Watch:
                 then=None if then is None else self._then(then, (*path, n)),
                 report=c.report,
             )
+            n += 1
 
     def _then(self, then: Any, path: tuple[int, ...]) -> Any:
         return lambda: self.wrap(then(), path)
@@ -141,6 +152,64 @@ def test_only_a_later_way_of_the_last_guide_compiles(
     assert chosen["theta"] == pytest.approx(first["theta"], abs=1e-12)
     assert (first["side"], chosen["side"]) == (-1.0, 1.0)
     assert watch.taken[-1][:2] == ((0, 0, 0, 0, 3), 0)  # the release after the fourth way
+
+
+# ------------------------------------------------------------------ (b) back to an earlier step
+
+CONNECTOR = "Conn_Holder"  # routing.connector
+ONE_GUIDE = """\
+cell: cell.yaml
+objects: objects.yaml
+execution: split
+steps:
+  - skill: PickCable
+    cable: cable1
+    from: [holder.comb_a, holder.comb_b]
+  - skill: PlaceConnector
+    cable: cable1
+    guide: routing.connector
+  - skill: RouteCable
+    cable: cable1
+    guides: [routing.guide1]
+"""
+
+
+def tip(candidate: Candidate, arm: str) -> float:
+    """How far (rad) ``arm``'s tool axis is tipped from straight down at PickCable's grasp."""
+    (grasp,) = [s for s in candidate.segments if s.label.endswith(": approach and grasp")]
+    (path,) = [p for p in grasp.paths if p.arm == arm]
+    return math.acos(-float(path.poses[-1][2, 2]))
+
+
+def test_placing_the_connector_sends_the_search_back_to_another_pick(
+    tmp_path: Path, watch: Watch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The connector guide at (760, -250) mm in the cell, far out in front of the right arm,
+    and guide1 at (700, -120) mm; one RouteCable guide. PickCable's first way (both hands
+    tipped 15 deg) leaves the left hand, which holds the cable ahead of the connector while
+    the right one places it, where it cannot reach the placing poses: PlaceConnector cannot
+    be planned from it and the search goes back to PickCable's second way (tipped 25 deg),
+    from which everything compiles."""
+    cell = board(tmp_path, {CONNECTOR: (480.0, -40.0), GUIDE1: (420.0, 90.0)})
+    path = cell / "plan_one_guide.yaml"
+    path.write_text(ONE_GUIDE)
+    out = tmp_path / "out"
+    assert plan(path, out) == 0, capsys.readouterr().err
+    # choices: PickCable, PlaceConnector, guide1, release
+    assert [watch.at(d) for d in range(4)] == [[0, 1], [0], [0], [0]]
+    ((where, why),) = watch.refused
+    assert where == (0,)  # PlaceConnector after PickCable's first way
+    assert why.startswith(
+        "steps[1] PlaceConnector routing.connector: out of reach of arm 'left': the "
+    )
+    picks = [c for p, _, c in watch.taken if p == ()]
+    assert [round(math.degrees(tip(c, "left")), 9) for c in picks] == [15.0, 25.0]
+    assert [round(math.degrees(tip(c, "right")), 9) for c in picks] == [15.0, 25.0]
+    # what was compiled is the second pick and what followed it
+    kept = [s.label for p, _, c in watch.taken if p != () or c is picks[1] for s in c.segments]
+    report = json.loads((out / "report.json").read_text())
+    assert [s["label"] for s in report["segments"]] == kept
+    assert (out / "trajectory.json").is_file()
 
 
 # ------------------------------------------------------------------ (c) boards nothing can do
