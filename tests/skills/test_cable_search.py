@@ -260,3 +260,7 @@ def test_a_guide_out_of_reach_of_both_arms_is_refused_at_the_step(
     )
     assert watch.at(0) == [0, 1, 2, 3, 4, 5]
     assert watch.at(2) == []
+    # guide1 refused after each pick: routed by the left arm after the first three, by the
+    # right after the three that give the connector to the left
+    arms = [re.findall(r"out of reach of arm '(\w+)'", why) for _, why in watch.refused]
+    assert arms == [["left"]] * 3 + [["right"]] * 3
