@@ -3,7 +3,8 @@ compile and passed explicitly (no module-level caches keyed by the world).
 
 It holds the loaded world, the robots as pinocchio models, the collision scene of the cell
 with its containers where they stand and a checker on it, each arm's inverse kinematics, the
-one home configuration, the cell's clearance, and the masses measured so far (a runtime
+one home configuration, the cell's clearance, a probe of the tools against the environment
+(a skill screens its candidate poses with it), and the masses measured so far (a runtime
 choice such as ``heavier_of`` picks by them).
 """
 
@@ -17,6 +18,7 @@ from cellengine.arrays import Mat
 from cellengine.info.cell import DEFAULT_CLEARANCE
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.ik import ArmIK, arm_ik
+from cellengine.motion.probe import ToolProbe
 from cellengine.motion.robot import CellModel, build_cell_model, home_configuration
 from cellengine.motion.scene import CollisionScene, build_scene
 from cellengine.world import World
@@ -33,6 +35,10 @@ class PlanningContext:
     # cell.yaml's clearance (m): the gate's least distance between the arms and from the
     # environment, and the async schedule's between two arms moving on their own
     clearance: float = DEFAULT_CLEARANCE
+    probe: ToolProbe = field(init=False)  # on ``scene``
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "probe", ToolProbe(self.cell, self.scene))
 
     @property
     def home(self) -> Mat:

@@ -100,6 +100,11 @@ class Segment:
     # (arm, object): contacts this segment makes on purpose (a gripper closing on or letting
     # go of a container): that arm's tool is not checked against that object meanwhile
     contacts: tuple[tuple[str, str], ...] = ()
+    # (arm, object): what this segment works closer to than the cell's clearance without
+    # touching it (fingers beside the comb they grasp in, around the guide's slot they slide
+    # past, over the connector guide they insert into): still checked for collision, but
+    # that arm's tool against that object is not held to the clearance meanwhile
+    near: tuple[tuple[str, str], ...] = ()
     # what the step promises at the end of this segment, for reports and tests, e.g.
     # {"guide": "routing.guide2", "slot": [x, y, z]}
     facts: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))

@@ -48,6 +48,7 @@ if TYPE_CHECKING:  # planning needs the motion stack; parsing a plan does not
     from cellengine.context import PlanningContext
 
 OPEN, SLIDE, GRASP = "open", "slide", "grasp"  # jaw modes the method uses (the tool's table)
+CENTRING_STEP = 0.001  # m: how finely the room after a guide is measured for a centred hand
 
 
 # =========================================================================== the skills
@@ -76,7 +77,8 @@ class PickCable(Skill):
         """The ways to pick the cable, best first, each with the state after it: the arm
         the look-ahead chose takes the connector end (``either_arm``: the PlaceConnector
         that follows lets either arm place it, so then the other arm too), with each tip of
-        the hands (cg.LEANS, the default first); the first way's error when none reaches."""
+        the hands (cg.LEANS, the default first), the far hand grasping as published, then
+        turned half a turn; the first way's error when none reaches."""
         world = ctx.world
         where = f"steps[{state.step}] PickCable {self.cable}"
         arms = _two_arms(world, where)
@@ -84,17 +86,29 @@ class PickCable(Skill):
             _check_jaw(world, arm, where)
         conn_ref, free_ref = self.from_
         chosen = state.connector_arm or _nearest_arm(world, arms, conn_ref)
-        c_arms = (chosen, _other(arms, chosen)) if either_arm else (chosen,)
+        c_arms: tuple[str, ...] = (chosen,)
+        if either_arm:  # the arms not crossing first: the shorter reach from the bases
+            pairs = [(chosen, _other(arms, chosen)), (_other(arms, chosen), chosen)]
+            reach = [
+                _base_distance(ctx, a, conn_ref) + _base_distance(ctx, b, free_ref)
+                for a, b in pairs
+            ]
+            c_arms = tuple(
+                p[0] for _, p in sorted(zip(reach, pairs, strict=True), key=lambda r: r[0])
+            )
         first: InputError | None = None
         found = False
         for c_arm in c_arms:
             f_arm = _other(arms, c_arm)
-            for lean in cg.LEANS:
+            for lean, flip in itertools.product(cg.LEANS, (False, True)):
                 s = replace(state, lean=lean)
-                geo = _pick_geometry(world, s, self.cable, conn_ref, free_ref, c_arm, f_arm, lean)
+                geo = _pick_geometry(
+                    world, s, self.cable, conn_ref, free_ref, c_arm, f_arm, lean, flip
+                )
                 try:
                     _check_reach(ctx, c_arm, geo.reach(c_arm), where)
                     _check_reach(ctx, f_arm, geo.reach(f_arm), where)
+                    _check_both_free(ctx, geo, c_arm, f_arm, where)
                 except InputError as e:
                     first = first or e
                     continue
@@ -201,6 +215,7 @@ class RouteCable(Skill):
                 _check_reach(ctx, r_arm, gp.reach_routing(), gp.where)
                 _check_reach(ctx, o_arm, gp.reach_other(), gp.where)
                 _check_length(world, self.cable, _hand(world, r_arm), gp)
+                _check_clear(ctx, gp, r_arm, o_arm)
             except InputError as e:
                 first = first or e
                 continue
@@ -290,6 +305,7 @@ class _Builder:
         after: Iterable[GripperEvent] = (),
         closed_chain: tuple[str, str] | None = None,
         keep_distance: tuple[str, str] | None = None,
+        near: Iterable[tuple[str, str]] = (),
         facts: Mapping[str, Any] | None = None,
         annotations: Iterable[Annotation] = (),
     ) -> None:
@@ -301,6 +317,7 @@ class _Builder:
             after=tuple(after),
             closed_chain=closed_chain,
             keep_distance=keep_distance,
+            near=tuple(near),
             facts=MappingProxyType(dict(facts or {})),
             annotations=tuple(annotations),
         )
@@ -390,6 +407,7 @@ def _pick_geometry(
     c_arm: str,
     f_arm: str,
     lean: float,
+    flip: bool = False,
 ) -> _PickGeometry:
     cable = world.cable(name)
     up = cg.platform_up(world, conn_ref)
@@ -410,6 +428,11 @@ def _pick_geometry(
     # relative to the connector until it lets go of it).
     T_c = cg.tcp_frame(K_a[:3, 3] + (half_a + reach_a) * x_a, -x_a, up, x_a, lean)
     T_f = cg.tcp_frame(K_b[:3, 3] + (half_b + hand_f.x_offset) * x_b, x_b, up, x_b, lean)
+    if flip:
+        # the same grasp with the far hand turned half a turn about its tool axis (the gripper
+        # is symmetric and that hand holds only the cable): its wrist on the other side, where
+        # the arms may not meet; it turns back with the turn along the cable
+        T_f = T_f @ g.transform(g.axis_angle_to_matrix(np.array([0.0, 0.0, 1.0]), math.pi))
     T_c_up = cg.lifted(T_c, up, cg.RETRACT_HEIGHT)
     T_f_up = cg.lifted(T_f, up, cg.RETRACT_HEIGHT)
     chord = cg.horizontal(T_f_up[:3, 3] - T_c_up[:3, 3], up)
@@ -481,10 +504,13 @@ def _emit_pick(
         [_transit(a, above[a]) for a in arms],
         before=[GripperEvent(a, OPEN) for a in arms],
     )
+    # each hand's fingers go down beside the comb they grasp in
+    combs = tuple((a, _element_of(ref)) for a, ref in zip(arms, step.from_, strict=True))
     b.add(
         f"{label}: approach and grasp",
         [_cartesian(a, cg.line(above[a], geo.grasp[a])) for a in arms],
         after=[GripperEvent(a, GRASP, name) for a in arms],
+        near=combs,
         facts={
             "cable": name,
             "grasps": {
@@ -500,6 +526,7 @@ def _emit_pick(
         f"{label}: retract",
         [_cartesian(a, cg.line(geo.grasp[a], geo.retracted[a])) for a in arms],
         closed_chain=(c_arm, f_arm),
+        near=combs,
     )
     b.add(f"{label}: turn along the cable", [_cartesian(a, geo.faced[a]) for a in arms])
     b.add(f"{label}: down", [_cartesian(f_arm, geo.lower)], keep_distance=(c_arm, f_arm))
@@ -668,6 +695,7 @@ def _emit_place(
         after=[GripperEvent(c_arm, OPEN)],
         closed_chain=pair,
         keep_distance=pair,
+        near=[(c_arm, _element_of(step.guide))],  # the fingers either side of the guide
         annotations=[Anchor(name, _point(geo.slot), step.guide)],
         facts={
             "guide": step.guide,
@@ -681,6 +709,7 @@ def _emit_place(
     b.add(
         f"{label}: retract",
         [_cartesian(c_arm, geo.retract)],
+        near=[(c_arm, _element_of(step.guide))],
         facts={"pull_distance": geo.pull_distance},
     )
     s = b.state.hold(f_arm, name, geo.s_other)
@@ -850,7 +879,7 @@ def guide_ways(world: World, state: CableState, guide: str, r_arm: str) -> Itera
         )
     ranked: list[tuple[float, int, GuideWay]] = []
     first_blocked: list[str] = []
-    for gap in cg.APPROACH_GAPS:
+    for gap in (*cg.APPROACH_GAPS, *_centred_gap(world, guide, b0)):
         b = _basics(world, state, guide, r_arm, gap)
         start = b.theta_min + cg.THETA_MARGIN
         n = int((cg.THETA_MAX - start) / cg.THETA_STEP + 1e-9) + 1 if start <= cg.THETA_MAX else 0
@@ -878,6 +907,26 @@ def guide_ways(world: World, state: CableState, guide: str, r_arm: str) -> Itera
             "narrower fingers"
         )
     yield from (way for _, _, way in sorted(ranked, key=lambda r: (r[0], r[1])))
+
+
+def _centred_gap(world: World, guide: str, b: _Basics) -> tuple[float, ...]:
+    """A, for the routing hand to insert centred between the guide and the element standing
+    next after it along the cable (its fingers then as far as they can be from both); none
+    when no element stands within the steps' largest A plus the hand's thickness, or when the
+    gap is too short for the hand."""
+    far = b.slot + b.dims.length / 2.0 * b.axis
+    # what stands up to the fingers going down to the slot, not the plates
+    height = float(b.slot @ b.up) - b.dims.height / 2.0
+    elements = [f for f in cg.footprints(world, guide, b.up) if f.top > height]
+    across = b.hand.width / 2.0 * np.cross(b.up, b.axis)
+    reach = 2.0 * (max(cg.APPROACH_GAPS) + b.hand.half_length)
+    for k in range(1, int(reach / CENTRING_STEP) + 1):
+        p = far + k * CENTRING_STEP * b.axis
+        if any(f.distance(p - across, p + across, b.up) <= 0.0 for f in elements):
+            gap = k * CENTRING_STEP / 2.0 - b.hand.half_length
+            near = min(cg.APPROACH_GAPS, key=lambda a: abs(a - gap))
+            return (gap,) if gap > 0.0 and abs(near - gap) > CENTRING_STEP else ()
+    return ()
 
 
 def _guide_plan(
@@ -1047,6 +1096,7 @@ def _emit_guide(
         f"{label}: slide R_cable",
         [_cartesian(r_arm, gp.slide)],
         after=[GripperEvent(r_arm, GRASP, cable)],
+        near=[(r_arm, _element_of(gp.guide))],  # the slide ends A before the guide
         facts={
             "guide": gp.guide,
             "R_lift": gp.r_lift,
@@ -1078,6 +1128,7 @@ def _emit_guide(
         f"{label}: insert",
         [_cartesian(r_arm, gp.insert)],
         keep_distance=pair,
+        near=[(r_arm, _element_of(gp.guide))],  # the fingers take the cable down by the slot
         annotations=[Anchor(cable, _point(gp.slot), gp.guide)],
         facts={
             "guide": gp.guide,
@@ -1093,6 +1144,11 @@ def _emit_guide(
 
 
 # =========================================================================== checks and arms
+
+
+def _element_of(ref: str) -> str:
+    """``platform.element`` of a keypoint reference (the scene's object)."""
+    return ".".join(ref.split(".")[:2])
 
 
 def _error(message: str) -> InputError:
@@ -1178,6 +1234,63 @@ def _check_reach(
             raise _error(
                 f"{where}: out of reach of arm '{arm}': the {what} pose at ({x}, {y}, {z}) "
                 "mm has no inverse kinematics solution within its joint limits"
+            )
+
+
+def _base_distance(ctx: PlanningContext, arm: str, ref: str) -> float:
+    """Horizontal distance (m) from ``arm``'s base to the keypoint ``ref``."""
+    d = ctx.world.pose(ref)[:3, 3] - ctx.cell.arms[arm].T_cell_base[:3, 3]
+    return float(np.hypot(d[0], d[1]))
+
+
+def _check_both_free(
+    ctx: PlanningContext, geo: _PickGeometry, c_arm: str, f_arm: str, where: str
+) -> None:
+    """Some pair of the two arms' inverse kinematics solutions over the combs (the pick
+    configuration, where both hands go first) is free of collisions, between the arms and
+    with the cell: else the way is not handed to the compiler."""
+    above = {a: cg.lifted(geo.grasp[a], geo.up, cg.APPROACH_HEIGHT) for a in (c_arm, f_arm)}
+    q = ctx.home.copy()
+    sols = {a: ctx.iks[a].solve_all(T) for a, T in above.items()}
+    nearest = None
+    for q_c in sols[c_arm]:
+        q[ctx.cell.slices[c_arm]] = q_c
+        for q_f in sols[f_arm]:
+            q[ctx.cell.slices[f_arm]] = q_f
+            contact = ctx.checker.check(q)
+            if contact is None:
+                return
+            nearest = nearest or contact
+    raise _error(
+        f"{where}: every inverse kinematics solution of the pick configuration ({c_arm} "
+        f"over {geo.end(c_arm)}, {f_arm} over {geo.end(f_arm)}) is in collision"
+        + (f" ({nearest})" if nearest is not None else "")
+    )
+
+
+def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) -> None:
+    """Both hands' tools keep the cell's clearance from everything but the guide they work
+    at along the way's Cartesian paths (every other pose: the compiler checks them all, with
+    the arms), so a way that cannot is not handed to the compiler."""
+    own = {_element_of(gp.guide)}
+    paths = (
+        (r_arm, "sliding", SLIDE, gp.slide),
+        (r_arm, "pulling", GRASP, gp.pull_path),
+        (r_arm, "lifting", GRASP, gp.lift),
+        (r_arm, "swinging over the slot", GRASP, gp.swing),
+        (r_arm, "inserting", GRASP, gp.insert),
+        (o_arm, "grasping at the pivot", OPEN, cg.line(gp.other_above, gp.pivot)),
+    )
+    for arm, what, mode, poses in paths:
+        sampled = [*poses[::2], poses[-1]]
+        near = ctx.probe.nearest(arm, sampled, mode, own, ctx.clearance)
+        if near is not None:
+            side = "left" if gp.side > 0 else "right"
+            raise _error(
+                f"{gp.where}: {near.tool} would pass {_mm(near.distance)} mm from "
+                f"{near.other} {what} (sliding at theta = {math.degrees(gp.theta):.1f} deg on "
+                f"the {side}, stopping {_mm(gp.a)} mm before the guide); the cell's "
+                f"clearance is {_mm(ctx.clearance)} mm"
             )
 
 

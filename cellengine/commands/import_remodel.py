@@ -65,11 +65,15 @@ DEFAULT_SETUP: dict[str, Any] = {
             "finger_width": 20,
             "finger_thickness": 8,
             "jaw": {"open": 60, "slide": 7, "grasp": 4},
+            # the reference cell's gripper (cells/cable_routing/cell.yaml): the jaw housing
+            # on the flange, then the fingers
+            "shape": [{"name": "body", "box": [50, 90, 110], "pose": {"xyz": [0, 0, 55]}}],
+            "fingers": {"size": [8, 6, 90]},
         }
     },
     "driver": {"kind": "sim"},
-    # the reference cell's, until the cable skills keep the 10 mm default (issue #13): the
-    # imported sample's connector insertion passes 5.9 mm from its guide
+    # until RouteCable keeps 10 mm between guides 40 mm apart (issue #13): the imported
+    # sample's insertion into J3 passes 5.5 mm from J4
     "clearance": 1,
 }
 

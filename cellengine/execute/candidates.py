@@ -2,7 +2,7 @@
 
 The first candidate at every choice is taken and all their segments are compiled in one go
 (:func:`~cellengine.execute.search.add_all`: each transit looks ahead over the whole plan).
-When that fails, the choice that produced the failing step is asked for its next candidate,
+When that fails, the choice that produced the failing segment is asked for its next candidate,
 then the choices before it; what is compiled before that choice is kept (the compiler is
 restored to where that choice's segments began) and compiling goes on with the new
 candidates. A family that cannot plan a choice at all (its generator raises) sends the search
@@ -18,7 +18,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from cellengine.errors import InputError, StepError
+from cellengine.errors import InputError
 from cellengine.execute.search import add_all
 from cellengine.program import Segment
 
@@ -49,16 +49,17 @@ def compile_candidates(
     pending: Iterator[Candidate] | None = first
     first_error: InputError | None = None
     for _ in range(MAX_TRIES + 1):
+        current = [len(chosen) - 1]  # the choice of the segment being compiled
         try:
             _grow(chosen, pending)
-            _compile_from(compiler, chosen, start, marks, before_each)
+            _compile_from(compiler, chosen, start, marks, before_each, current)
             return [c.taken for c in chosen]
         except _Grown as e:  # the choice after the last one taken offered nothing
             first_error = first_error or e.error
             failed = len(chosen)
         except InputError as e:
             first_error = first_error or e
-            failed = _owner(chosen, e)
+            failed = current[0]
         k = _next_candidate(chosen, failed)
         if k is None:
             break
@@ -99,33 +100,30 @@ def _compile_from(
     start: int,
     marks: dict[int, Mark],
     before_each: Callable[[Segment], None] | None,
+    current: list[int],
 ) -> None:
-    """Compile the segments of choices ``start`` on, marking where each choice begins."""
+    """Compile the segments of choices ``start`` on, marking where each choice begins;
+    ``current[0]``: the choice whose segment is being compiled (the one a failure blames:
+    the guides of one RouteCable are choices of one step)."""
     segments: list[Segment] = []
     begins: dict[int, int] = {}  # id of a choice's first segment -> the choice
+    owner: dict[int, int] = {}  # id of any segment -> its choice
     for k in range(start, len(chosen)):
         if chosen[k].taken.segments:
             begins[id(chosen[k].taken.segments[0])] = k
+        owner.update((id(s), k) for s in chosen[k].taken.segments)
         segments += chosen[k].taken.segments
 
     def before(segment: Segment) -> None:
         k = begins.get(id(segment))
         if k is not None:
             marks[k] = compiler.mark()
+        current[0] = owner[id(segment)]
         if before_each is not None:
             before_each(segment)
 
+    current[0] = start
     add_all(compiler, segments, before)
-
-
-def _owner(chosen: list[_Choice], error: InputError) -> int:
-    """The latest choice with a segment of the failing step (the last choice when the step
-    is not known)."""
-    step = error.step if isinstance(error, StepError) else None
-    for k in range(len(chosen) - 1, -1, -1):
-        if any(s.step == step for s in chosen[k].taken.segments):
-            return k
-    return len(chosen) - 1
 
 
 def _next_candidate(chosen: list[_Choice], failed: int) -> int | None:

@@ -19,6 +19,7 @@ from cellengine.execute.refused import Refused
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.gate import GateReport, check_cell_trajectory
 from cellengine.motion.robot import CellModel
+from cellengine.motion.scene import Pair
 from cellengine.motion.trajectory import Trajectory
 
 KEEP_DISTANCE_TOLERANCE = 0.001  # m: the fingertips' distance may vary by this much
@@ -26,11 +27,15 @@ KEEP_DISTANCE_DT = 0.005  # s between the samples where it is measured
 
 
 def gate(
-    traj: Trajectory, cell: CellModel, checker: CollisionChecker, clearance: float | None = None
+    traj: Trajectory,
+    cell: CellModel,
+    checker: CollisionChecker,
+    clearance: float | None = None,
+    near: frozenset[Pair] = frozenset(),
 ) -> GateReport:
     """The gate's report; Refused naming every violation when it fails (a clearance
     shortfall as it is: its message is already in plan terms)."""
-    report = check_cell_trajectory(traj, cell, checker, clearance)
+    report = check_cell_trajectory(traj, cell, checker, clearance, near)
     if not report.ok:
         unsafe = [str(v) for v in report.violations if v.kind != "clearance"]
         short = [str(v) for v in report.violations if v.kind == "clearance"]

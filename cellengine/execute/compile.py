@@ -40,7 +40,8 @@ from cellengine.info.cell import DEFAULT_CLEARANCE
 from cellengine.motion.clearance import least
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.gate import SAMPLE_DT, GateReport
-from cellengine.motion.robot import CellModel
+from cellengine.motion.robot import CellModel, tool_parts
+from cellengine.motion.scene import Pair, pair_key
 from cellengine.motion.trajectory import Trajectory, concatenate
 from cellengine.program import CompiledSegment, Program, Segment, TimedEvent
 from cellengine.world import World
@@ -171,12 +172,13 @@ class Compiler:
             choice,
         )
         merge = self._merge_for(segment)
+        near = self._near(segment)
         pieces: list[Trajectory] = []
         figures: list[tuple[Part, Merged, GateReport, dict[str, float]]] = []
         t, q = t0, self.q
         for part in parts:
             merged = merge_rows(self.cell, q, part.rows, part.coupled, merge)
-            traj, report, starts = self._timed(part, merged, t, q)
+            traj, report, starts = self._timed(part, merged, t, q, near)
             pieces.append(traj)
             figures.append((part, merged, report, starts))
             t, q = traj.end_time, np.array(traj.q[-1])
@@ -194,6 +196,19 @@ class Compiler:
         summary["start_s"] = t0
         summary["duration_s"] = trajectory.end_time - t0
         return CompiledSegment(segment, self.strategy, trajectory, summary)
+
+    def _near(self, segment: Segment) -> frozenset[Pair]:
+        """The scene pairs of the segment's ``near``: the arm's tool parts and the object's
+        shapes (an element of several boxes has ``name``, ``name#2``, ...)."""
+        names = [o.name for o in self.checker.scene.objects]
+        out: set[Pair] = set()
+        for arm, obj in segment.near:
+            shapes = [n for n in names if n == obj or n.startswith(obj + "#")]
+            if not shapes:
+                raise ValueError(f"{segment.label}: near '{obj}', which the scene does not have")
+            parts = tool_parts(self.cell.arms[arm])
+            out |= {pair_key(p, s) for p in parts for s in shapes}
+        return frozenset(out)
 
     def _merge_for(self, segment: Segment) -> Merge:
         """A coupling (closed chain, kept distance) needs one time law for both arms: the
@@ -213,7 +228,7 @@ class Compiler:
             self.events.append(TimedEvent(t, e))
 
     def _timed(
-        self, part: Part, merged: Merged, t: float, q: Vec
+        self, part: Part, merged: Merged, t: float, q: Vec, near: frozenset[Pair]
     ) -> tuple[Trajectory, GateReport, dict[str, float]]:
         """The part's trajectory at its place on the program's time axis, through the gate,
         and each arm's start in it. Async parts of several arms are scheduled; when the gate's
@@ -221,7 +236,7 @@ class Compiler:
         again at the gate's resolution."""
         if self.strategy != "async" or part.solved != "apart" or len(merged.alone) < 2:
             traj = merged.trajectory.shifted(t)
-            return traj, gate(traj, self.cell, self.checker, self.clearance), {}
+            return traj, gate(traj, self.cell, self.checker, self.clearance, near), {}
         refused = Refused("unreachable")
         for dt in (SCHEDULE_DT, SAMPLE_DT):
             # two arms moving on their own keep at least the default apart, even in a cell
@@ -230,7 +245,7 @@ class Compiler:
             starts = schedule(self.cell, q, merged.alone, self.checker, dt=dt, clearance=margin)
             traj = on_one_axis(self.cell, q, merged.alone, starts).shifted(t)
             try:
-                return traj, gate(traj, self.cell, self.checker, self.clearance), starts
+                return traj, gate(traj, self.cell, self.checker, self.clearance, near), starts
             except Refused as e:
                 refused = e
         raise refused
@@ -306,6 +321,7 @@ def _report(
         "min_arm_distance_m": min(distances) if distances else None,
         "clearance": least([r.clearance for _, _, r, _ in figures if r.clearance]).figures(),
         "closest_pair": list(closest.closest_pair or ()) if closest is not None else None,
+        "near": [list(n) for n in segment.near],
         "keep_distance": None
         if kept is None
         else {

@@ -111,26 +111,34 @@ def least(clearances: list[Clearance]) -> Clearance:
     return Clearance(pick("arms"), pick("environment"))
 
 
-def measure(scene: CollisionScene, t: Vec, Q: Vec) -> Clearance:
-    """The clearance of the states Q (n, nq) at times t (the gate's 1 ms samples)."""
-    return _model(scene).measure(np.asarray(t, dtype=float), np.asarray(Q, dtype=float))
+def measure(
+    scene: CollisionScene, t: Vec, Q: Vec, near: frozenset[Pair] = frozenset()
+) -> Clearance:
+    """The clearance of the states Q (n, nq) at times t (the gate's 1 ms samples); ``near``:
+    pairs (object names, :func:`pair_key` order) the motion works closer than the clearance
+    on purpose, left out."""
+    model = _model(scene, near)
+    return model.measure(np.asarray(t, dtype=float), np.asarray(Q, dtype=float))
 
 
-def _model(scene: CollisionScene) -> ClearanceModel:
-    """One model per scene, kept on it (a compile comes back to the same held states again
-    and again)."""
-    model = scene.clearance_model
-    if not isinstance(model, ClearanceModel):
-        model = ClearanceModel(scene)
-        object.__setattr__(scene, "clearance_model", model)
+def _model(scene: CollisionScene, near: frozenset[Pair]) -> ClearanceModel:
+    """One model per scene and pairs left out, kept on the scene (a compile comes back to the
+    same held states again and again)."""
+    models = scene.clearance_model
+    if not isinstance(models, dict):
+        models = {}
+        object.__setattr__(scene, "clearance_model", models)
+    if near not in models:
+        models[near] = ClearanceModel(scene, near)
+    model: ClearanceModel = models[near]
     return model
 
 
 class ClearanceModel:
     """The measured pairs of one scene, one :class:`_Pairs` per kind."""
 
-    def __init__(self, scene: CollisionScene) -> None:
-        pairs, kinds = measured_pairs(scene)
+    def __init__(self, scene: CollisionScene, near: frozenset[Pair] = frozenset()) -> None:
+        pairs, kinds = measured_pairs(scene, near)
         self.kinds = {
             k: _Pairs(scene, [p for p, x in zip(pairs, kinds, strict=True) if x == k])
             for k in KINDS
@@ -215,8 +223,10 @@ class _Pairs:
         return float(pin.computeDistance(self.geometry, self.gdata, p).min_distance)
 
 
-def measured_pairs(scene: CollisionScene) -> tuple[list[tuple[int, int]], list[Kind]]:
-    """The pairs measured (object ids) and the kind of each."""
+def measured_pairs(
+    scene: CollisionScene, near: frozenset[Pair] = frozenset()
+) -> tuple[list[tuple[int, int]], list[Kind]]:
+    """The pairs measured (object ids) and the kind of each; ``near`` left out."""
     pairs: list[tuple[int, int]] = []
     kinds: list[Kind] = []
     for i, j in combinations(range(len(scene.objects)), 2):
@@ -224,6 +234,8 @@ def measured_pairs(scene: CollisionScene) -> tuple[list[tuple[int, int]], list[K
         kind = _kind(a, b)
         why = scene.acm.reason(a.name, b.name)
         if kind is None or (why is not None and why.split(" ")[0] not in MEASURED_REASONS):
+            continue
+        if pair_key(a.name, b.name) in near:
             continue
         pairs.append((i, j))
         kinds.append(kind)

@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 from cellengine.arrays import Vec
 from cellengine.motion.clearance import Clearance, measure
 from cellengine.motion.robot import CellModel, Limits
-from cellengine.motion.scene import CollisionScene
+from cellengine.motion.scene import CollisionScene, Pair
 from cellengine.motion.trajectory import Trajectory
 
 SAMPLE_DT = 0.001  # seconds between checked samples
@@ -192,14 +192,19 @@ class CellChecker(Checker, Protocol):
 
 
 def check_cell_trajectory(
-    traj: Trajectory, cell: CellModel, checker: CellChecker, clearance: float | None = None
+    traj: Trajectory,
+    cell: CellModel,
+    checker: CellChecker,
+    clearance: float | None = None,
+    near: frozenset[Pair] = frozenset(),
 ) -> GateReport:
     """The gate for a whole cell: its joint order and limits, its collision checker, and the
     minimum distance between its two arms (when it has two). Given ``clearance`` (m), the
     trajectory's clearance is measured instead (the arms' distance is then its ``arms``) and a
-    trajectory passing closer than it is refused."""
+    trajectory passing closer than it is refused; ``near``: pairs the motion works closer than
+    that on purpose, not measured."""
     if clearance is not None:
-        return _with_clearance(traj, cell, checker, clearance)
+        return _with_clearance(traj, cell, checker, clearance, near)
     arms = tuple(cell.arms)
     distance: ArmDistance | None = None
     if len(arms) == 2:
@@ -212,10 +217,10 @@ def check_cell_trajectory(
 
 
 def _with_clearance(
-    traj: Trajectory, cell: CellModel, checker: CellChecker, clearance: float
+    traj: Trajectory, cell: CellModel, checker: CellChecker, clearance: float, near: frozenset[Pair]
 ) -> GateReport:
     t, q, violations = _sampled(traj, cell.joint_names, cell.limits, checker, SAMPLE_DT)
-    measured = measure(checker.scene, t, q)
+    measured = measure(checker.scene, t, q, near)
     short = [
         Violation("clearance", c.time, why, c.distance, clearance)
         for c, why in measured.shortfalls(clearance)

@@ -190,8 +190,8 @@ class CollisionScene:
     # arm -> its fingers' opening (m); an arm not named has them at its tool's widest
     jaw: Mapping[str, float] = field(default_factory=dict)
     _ids: Mapping[str, int] = field(init=False, repr=False)
-    # the clearance measurement's pairs, built on first use by motion.clearance (which owns
-    # the type): it lives and goes with the scene
+    # the clearance measurement's pairs, one model per set of pairs left out, built on first
+    # use by motion.clearance (which owns the type): they live and go with the scene
     clearance_model: Any = field(init=False, default=None, repr=False)
 
     def __post_init__(self) -> None:

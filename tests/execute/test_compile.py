@@ -182,7 +182,12 @@ def test_the_gate_stops_a_held_object_in_the_table() -> None:
     low = (0.40, 0.15, 0.002)
     segments = [
         ready(),
-        Segment(1, "down to the table", (ArmPath("left", "cartesian", line(LEFT_READY, low)),)),
+        Segment(
+            1,
+            "down to the table",
+            (ArmPath("left", "cartesian", line(LEFT_READY, low)),),
+            near=(("left", "table"),),  # within the clearance on purpose
+        ),
         Segment(1, "grasp", before=(GripperEvent("left", "grasp", "cable1"),)),
     ]
     with pytest.raises(InputError) as e:

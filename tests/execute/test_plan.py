@@ -10,15 +10,16 @@ import pytest
 
 from cellengine.context import build_context
 from cellengine.execute import STRATEGIES, Compiler, home_configuration, program_trajectory
+from cellengine.execute.candidates import compile_candidates
 from cellengine.execute.checks import KEEP_DISTANCE_TOLERANCE, tcp_distances
 from cellengine.info.load import load_plan
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.gate import check_cell_trajectory
 from cellengine.motion.robot import CellModel, build_cell_model
 from cellengine.motion.scene import build_scene, with_jaw
-from cellengine.program import Program, Segment
+from cellengine.program import Program
 from cellengine.report.replay import jaw_openings
-from cellengine.skills.cable import plan_cable_steps
+from cellengine.skills.cable_family import FAMILY
 from tests.conftest import CELLS
 from tests.execute.scenes import states, tcp
 
@@ -32,23 +33,23 @@ def models() -> tuple[CellModel, CollisionChecker]:
     return cell, CollisionChecker(build_scene(cell, world))
 
 
-def segments(plan: str, steps: int | None = None) -> tuple[list[Segment], object]:
+def compiled(plan: str, strategy: str, steps: int | None = None) -> Program:
+    """The plan's steps (the first ``steps``) through the skills' candidates and the
+    compiler's search, as `cellengine plan` compiles them."""
     loaded = load_plan(PLANS / plan)
     chosen = loaded.plan.steps if steps is None else loaded.plan.steps[:steps]
-    return plan_cable_steps(build_context(loaded.world), chosen)[0], loaded
-
-
-def compiled(plan: str, strategy: str, steps: int | None = None) -> Program:
-    segs, loaded = segments(plan, steps)
     cell, checker = models()
+    ctx = build_context(loaded.world)
     c = Compiler(
-        loaded.world,  # type: ignore[attr-defined]
+        loaded.world,
         cell,
         checker,
         home_configuration(cell),
         strategy,  # type: ignore[arg-type]
+        clearance=ctx.clearance,
     )
-    return c.add_all(segs)
+    compile_candidates(c, FAMILY.plan(ctx, chosen))
+    return c.program()
 
 
 @pytest.mark.parametrize("strategy", STRATEGIES)

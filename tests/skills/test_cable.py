@@ -490,7 +490,8 @@ def test_a_slide_blocked_at_the_published_angle_takes_a_steeper_one() -> None:
     segments, _ = plan_cable_steps(context(world), steps)
     slides = [s for s in segments if "theta" in s.facts]
     assert slides[0].label == "RouteCable routing.guide1: slide R_cable"
-    assert math.degrees(slides[0].facts["theta"]) == pytest.approx(46.3478 + 25.0, abs=1e-4)
+    # 71.3 deg clears their footprints but passes a finger within the cell's 10 mm of one
+    assert math.degrees(slides[0].facts["theta"]) == pytest.approx(46.3478 + 30.0, abs=1e-4)
     assert [round(math.degrees(s.facts["theta"]), 1) for s in slides[1:]] == [46.3, 46.3]
 
 

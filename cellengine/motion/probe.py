@@ -1,0 +1,120 @@
+"""How far an arm's tool would be from the environment with its TCP at a pose: a check a skill
+makes on its candidate poses before anything is planned (no inverse kinematics, no arm links).
+
+The tool's solids are the arm's own (cell.yaml's ``tools.<name>`` shape, mesh or stand-in box),
+the fingers at the jaw mode's opening. Distances come from coal on the exact shapes; a
+bounding-sphere test skips pairs that cannot be within the distance asked about.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Collection, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import coal
+import numpy as np
+
+from cellengine import geometry as g
+from cellengine.arrays import Mat, Vec
+from cellengine.motion.robot import Arm, CellModel, finger_placements
+from cellengine.motion.scene import CollisionScene
+from cellengine.motion.tool import is_tool
+
+
+@dataclass(frozen=True)
+class _Solid:
+    name: str
+    T: Mat  # a tool's solid: in the TCP frame; the environment's: in the cell frame
+    shape: Any
+    centre: Vec  # of its bounding sphere, in its own frame
+    radius: float
+
+
+@dataclass(frozen=True)
+class Nearest:
+    distance: float  # m; negative: overlapping (coal's penetration estimate)
+    tool: str  # the tool's solid, e.g. 'left/tool/finger_left'
+    other: str  # the environment object
+
+
+class ToolProbe:
+    """The environment of a scene (its statics) against the arms' tools at given TCP poses.
+    Holds coal objects: not thread-safe, like the checker."""
+
+    def __init__(self, cell: CellModel, scene: CollisionScene) -> None:
+        self.cell = cell
+        self.statics = [
+            _solid(s.name, np.asarray(s.T_cell_shape, dtype=float), s.shape) for s in scene.statics
+        ]
+        self._tools: dict[tuple[str, float | None], list[_Solid]] = {}
+
+    def nearest(
+        self,
+        arm: str,
+        poses: Sequence[Mat],
+        mode: str | None = None,
+        skip: Collection[str] = (),
+        within: float = math.inf,
+    ) -> Nearest | None:
+        """The closest environment object to ``arm``'s tool over ``poses`` (T_cell_tcp), its
+        fingers at jaw ``mode``'s opening (None: the widest); objects named in ``skip`` (or
+        their parts ``name#k``) left out; only pairs closer than ``within`` (m) are measured,
+        None when none is."""
+        tool = self._tool(arm, mode)
+        best: Nearest | None = None
+        limit = within
+        request, result = coal.DistanceRequest(), coal.DistanceResult()
+        for T_cell_tcp in poses:
+            for s in self.statics:
+                if s.name in skip or s.name.split("#")[0] in skip:
+                    continue
+                c_s = s.T[:3, :3] @ s.centre + s.T[:3, 3]
+                for t in tool:
+                    T = T_cell_tcp @ t.T
+                    c_t = T[:3, :3] @ t.centre + T[:3, 3]
+                    if float(np.linalg.norm(c_t - c_s)) - s.radius - t.radius >= limit:
+                        continue
+                    result.clear()
+                    d = coal.distance(
+                        t.shape, _transform(T), s.shape, _transform(s.T), request, result
+                    )
+                    if d < limit:
+                        limit = float(d)
+                        best = Nearest(float(d), t.name, s.name)
+        return best
+
+    def _tool(self, arm: str, mode: str | None) -> list[_Solid]:
+        a = self.cell.arms[arm]
+        opening = None if a.fingers is None or mode is None else a.fingers.opening(mode)
+        key = (arm, opening)
+        if key not in self._tools:
+            self._tools[key] = _tool_solids(a, opening)
+        return self._tools[key]
+
+
+def _tool_solids(arm: Arm, opening: float | None) -> list[_Solid]:
+    """The tool's solids in the TCP frame; the fingers at ``opening`` (None: as the arm's
+    model holds them, at the widest)."""
+    T_joint_tcp = np.asarray(arm.model.frames[arm.tcp].placement.homogeneous)
+    T_tcp_joint = g.inverse(T_joint_tcp)
+    fingers = finger_placements(arm, opening) if opening is not None else {}
+    out = []
+    for o in arm.collision.geometryObjects:
+        if not is_tool(o.name, arm.name):
+            continue
+        placement = fingers.get(o.name, o.placement)
+        out.append(_solid(o.name, T_tcp_joint @ np.asarray(placement.homogeneous), o.geometry))
+    return out
+
+
+def _solid(name: str, T: Mat, shape: Any) -> _Solid:
+    shape.computeLocalAABB()
+    box = shape.aabb_local
+    lo, hi = np.asarray(box.min_), np.asarray(box.max_)
+    return _Solid(name, T, shape, (lo + hi) / 2.0, float(np.linalg.norm(hi - lo)) / 2.0)
+
+
+def _transform(T: Mat) -> Any:
+    return coal.Transform3s(np.ascontiguousarray(T[:3, :3]), np.ascontiguousarray(T[:3, 3]))
