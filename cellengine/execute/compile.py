@@ -142,6 +142,15 @@ class Compiler:
         self.holding.restore(mark.held, mark.checker)
 
     @property
+    def transit_clearance(self) -> float:
+        """What transits keep between the arms and from the environment (m): the cell's
+        clearance, and at least the default. A cell lowers its clearance so that its skills'
+        moves along guides and combs get past the gate; a transit is a move through free
+        space, with no reason to come closer (as the async schedule's arms moving on their
+        own), and its start and goal lower it where they must (motion.margins)."""
+        return max(self.clearance, DEFAULT_CLEARANCE)
+
+    @property
     def checker(self) -> CollisionChecker:
         """The collision checker of the cell with what the grippers hold now."""
         return self.holding.checker
@@ -169,6 +178,7 @@ class Compiler:
             self.split_threshold,
             accept,
             choice,
+            self.transit_clearance,
         )
         merge = self._merge_for(segment)
         pieces: list[Trajectory] = []

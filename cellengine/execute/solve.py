@@ -31,8 +31,9 @@ from cellengine.motion.cartesian import (
 )
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.ik import arm_ik
+from cellengine.motion.margins import keeping_clearance
 from cellengine.motion.robot import CellModel
-from cellengine.motion.transit import plan_for_arms
+from cellengine.motion.transit import CellChecker, plan_for_arms
 
 Accept = Callable[[Vec], bool]  # a goal configuration -> whether what follows can run from it
 
@@ -51,9 +52,12 @@ def transit(
     q: Vec,
     accept: Accept | None = None,
     choice: int = 0,
+    clearance: float | None = None,
 ) -> Vec:
     """Whole-cell rows from ``q`` to a configuration putting each arm's TCP at its goal pose
-    (4, 4), the arms moving together; the other arms stand.
+    (4, 4), the arms moving together; the other arms stand. ``clearance`` (m): what the arms
+    keep from each other and from the environment on the way (:mod:`~cellengine.motion.margins`;
+    less where the start or the goal is closer); None: only collisions are refused.
 
     Goal configurations are tried in tiers (:func:`_goal_configurations`: every arm on its IK
     branch first), each tier its own query, since a planner given several goals reaches
@@ -86,26 +90,47 @@ def transit(
         order = iter([[every[choice]]])
     reason = ""
     for tier in order:
-        rows, reason = _reach(cell, checker, arms, q, tier)
+        rows, reason = _reach(cell, checker, arms, q, tier, clearance)
         if rows is not None:
             return rows
     raise Refused(f"no collision-free transit for {_names(arms)}: {reason}")
 
 
 def _reach(
-    cell: CellModel, checker: CollisionChecker, arms: Sequence[str], q: Vec, goals: list[Vec]
+    cell: CellModel,
+    checker: CollisionChecker,
+    arms: Sequence[str],
+    q: Vec,
+    goals: list[Vec],
+    clearance: float | None = None,
 ) -> tuple[Vec | None, str]:
     """Rows to one of ``goals`` (nearest first): a straight line when it is free, else
-    planned; or None and why not."""
+    planned; or None and why not. Each keeps ``clearance`` where its ends allow."""
     for goal in goals[:DIRECT_TRIES]:
-        if checker.check_segment(q, goal) is None:
+        if _keeping(checker, clearance, [q, goal]).check_segment(q, goal) is None:
             return _densified(np.vstack([q, goal])), ""
     result = plan_for_arms(
-        cell, checker, arms, q, np.array(goals), seed=PLANNER_SEED, time_limit=PLANNER_TIME
+        cell,
+        _keeping(checker, clearance, [q, *goals]),
+        arms,
+        q,
+        np.array(goals),
+        seed=PLANNER_SEED,
+        time_limit=PLANNER_TIME,
     )
     if result.path is None:
         return None, result.reason
     return _densified(result.path), ""
+
+
+def _keeping(
+    checker: CollisionChecker, clearance: float | None, ends: Sequence[Vec]
+) -> CellChecker:
+    """The checker a transit between ``ends`` keeps ``clearance`` with (one query: its margins
+    are lowered only as far as its own ends need)."""
+    if clearance is None:
+        return checker
+    return keeping_clearance(checker, clearance, np.array(ends))
 
 
 def _looking_ahead(tiers: list[list[Vec]], accept: Accept | None) -> Iterator[list[Vec]]:
