@@ -22,7 +22,7 @@ import numpy as np
 
 from cellengine.arrays import Poses, Vec
 from cellengine.execute.refused import NoMoreChoices, Refused
-from cellengine.execute.retime import fastest
+from cellengine.execute.retime import fastest, thinned
 from cellengine.motion.cartesian import (
     ArmInCell,
     CartesianResult,
@@ -34,6 +34,7 @@ from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.ik import arm_ik
 from cellengine.motion.margins import keeping_clearance
 from cellengine.motion.robot import CellModel
+from cellengine.motion.topp import SplinePath
 from cellengine.motion.transit import CellChecker, plan_for_arms
 
 Accept = Callable[[Vec], bool]  # a goal configuration -> whether what follows can run from it
@@ -49,6 +50,12 @@ DIRECT_TRIES = 4  # nearest goals tried as a straight joint-space line before pl
 # Transit rows are cut into steps of at most this (rad, largest joint) so that the timing
 # spline, which passes through every row, stays on the planner's straight segments.
 TRANSIT_STEP = 0.1
+# ... except at a sharp corner, more so where the timing's thinning drops a short segment's
+# row: there the spline cuts the corner (20 mm on a lab cell's transit). A planned path's
+# rows are cut finer, halving the step down to this, until the spline keeps what the
+# planner kept, checked at states this far apart (L2, rad or m).
+FINEST_STEP = TRANSIT_STEP / 8
+SPLINE_CHECK_STEP = 0.01
 
 
 def transit(
@@ -141,7 +148,10 @@ def _quickest(
             if best is None:
                 break
             continue
-        rows = _densified(result.path)
+        rows = _on_spline(result.path, checker)
+        if rows is None:
+            reason = "the timing spline through the planned path leaves its clearance"
+            continue
         duration = max(fastest(rows[:, cell.slices[a]], cell.arms[a].limits) for a in arms)
         if best is None or duration < best[0]:
             best = (duration, rows)
@@ -219,11 +229,32 @@ def _same_branch(cell: CellModel, arm: str, sols: Vec, q: Vec) -> list[bool]:
     return [ik.branch(sol) == now for sol in sols]
 
 
-def _densified(path: Vec) -> Vec:
-    """The path with rows inserted on each straight segment, at most TRANSIT_STEP apart."""
+def _on_spline(path: Vec, checker: CellChecker) -> Vec | None:
+    """Rows along ``path`` whose timing spline (the C2 spline through the thinned rows, as
+    the timing builds it for one arm or for the arms together) is free for ``checker`` at
+    states SPLINE_CHECK_STEP apart: TRANSIT_STEP apart, halved while it is not, down to
+    FINEST_STEP; None below that. A path whose spline keeps it is as it always was."""
+    step = TRANSIT_STEP
+    while step >= FINEST_STEP:
+        rows = _densified(path, step)
+        if _spline_free(rows, checker):
+            return rows
+        step /= 2
+    return None
+
+
+def _spline_free(rows: Vec, checker: CellChecker) -> bool:
+    spline = SplinePath(thinned(rows))
+    n = int(np.ceil(spline.length / SPLINE_CHECK_STEP)) + 1
+    states, _, _ = spline.derivatives(np.linspace(0.0, spline.length, n))
+    return not any(checker.in_collision(q) for q in states)
+
+
+def _densified(path: Vec, step: float = TRANSIT_STEP) -> Vec:
+    """The path with rows inserted on each straight segment, at most ``step`` apart."""
     rows = [path[:1]]
     for a, b in itertools.pairwise(path):
-        n = max(1, int(np.ceil(np.abs(b - a).max() / TRANSIT_STEP)))
+        n = max(1, int(np.ceil(np.abs(b - a).max() / step)))
         f = np.arange(1, n + 1)[:, None] / n
         rows.append(a + f * (b - a))
     out: Vec = np.vstack(rows)

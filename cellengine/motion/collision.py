@@ -206,15 +206,17 @@ class CollisionChecker:
         self,
         q0: ArrayLike,
         q1: ArrayLike,
-        clearance: float = DEFAULT_CLEARANCE,
+        clearance: float | Vec = DEFAULT_CLEARANCE,
         margins: Vec | None = None,
     ) -> Contact | None:
         """None when every state on the straight joint-space segment q0 -> q1 is free (proved,
         not sampled: see the module's notes); else the first contact found, or the first state
-        found closer than ``clearance``. ``margins`` (m, one per checked pair): each pair must
-        stay its margin apart, proved the same way (the margin added to every check's), and a
-        pair found closer than its margin plus ``clearance`` stops the segment."""
-        if clearance <= 0:
+        found closer than ``clearance`` (m; or one per checked pair). ``margins`` (m, one per
+        checked pair): each pair must stay its margin apart, proved the same way (the margin
+        added to every check's), and a pair found closer than its margin plus its clearance
+        stops the segment."""
+        near = np.broadcast_to(np.asarray(clearance, dtype=float), (self._n_pairs,))
+        if np.any(near <= 0):
             raise ValueError("clearance must be greater than 0")
         qa, qb = self._q(q0), self._q(q1)
         dq = qb - qa
@@ -238,11 +240,11 @@ class CollisionChecker:
             # The flagged pair is closer than its margin: the largest step it allows is its
             # room (distance less the margin to keep) over its motion bound (a hull's distance
             # is a lower bound: also safe).
-            room = self._pair_distance(p, keep[p] + clearance) - keep[p]
-            if room <= clearance:
+            room = self._pair_distance(p, keep[p] + near[p]) - keep[p]
+            if room <= near[p]:
                 return self._contact(p, q, t)
             # below room / motion[p] < h: the pair passes next time (with room for GJK's
-            # tolerance); the step never falls below 0.9 clearance / max(motion): terminates
+            # tolerance); the step never falls below 0.9 min(near) / max(motion): terminates
             h = STEP_SAFETY * room / motion[p]
         return None
 
@@ -281,9 +283,12 @@ class Keeping:
     collision, a segment passing closer is refused. What a transit plans with to keep the
     cell's clearance (:mod:`~cellengine.motion.margins`)."""
 
-    def __init__(self, checker: CollisionChecker, margins: Vec) -> None:
+    def __init__(
+        self, checker: CollisionChecker, margins: Vec, near: float | Vec = DEFAULT_CLEARANCE
+    ) -> None:
         scene = checker.scene
         self.checker, self.margins = checker, np.asarray(margins, dtype=float)
+        self.near = near  # check_segment's clearance: a pair within margin + near stops it
         self._model = scene.cell.model
         self._data = self._model.createData()
         self._within = _Checked(self._model, scene.geometry)
@@ -296,7 +301,7 @@ class Keeping:
         return bool(pin.computeCollisions(self._model, self._data, manager, qa, True))
 
     def check_segment(self, q0: ArrayLike, q1: ArrayLike) -> Contact | None:
-        return self.checker.check_segment(q0, q1, margins=self.margins)
+        return self.checker.check_segment(q0, q1, self.near, self.margins)
 
 
 class _Checked:

@@ -10,10 +10,15 @@ The measured pairs out of each other's reach are not checked at all (they cannot
 their reach spheres may be a few millimetres apart: the checker here checks them too
 (:func:`~cellengine.motion.scene.checking_too`).
 
+The segment check refuses a pair it finds closer than its margin plus a resolution (and its
+steps never fall below that resolution over the pair's motion bound): 0.1 mm over the margin
+for the measured pairs (a path 10.1 mm from a vial keeps a 10 mm clearance), the default
+1 mm for the others, whose check stays what it was.
+
 Where a transit starts or ends closer than the clearance to something (a hand leaving a grasp
 at a comb), no path could keep it: that pair's margin is lowered, for that transit only, to what
-its ends allow, less the segment check's resolution (a segment is refused at a pair closer than
-its margin plus that) and a little room.
+its ends allow, less the resolution (the end itself must pass the segment check) and as much
+again.
 """
 
 from __future__ import annotations
@@ -25,7 +30,7 @@ from cellengine.motion.clearance import measured_pairs
 from cellengine.motion.collision import DEFAULT_CLEARANCE, CollisionChecker, Keeping
 from cellengine.motion.scene import CollisionScene, checking_too
 
-RESOLUTION = DEFAULT_CLEARANCE  # m: check_segment's, refusing a pair within margin + this
+RESOLUTION = 1e-4  # m: the segment check refuses a measured pair within margin + this
 ROOM = 1e-4  # m: below an end's distance besides the resolution, so the end itself passes
 
 
@@ -40,7 +45,7 @@ def keeping_clearance(checker: CollisionChecker, clearance: float, ends: ArrayLi
     for q in np.atleast_2d(np.asarray(ends, dtype=float)):
         for p, d in wide.closer_than(q, limits).items():
             margins[p] = min(margins[p], max(0.0, d - RESOLUTION - ROOM))
-    return Keeping(wide, margins)
+    return Keeping(wide, margins, np.where(measured, RESOLUTION, DEFAULT_CLEARANCE))
 
 
 def _margin_checker(scene: CollisionScene) -> tuple[CollisionChecker, NDArray[np.bool_]]:
