@@ -207,8 +207,15 @@ class Compiler:
 
     def _merge_for(self, segment: Segment) -> Merge:
         """A coupling (closed chain, kept distance) needs one time law for both arms: the
-        published merge, which retimes one arm point by point, would break it."""
+        published merge, which retimes one arm point by point, would break it. So does a
+        transit of two arms planned as one (all but async): the planner proved the pair free
+        moving together, and a transit keeping only the clearance between them collides when
+        one arm runs ahead of the other."""
         if segment.closed_chain is not None or segment.keep_distance is not None:
+            return "joint"
+        arms = {p.arm for p in segment.paths}
+        both_transit = len(arms) > 1 and all(p.kind == "transit" for p in segment.paths)
+        if both_transit and self.strategy != "async":
             return "joint"
         return self.merge
 
