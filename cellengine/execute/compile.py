@@ -143,6 +143,15 @@ class Compiler:
         self.holding.restore(mark.held, mark.checker)
 
     @property
+    def transit_clearance(self) -> float:
+        """What transits keep between the arms and from the environment (m): the cell's
+        clearance, and at least the default. A cell lowers its clearance so that its skills'
+        moves along guides and combs get past the gate; a transit is a move through free
+        space, with no reason to come closer (as the async schedule's arms moving on their
+        own), and its start and goal lower it where they must (motion.margins)."""
+        return max(self.clearance, DEFAULT_CLEARANCE)
+
+    @property
     def checker(self) -> CollisionChecker:
         """The collision checker of the cell with what the grippers hold now."""
         return self.holding.checker
@@ -170,6 +179,7 @@ class Compiler:
             self.split_threshold,
             accept,
             choice,
+            self.transit_clearance,
         )
         merge = self._merge_for(segment)
         near = self._near(segment)
@@ -212,8 +222,15 @@ class Compiler:
 
     def _merge_for(self, segment: Segment) -> Merge:
         """A coupling (closed chain, kept distance) needs one time law for both arms: the
-        published merge, which retimes one arm point by point, would break it."""
+        published merge, which retimes one arm point by point, would break it. So does a
+        transit of two arms planned as one (all but async): the planner proved the pair free
+        moving together, and a transit keeping only the clearance between them collides when
+        one arm runs ahead of the other."""
         if segment.closed_chain is not None or segment.keep_distance is not None:
+            return "joint"
+        arms = {p.arm for p in segment.paths}
+        both_transit = len(arms) > 1 and all(p.kind == "transit" for p in segment.paths)
+        if both_transit and self.strategy != "async":
             return "joint"
         return self.merge
 

@@ -22,6 +22,7 @@ import numpy as np
 
 from cellengine.arrays import Poses, Vec
 from cellengine.execute.refused import NoMoreChoices, Refused
+from cellengine.execute.retime import fastest, thinned
 from cellengine.motion.cartesian import (
     ArmInCell,
     CartesianResult,
@@ -31,17 +32,30 @@ from cellengine.motion.cartesian import (
 )
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.ik import arm_ik
+from cellengine.motion.margins import keeping_clearance
 from cellengine.motion.robot import CellModel
-from cellengine.motion.transit import plan_for_arms
+from cellengine.motion.topp import SplinePath
+from cellengine.motion.transit import CellChecker, plan_for_arms
 
 Accept = Callable[[Vec], bool]  # a goal configuration -> whether what follows can run from it
 
 PLANNER_SEED = 0  # OMPL is re-seeded per query: the same segment gives the same path
-PLANNER_TIME = 1.0  # s per transit query (one per tier of goals)
+PLANNER_TIME = 1.0  # s per transit query
+# Queries per tier of goals (seeds PLANNER_SEED, PLANNER_SEED + 1, ...), the quickest path
+# kept: RRTConnect returns the first path it connects, and the simplifier only shortens it
+# where it is (in joint-space length, not time). On the cable cell's pick configuration,
+# ten seeds give paths of 2.3 to 6.6 s: one query leaves the cycle time to chance.
+PLANNER_RUNS = 4
 DIRECT_TRIES = 4  # nearest goals tried as a straight joint-space line before planning
 # Transit rows are cut into steps of at most this (rad, largest joint) so that the timing
 # spline, which passes through every row, stays on the planner's straight segments.
 TRANSIT_STEP = 0.1
+# ... except at a sharp corner, more so where the timing's thinning drops a short segment's
+# row: there the spline cuts the corner (20 mm on a lab cell's transit). A planned path's
+# rows are cut finer, halving the step down to this, until the spline keeps what the
+# planner kept, checked at states this far apart (L2, rad or m).
+FINEST_STEP = TRANSIT_STEP / 8
+SPLINE_CHECK_STEP = 0.01
 
 
 def transit(
@@ -51,9 +65,12 @@ def transit(
     q: Vec,
     accept: Accept | None = None,
     choice: int = 0,
+    clearance: float | None = None,
 ) -> Vec:
     """Whole-cell rows from ``q`` to a configuration putting each arm's TCP at its goal pose
-    (4, 4), the arms moving together; the other arms stand.
+    (4, 4), the arms moving together; the other arms stand. ``clearance`` (m): what the arms
+    keep from each other and from the environment on the way (:mod:`~cellengine.motion.margins`;
+    less where the start or the goal is closer); None: only collisions are refused.
 
     Goal configurations are tried in tiers (:func:`_goal_configurations`: every arm on its IK
     branch first), each tier its own query, since a planner given several goals reaches
@@ -86,26 +103,69 @@ def transit(
         order = iter([[every[choice]]])
     reason = ""
     for tier in order:
-        rows, reason = _reach(cell, checker, arms, q, tier)
+        rows, reason = _reach(cell, checker, arms, q, tier, clearance)
         if rows is not None:
             return rows
     raise Refused(f"no collision-free transit for {_names(arms)}: {reason}")
 
 
 def _reach(
-    cell: CellModel, checker: CollisionChecker, arms: Sequence[str], q: Vec, goals: list[Vec]
+    cell: CellModel,
+    checker: CollisionChecker,
+    arms: Sequence[str],
+    q: Vec,
+    goals: list[Vec],
+    clearance: float | None = None,
 ) -> tuple[Vec | None, str]:
     """Rows to one of ``goals`` (nearest first): a straight line when it is free, else
-    planned; or None and why not."""
+    planned; or None and why not. Each keeps ``clearance`` where its ends allow."""
     for goal in goals[:DIRECT_TRIES]:
-        if checker.check_segment(q, goal) is None:
+        if _keeping(checker, clearance, [q, goal]).check_segment(q, goal) is None:
             return _densified(np.vstack([q, goal])), ""
-    result = plan_for_arms(
-        cell, checker, arms, q, np.array(goals), seed=PLANNER_SEED, time_limit=PLANNER_TIME
-    )
-    if result.path is None:
-        return None, result.reason
-    return _densified(result.path), ""
+    return _quickest(cell, _keeping(checker, clearance, [q, *goals]), arms, q, goals)
+
+
+def _quickest(
+    cell: CellModel, checker: CellChecker, arms: Sequence[str], q: Vec, goals: list[Vec]
+) -> tuple[Vec | None, str]:
+    """Rows of the quickest of PLANNER_RUNS planned paths (time-optimal duration; the first
+    seed's on a tie), or None and why not. A first query that fails ends it: the others
+    would only spend their time limits finding the same."""
+    best: tuple[float, Vec] | None = None
+    reason = ""
+    for run in range(PLANNER_RUNS):
+        result = plan_for_arms(
+            cell,
+            checker,
+            arms,
+            q,
+            np.array(goals),
+            seed=PLANNER_SEED + run,
+            time_limit=PLANNER_TIME,
+        )
+        if result.path is None:
+            reason = result.reason
+            if best is None:
+                break
+            continue
+        rows = _on_spline(result.path, checker)
+        if rows is None:
+            reason = "the timing spline through the planned path leaves its clearance"
+            continue
+        duration = max(fastest(rows[:, cell.slices[a]], cell.arms[a].limits) for a in arms)
+        if best is None or duration < best[0]:
+            best = (duration, rows)
+    return (None, reason) if best is None else (best[1], "")
+
+
+def _keeping(
+    checker: CollisionChecker, clearance: float | None, ends: Sequence[Vec]
+) -> CellChecker:
+    """The checker a transit between ``ends`` keeps ``clearance`` with (one query: its margins
+    are lowered only as far as its own ends need)."""
+    if clearance is None:
+        return checker
+    return keeping_clearance(checker, clearance, np.array(ends))
 
 
 def _looking_ahead(tiers: list[list[Vec]], accept: Accept | None) -> Iterator[list[Vec]]:
@@ -169,11 +229,32 @@ def _same_branch(cell: CellModel, arm: str, sols: Vec, q: Vec) -> list[bool]:
     return [ik.branch(sol) == now for sol in sols]
 
 
-def _densified(path: Vec) -> Vec:
-    """The path with rows inserted on each straight segment, at most TRANSIT_STEP apart."""
+def _on_spline(path: Vec, checker: CellChecker) -> Vec | None:
+    """Rows along ``path`` whose timing spline (the C2 spline through the thinned rows, as
+    the timing builds it for one arm or for the arms together) is free for ``checker`` at
+    states SPLINE_CHECK_STEP apart: TRANSIT_STEP apart, halved while it is not, down to
+    FINEST_STEP; None below that. A path whose spline keeps it is as it always was."""
+    step = TRANSIT_STEP
+    while step >= FINEST_STEP:
+        rows = _densified(path, step)
+        if _spline_free(rows, checker):
+            return rows
+        step /= 2
+    return None
+
+
+def _spline_free(rows: Vec, checker: CellChecker) -> bool:
+    spline = SplinePath(thinned(rows))
+    n = int(np.ceil(spline.length / SPLINE_CHECK_STEP)) + 1
+    states, _, _ = spline.derivatives(np.linspace(0.0, spline.length, n))
+    return not any(checker.in_collision(q) for q in states)
+
+
+def _densified(path: Vec, step: float = TRANSIT_STEP) -> Vec:
+    """The path with rows inserted on each straight segment, at most ``step`` apart."""
     rows = [path[:1]]
     for a, b in itertools.pairwise(path):
-        n = max(1, int(np.ceil(np.abs(b - a).max() / TRANSIT_STEP)))
+        n = max(1, int(np.ceil(np.abs(b - a).max() / step)))
         f = np.arange(1, n + 1)[:, None] / n
         rows.append(a + f * (b - a))
     out: Vec = np.vstack(rows)

@@ -76,11 +76,12 @@ def solve_segment(
     threshold: float = SPLIT_THRESHOLD,
     accept: Accept | None = None,
     choice: int = 0,
+    clearance: float | None = None,
 ) -> list[Part]:
     """The parts of ``segment`` from the cell configuration ``q``. ``accept``: whether the
     segments after this one can run from a configuration: a transit prefers goals it accepts.
     ``choice``: which goal configuration a transit takes (0: the first that works; see
-    solve.transit)."""
+    solve.transit). ``clearance``: what transits keep (m; None: only collisions refused)."""
     paths = _by_arm(cell, segment)
     if not paths:
         return [Part(q, {}, None, {}, "still")]
@@ -88,11 +89,22 @@ def solve_segment(
     if segment.closed_chain is not None:
         return [_closed_chain(cell, checker, segment.closed_chain, paths, q)]
     if len(paths) == 1:
-        return [_apart(cell, checker, paths, q, "one_arm", accept=accept, choice=choice)]
+        return [
+            _apart(
+                cell,
+                checker,
+                paths,
+                q,
+                "one_arm",
+                accept=accept,
+                choice=choice,
+                clearance=clearance,
+            )
+        ]
     coupled = segment.keep_distance is not None
     if kinds == {"transit"} and strategy != "async":
         goals = {a: p.poses[-1] for a, p in paths.items()}
-        rows = solve.transit(cell, checker, goals, q, accept, choice)
+        rows = solve.transit(cell, checker, goals, q, accept, choice, clearance)
         return [_coupled_part(cell, q, rows, {}, tuple(paths))]
     if kinds == {"cartesian"} and (strategy == "sync" or coupled):
         return [_cartesian_together(cell, checker, paths, q)]
@@ -101,7 +113,17 @@ def solve_segment(
     # async: each arm against those before it standing where they end (see _apart)
     async_ = strategy == "async"
     return [
-        _apart(cell, checker, paths, q, "apart", prioritised=async_, accept=accept, choice=choice)
+        _apart(
+            cell,
+            checker,
+            paths,
+            q,
+            "apart",
+            prioritised=async_,
+            accept=accept,
+            choice=choice,
+            clearance=clearance,
+        )
     ]
 
 
@@ -164,6 +186,7 @@ def _apart(
     prioritised: bool = False,
     accept: Accept | None = None,
     choice: int = 0,
+    clearance: float | None = None,
 ) -> Part:
     """Each arm on its own from ``q``, the other arms standing there (the published way).
 
@@ -176,7 +199,9 @@ def _apart(
     here = q.copy()
     for arm, p in paths.items():
         if p.kind == "transit":
-            found = solve.transit(cell, checker, {arm: p.poses[-1]}, here, accept, choice)
+            found = solve.transit(
+                cell, checker, {arm: p.poses[-1]}, here, accept, choice, clearance
+            )
             rows[arm] = found[:, cell.slices[arm]]
         else:
             rows[arm], fraction[arm] = solve.cartesian(cell, checker, arm, p.poses, here)

@@ -138,6 +138,26 @@ class CollisionChecker:
             return float(gdata.distanceResults[k].min_distance), scene.pair_names(k)
         return self._refined_distance(gdata, mask)
 
+    def closer_than(self, q: ArrayLike, limits: Vec) -> dict[int, float]:
+        """The checked pairs closer than their limit (m, one per pair) at q, each with its
+        distance (a mesh element's exact one): convex bounds for every pair in one call, then
+        the meshes whose bound is under their limit."""
+        qa = self._q(q)
+        scene = self._scene
+        gdata, _ = self._selection(None)
+        pin.computeDistances(self._model, self._data, scene.bounds, gdata, qa)
+        bounds = np.fromiter(
+            (r.min_distance for r in gdata.distanceResults), dtype=float, count=self._n_pairs
+        )
+        exact = self._exact
+        pin.updateGeometryPlacements(self._model, self._data, scene.geometry, exact.data)
+        out = {}
+        for p in map(int, np.flatnonzero(bounds < limits)):
+            d = float(bounds[p]) if scene.exact_bounds[p] else exact.distance(p)
+            if d < limits[p]:
+                out[p] = d
+        return out
+
     def _selection(self, between: tuple[str, str] | None) -> tuple[Any, NDArray[np.bool_]]:
         """A GeometryData on the bounds model with only the selected pairs active (pinocchio
         skips inactive pairs), and the selection as a mask; made once per selection."""
@@ -183,22 +203,31 @@ class CollisionChecker:
     # ------------------------------------------------------------------------------ segments
 
     def check_segment(
-        self, q0: ArrayLike, q1: ArrayLike, clearance: float = DEFAULT_CLEARANCE
+        self,
+        q0: ArrayLike,
+        q1: ArrayLike,
+        clearance: float | Vec = DEFAULT_CLEARANCE,
+        margins: Vec | None = None,
     ) -> Contact | None:
         """None when every state on the straight joint-space segment q0 -> q1 is free (proved,
         not sampled: see the module's notes); else the first contact found, or the first state
-        found closer than ``clearance``."""
-        if clearance <= 0:
+        found closer than ``clearance`` (m; or one per checked pair). ``margins`` (m, one per
+        checked pair): each pair must stay its margin apart, proved the same way (the margin
+        added to every check's), and a pair found closer than its margin plus its clearance
+        stops the segment."""
+        near = np.broadcast_to(np.asarray(clearance, dtype=float), (self._n_pairs,))
+        if np.any(near <= 0):
             raise ValueError("clearance must be greater than 0")
         qa, qb = self._q(q0), self._q(q1)
         dq = qb - qa
         motion = self._scene.motion @ np.abs(dq)  # (P,) m over the whole segment
+        keep = np.zeros(self._n_pairs) if margins is None else np.asarray(margins, dtype=float)
         inflated = self._inflated
         t, h = 0.0, 1.0
         while t < 1.0:
             h = min(h, 1.0 - t)
             q = qa + t * dq
-            inflated.set_margins(motion * h)
+            inflated.set_margins(keep + motion * h)
             p = inflated.first_hit(self._model, self._data, q)
             if p is None:
                 t += h
@@ -209,13 +238,14 @@ class CollisionChecker:
                 if start is not None:
                     return self._contact(start, qa, 0.0)
             # The flagged pair is closer than its margin: the largest step it allows is its
-            # distance over its motion bound (a hull's distance is a lower bound: also safe).
-            d = self._pair_distance(p, clearance)
-            if d <= clearance:
+            # room (distance less the margin to keep) over its motion bound (a hull's distance
+            # is a lower bound: also safe).
+            room = self._pair_distance(p, keep[p] + near[p]) - keep[p]
+            if room <= near[p]:
                 return self._contact(p, q, t)
-            # below d / motion[p] < h: the pair passes next time (with room for GJK's
-            # tolerance); the step never falls below 0.9 clearance / max(motion): terminates
-            h = STEP_SAFETY * d / motion[p]
+            # below room / motion[p] < h: the pair passes next time (with room for GJK's
+            # tolerance); the step never falls below 0.9 min(near) / max(motion): terminates
+            h = STEP_SAFETY * room / motion[p]
         return None
 
     def _pair_distance(self, p: int, clearance: float) -> float:
@@ -245,6 +275,33 @@ class CollisionChecker:
         if qa.shape != (self._nq,):
             raise ValueError(f"q has shape {qa.shape}, expected ({self._nq},)")
         return qa
+
+
+class Keeping:
+    """A checker's states and segments with each checked pair kept its margin apart (m, one per
+    pair; 0: touching is the only failure): a state with a pair closer than its margin is in
+    collision, a segment passing closer is refused. What a transit plans with to keep the
+    cell's clearance (:mod:`~cellengine.motion.margins`)."""
+
+    def __init__(
+        self, checker: CollisionChecker, margins: Vec, near: float | Vec = DEFAULT_CLEARANCE
+    ) -> None:
+        scene = checker.scene
+        self.checker, self.margins = checker, np.asarray(margins, dtype=float)
+        self.near = near  # check_segment's clearance: a pair within margin + near stops it
+        self._model = scene.cell.model
+        self._data = self._model.createData()
+        self._within = _Checked(self._model, scene.geometry)
+        self._within.set_margins(self.margins)
+
+    def in_collision(self, q: ArrayLike) -> bool:
+        """True when any checked pair is closer than its margin at q."""
+        manager = self._within.manager
+        qa = np.asarray(q, dtype=float)
+        return bool(pin.computeCollisions(self._model, self._data, manager, qa, True))
+
+    def check_segment(self, q0: ArrayLike, q1: ArrayLike) -> Contact | None:
+        return self.checker.check_segment(q0, q1, self.near, self.margins)
 
 
 class _Checked:

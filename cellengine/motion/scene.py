@@ -193,6 +193,8 @@ class CollisionScene:
     # the clearance measurement's pairs, one model per set of pairs left out, built on first
     # use by motion.clearance (which owns the type): they live and go with the scene
     clearance_model: Any = field(init=False, default=None, repr=False)
+    # the checker transits keep the clearance with, built on first use by motion.margins
+    margin_checker: Any = field(init=False, default=None, repr=False)
 
     def __post_init__(self) -> None:
         ids = MappingProxyType({o.name: i for i, o in enumerate(self.objects)})
@@ -337,6 +339,41 @@ def assemble(
         fixed_reasons=MappingProxyType(dict(fixed_reasons)),
         notes=notes,
         jaw=MappingProxyType(jaw),
+    )
+
+
+def checking_too(scene: CollisionScene, extra: Iterable[tuple[int, int]]) -> CollisionScene:
+    """The scene with the pairs ``extra`` (object ids, lower first) checked as well, after its
+    own: pairs the ACM leaves out because they cannot touch (``out_of_reach``) may still come
+    closer than a margin a checker is asked to keep. The ACM is the scene's (it says why they
+    cannot touch)."""
+    own = set(scene.pairs)
+    added = [(i, j) for i, j in extra if (i, j) not in own]
+    pairs = [*scene.pairs, *added]
+    geometry, bounds = scene.geometry.copy(), scene.bounds.copy()
+    for gm in (geometry, bounds):
+        for i, j in added:
+            gm.addCollisionPair(pin.CollisionPair(i, j))
+    exact = {s.name: s.exact for s in scene.statics}
+    exact_added = [
+        exact.get(scene.objects[i].name, True) and exact.get(scene.objects[j].name, True)
+        for i, j in added
+    ]
+    radii, chains = _motion_radii(scene.cell.model, geometry, scene.objects)
+    return CollisionScene(
+        cell=scene.cell,
+        geometry=geometry,
+        bounds=bounds,
+        objects=scene.objects,
+        acm=scene.acm,
+        pairs=tuple(pairs),
+        exact_bounds=np.concatenate([scene.exact_bounds, np.array(exact_added, dtype=bool)]),
+        motion=_pair_motion(radii, chains, pairs, scene.cell.nq),
+        statics=scene.statics,
+        held=scene.held,
+        fixed_reasons=scene.fixed_reasons,
+        notes=scene.notes,
+        jaw=scene.jaw,
     )
 
 

@@ -138,3 +138,20 @@ def test_report_json_carries_each_segments_clearance_and_the_least() -> None:
             "segment": i,
             "label": data["segments"][i]["label"],
         }
+
+
+def test_a_transit_keeps_the_default_clearance_in_a_cell_set_lower() -> None:
+    """The left arm to a pose whose straight line passes 4.7 mm from the right arm: the cell's
+    1 mm would let the line pass; the transit keeps 10 mm (the gate at 10 mm accepts it)."""
+    from tests.motion.test_margins import A, B
+
+    world, cell, checker = cable_cell()
+    goal = cell.arms["left"].fk(np.array(B[:6]))
+    c = Compiler(world, cell, checker, np.array(A), clearance=0.001)
+    assert c.transit_clearance == 0.010
+    transit = Segment(0, "left over", (ArmPath("left", "transit", goal[None]),))
+    seg = c.add(transit)
+    assert seg.report["clearance"]["arms"]["distance_m"] >= 0.010
+    strict = Compiler(world, cell, checker, np.array(A), clearance=0.010)
+    arms = strict.add(transit).report["clearance"]["arms"]  # the gate at 10 mm lets it pass
+    assert arms["distance_m"] == pytest.approx(seg.report["clearance"]["arms"]["distance_m"])
