@@ -130,13 +130,16 @@ def test_arms_solved_apart_reach_the_bound_exactly() -> None:
     assert r["durations_s"]["joint"] == pytest.approx(r["jerk_limited_bound_s"], rel=1e-9)
 
 
-def test_a_12_dof_transit_within_5_percent_of_the_bound() -> None:
+def test_a_12_dof_transit_within_10_percent_of_the_bound() -> None:
+    """The joint merge times a planned 12-DOF transit close to its jerk-limited bound: 8 %
+    over on the quickest of four OMPL paths (2.36 s), which has sharper corners than the one
+    path of a single query (3.35 s, 5 % over)."""
     world, cell, checker = cable_cell()
     c = Compiler(world, cell, checker, home(cell), "split")
     r = c.add(ready()).report
     assert r["solved"] == ["together"]
     assert r["durations_s"]["joint"] <= r["durations_s"]["published"] * (1 + TIMING_SLACK)
-    assert r["durations_s"]["joint"] <= 1.05 * r["jerk_limited_bound_s"]
+    assert r["durations_s"]["joint"] <= 1.10 * r["jerk_limited_bound_s"]
 
 
 def test_a_coupling_is_never_merged_the_published_way() -> None:
