@@ -223,6 +223,9 @@ def test_a_bimanual_carry_plan_is_a_cooperation_of_both_arms(tmp_path: Path) -> 
     objects = folder / "objects.yaml"
     tray = "  tray: {kind: box, size: [60, 100, 80], mass: 200, at: routing.guide1.slot}\n"
     objects.write_text(objects.read_text() + "containers:\n" + tray)
+    # the tray stands among the guides: a hand at its side comes within 10 mm of guide3
+    cell_yaml = folder / "cell.yaml"
+    cell_yaml.write_text(cell_yaml.read_text() + "clearance: 5\n")
     plan = folder / "plan_carry.yaml"
     plan.write_text(
         "cell: cell.yaml\nobjects: objects.yaml\nsteps:\n"

@@ -535,14 +535,16 @@ def test_place_connector_arm_both_is_refused() -> None:
 
 def test_the_connector_goes_to_the_placing_arm_the_plan_names() -> None:
     """PlaceConnector arm: left. The look-ahead gives the left hand the connector end at the
-    pick; the right hand then routes (the guides being in reach of both arms)."""
+    pick: on the reference holder, in front of the right arm, the arms then cross over the
+    combs in every IK solution, and the pick says so for that assignment."""
     world, steps = _world()
     place = steps[1].model_copy(update={"arm": "left"})
-    segments, _ = plan_cable_steps(context(world), (steps[0], place, steps[2]))
-    pick = segments[1].facts["grasps"]
-    assert pick["left"]["end"] == "connector end" and pick["right"]["end"] == "free end"
-    inserts = [s for s in segments if "routing_arm" in s.facts]
-    assert {s.facts["routing_arm"] for s in inserts} == {"right"}
+    with pytest.raises(InputError) as e:
+        plan_cable_steps(context(world), (steps[0], place, steps[2]))
+    assert str(e.value).startswith(
+        "<input>: steps[0] PickCable cable1: every inverse kinematics solution of the pick "
+        "configuration (left over connector end, right over free end) is in collision ("
+    )
 
 
 def test_each_check_names_its_step_when_planned_alone() -> None:
@@ -646,7 +648,13 @@ def test_pick_cable_ways_vary_the_tip_then_the_arm() -> None:
     pick = steps[0]
     assert isinstance(pick, PickCable)
     one = list(pick.ways(context(world), home))
-    assert [s.lean for _, s in one] == list(cg.LEANS)
+    # each tip with the far hand as published, then turned half a turn
+    assert [s.lean for _, s in one] == [lean for lean in cg.LEANS for _ in range(2)]
+    (g0,), (g1,) = (
+        [p.poses[-1] for p in segs[1].paths if p.arm == "left"] for segs, _ in one[:2]
+    )  # the far hand's grasp, as published and turned
+    assert np.allclose(g1[:3, 3], g0[:3, 3], atol=1e-9)
+    assert np.allclose(g1[:3, :3], g0[:3, :3] @ np.diag([-1.0, -1.0, 1.0]), atol=1e-9)
     assert {s.connector_arm for _, s in one} == {"right"}
     both = list(pick.ways(context(world), home, either_arm=True))
     arms = [s.connector_arm for _, s in both]

@@ -260,6 +260,9 @@ def test_two_arms_carry_a_box_as_one_closed_chain(tmp_path: Path) -> None:
     objects = folder / "objects.yaml"
     tray = "  tray: {kind: box, size: [60, 100, 80], mass: 200, at: routing.guide1.slot}\n"
     objects.write_text(objects.read_text() + "containers:\n" + tray)
+    # the tray stands among the guides: a hand at its side comes within 10 mm of guide3
+    cell_yaml = folder / "cell.yaml"
+    cell_yaml.write_text(cell_yaml.read_text() + "clearance: 5\n")
     world = load_world(folder / "cell.yaml", objects)
     ctx = build_context(world)
     model = ctx.cell
