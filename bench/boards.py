@@ -262,6 +262,8 @@ def cell_yaml(board: Board) -> str:
         "tools:\n  cable_gripper:\n    kind: parallel_gripper\n    tcp: {xyz: [0, 0, 200]}\n"
         "    finger_width: 20\n    finger_thickness: 8\n"
         f"    jaw: {{open: 60, slide: {d + 1:.1f}, grasp: {max(1.0, d - 2):.1f}}}\n"
+        "    shape:\n      - {name: body, box: [50, 90, 110], pose: {xyz: [0, 0, 55]}}\n"
+        "    fingers: {size: [8, 6, 90]}\n"
         "# the plates' axes along the cell's (see cells/cable_routing/cell.yaml); routing's\n"
         "# plate coordinates are the cell's\nplatforms:\n"
         "  holder:  {pose: {xyz: [150, -190, 0], rpy: [0, 0, 180]}, cad: holder/holder.x3d,\n"

@@ -207,7 +207,9 @@ class RouteCable(Skill):
         none does."""
         world, guide = ctx.world, self.guides[k]
         r_arm, o_arm = self.arms(ctx, state)
-        first: InputError | None = None
+        # the error to give when no way passes: the way that came closest to keeping the
+        # clearance, else the first way's
+        closest: tuple[float, InputError] | None = None
         found = False
         for way in guide_ways(world, state, guide, r_arm):
             try:
@@ -217,12 +219,18 @@ class RouteCable(Skill):
                 _check_length(world, self.cable, _hand(world, r_arm), gp)
                 _check_clear(ctx, gp, r_arm, o_arm)
             except InputError as e:
-                first = first or e
+                score = e.distance if isinstance(e, _Blocked) else -math.inf
+                if closest is None or score > closest[0]:
+                    closest = (score, e)
                 continue
             found = True
             yield gp
         if not found:
-            raise first or _error(f"steps[{state.step}] RouteCable {guide}: no way to route it")
+            raise (
+                closest[1]
+                if closest is not None
+                else _error(f"steps[{state.step}] RouteCable {guide}: no way to route it")
+            )
 
 
 CableSkill = PickCable | PlaceConnector | RouteCable
@@ -808,6 +816,8 @@ class GuideWay:
     pivot_lean: float = cg.PIVOT_LEAN
     stand_back: float = cg.STAND_BACK  # the other hand, released, backs off this far first
     gap: float = cg.APPROACH_GAP  # A: the routing hand stops this far before the guide
+    # the routing hand's front ends this far past the guide's far face (None: A, as published)
+    gap_after: float | None = None
 
 
 @dataclass(frozen=True)
@@ -823,6 +833,7 @@ class _Basics:
     slot: Vec
     axis: Vec
     ap: Vec  # the approach point, X_offset before the near face: the pivot
+    rise: float  # H: the guide's top over the slot
     r_lift: float
     r_insert: float
     r_cable: float
@@ -836,7 +847,12 @@ class _Basics:
 
 
 def _basics(
-    world: World, state: CableState, guide: str, r_arm: str, gap: float = cg.APPROACH_GAP
+    world: World,
+    state: CableState,
+    guide: str,
+    r_arm: str,
+    gap: float = cg.APPROACH_GAP,
+    gap_after: float | None = None,
 ) -> _Basics:
     where = f"steps[{state.step}] RouteCable {guide}"
     dims = cg.GuideDims.of(world, guide, where)
@@ -850,13 +866,20 @@ def _basics(
     if float(axis @ (slot - last)) < 0.0:
         axis = -axis
     x_off = gap + hand.half_length
-    rl = cg.r_lift(dims.length, dims.height, x_off, cg.Z_OFFSET)
-    ri = cg.r_insert(dims.length, x_off)
+    rise = cg.rise(world, guide, up)
+    rise = dims.height if rise is None else rise
+    rl = cg.r_lift(dims.length, rise, x_off, cg.Z_OFFSET)
+    # R_insert = L + 2 X_offset, as published, when the hand ends as far past the guide as it
+    # stopped before it; else from X_offset before to its own offset past
+    after = x_off if gap_after is None else gap_after + hand.half_length
+    ri = cg.r_insert(dims.length, x_off) + (after - x_off)
     r_cable = max(rl, ri)
     ap = slot - (dims.length / 2.0 + x_off) * axis
     t_min = cg.theta_min(hand.width, dims.width, gap)
     pull = cg.tension_pull(r_cable)
-    return _Basics(where, dims, hand, gap, x_off, up, slot, axis, ap, rl, ri, r_cable, pull, t_min)
+    return _Basics(
+        where, dims, hand, gap, x_off, up, slot, axis, ap, rise, rl, ri, r_cable, pull, t_min
+    )
 
 
 def guide_ways(world: World, state: CableState, guide: str, r_arm: str) -> Iterator[GuideWay]:
@@ -879,8 +902,9 @@ def guide_ways(world: World, state: CableState, guide: str, r_arm: str) -> Itera
         )
     ranked: list[tuple[float, int, GuideWay]] = []
     first_blocked: list[str] = []
-    for gap in (*cg.APPROACH_GAPS, *_centred_gap(world, guide, b0)):
+    for gap in (*cg.APPROACH_GAPS, *_centred_gap(world, guide, b0, after=False)):
         b = _basics(world, state, guide, r_arm, gap)
+        afters = (None, *_centred_gap(world, guide, b, after=True))
         start = b.theta_min + cg.THETA_MARGIN
         n = int((cg.THETA_MAX - start) / cg.THETA_STEP + 1e-9) + 1 if start <= cg.THETA_MAX else 0
         for k in range(n):
@@ -889,12 +913,13 @@ def guide_ways(world: World, state: CableState, guide: str, r_arm: str) -> Itera
             if not first_blocked:
                 first_blocked = blocked
             for rank, side in enumerate(clear):
-                for lean, pivot, back in itertools.product(
-                    cg.LEANS, cg.PIVOT_LEANS, cg.STAND_BACKS
+                for lean, pivot, back, after in itertools.product(
+                    cg.LEANS, cg.PIVOT_LEANS, cg.STAND_BACKS, afters
                 ):
                     cost = (theta - theta0) + 0.05 * rank + abs(back - cg.STAND_BACK)
                     cost += 0.5 * (abs(lean - cg.LEAN) + abs(pivot - cg.PIVOT_LEAN))
-                    way = GuideWay(theta, side, lean, pivot, back, gap)
+                    cost += 0.0 if after is None else abs(after - gap)
+                    way = GuideWay(theta, side, lean, pivot, back, gap, after)
                     ranked.append((cost, len(ranked), way))
     if not ranked:
         raise _error(
@@ -909,19 +934,21 @@ def guide_ways(world: World, state: CableState, guide: str, r_arm: str) -> Itera
     yield from (way for _, _, way in sorted(ranked, key=lambda r: (r[0], r[1])))
 
 
-def _centred_gap(world: World, guide: str, b: _Basics) -> tuple[float, ...]:
-    """A, for the routing hand to insert centred between the guide and the element standing
-    next after it along the cable (its fingers then as far as they can be from both); none
+def _centred_gap(world: World, guide: str, b: _Basics, after: bool) -> tuple[float, ...]:
+    """A, for a hand beside the guide (after it: the routing hand inserting; before it: the
+    pivot, where the routing hand stops) centred between the guide and the element standing
+    next to it along the cable (its fingers then as far as they can be from both); none
     when no element stands within the steps' largest A plus the hand's thickness, or when the
     gap is too short for the hand."""
-    far = b.slot + b.dims.length / 2.0 * b.axis
+    direction = b.axis if after else -b.axis
+    face = b.slot + b.dims.length / 2.0 * direction
     # what stands up to the fingers going down to the slot, not the plates
     height = float(b.slot @ b.up) - b.dims.height / 2.0
     elements = [f for f in cg.footprints(world, guide, b.up) if f.top > height]
     across = b.hand.width / 2.0 * np.cross(b.up, b.axis)
     reach = 2.0 * (max(cg.APPROACH_GAPS) + b.hand.half_length)
     for k in range(1, int(reach / CENTRING_STEP) + 1):
-        p = far + k * CENTRING_STEP * b.axis
+        p = face + k * CENTRING_STEP * direction
         if any(f.distance(p - across, p + across, b.up) <= 0.0 for f in elements):
             gap = k * CENTRING_STEP / 2.0 - b.hand.half_length
             near = min(cg.APPROACH_GAPS, key=lambda a: abs(a - gap))
@@ -938,7 +965,7 @@ def _guide_plan(
     o_arm: str,
     way: GuideWay,
 ) -> GuidePlan:
-    b = _basics(world, state, guide, r_arm, way.gap)
+    b = _basics(world, state, guide, r_arm, way.gap, way.gap_after)
     up, slot, axis, ap, theta, side = b.up, b.slot, b.axis, b.ap, way.theta, way.side
     x_off = b.x_offset
     last = np.asarray(state.route[-1], dtype=float)
@@ -967,7 +994,7 @@ def _guide_plan(
     # Z_offset over its top. The hand keeps its orientation: turning with the circle would
     # lean the tool back over the other hand.
     dims = b.dims
-    elevation = math.atan2(dims.height + cg.Z_OFFSET, dims.length + x_off)
+    elevation = math.atan2(b.rise + cg.Z_OFFSET, dims.length + x_off)
     lift = cg.arc(pull_path[-1], ap, np.cross(d, up), elevation, turn=False)
     # Swing about the vertical through the pivot until the cable is over the slot, turning
     # the hand with it (a turn about the vertical keeps its z down).
@@ -1146,6 +1173,19 @@ def _emit_guide(
 # =========================================================================== checks and arms
 
 
+class _Blocked(InputError):
+    """A way whose tool would come within the clearance of something; ``distance``: by how
+    much it keeps more than the clearance (negative: by how much less)."""
+
+    distance: float
+
+    @classmethod
+    def of(cls, distance: float, message: str) -> _Blocked:
+        e = cls(Problem(message))
+        e.distance = distance
+        return e
+
+
 def _element_of(ref: str) -> str:
     """``platform.element`` of a keypoint reference (the scene's object)."""
     return ".".join(ref.split(".")[:2])
@@ -1270,8 +1310,10 @@ def _check_both_free(
 
 def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) -> None:
     """Both hands' tools keep the cell's clearance from everything but the guide they work
-    at along the way's Cartesian paths (every other pose: the compiler checks them all, with
-    the arms), so a way that cannot is not handed to the compiler."""
+    at, and cg.CLEARANCE from that guide, along the way's Cartesian paths (every other pose:
+    the compiler checks them all, with the arms), so a way that cannot is not handed to the
+    compiler. (The hand turning with the slide swings its fingers towards the guide by more
+    than the published sliding angle allows for.)"""
     own = {_element_of(gp.guide)}
     paths = (
         (r_arm, "sliding", SLIDE, gp.slide),
@@ -1283,14 +1325,40 @@ def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) ->
     )
     for arm, what, mode, poses in paths:
         sampled = [*poses[::2], poses[-1]]
-        near = ctx.probe.nearest(arm, sampled, mode, own, ctx.clearance)
-        if near is not None:
+        for skip, within in ((own, ctx.clearance), ((), cg.CLEARANCE)):
+            near = ctx.probe.nearest(arm, sampled, mode, skip, within)
+            if near is None:
+                continue
             side = "left" if gp.side > 0 else "right"
-            raise _error(
+            raise _Blocked.of(
+                near.distance - within,
                 f"{gp.where}: {near.tool} would pass {_mm(near.distance)} mm from "
                 f"{near.other} {what} (sliding at theta = {math.degrees(gp.theta):.1f} deg on "
-                f"the {side}, stopping {_mm(gp.a)} mm before the guide); the cell's "
-                f"clearance is {_mm(ctx.clearance)} mm"
+                f"the {side}, stopping {_mm(gp.a)} mm before the guide); "
+                + (
+                    f"the cell's clearance is {_mm(ctx.clearance)} mm"
+                    if skip
+                    else f"a hand keeps {_mm(cg.CLEARANCE)} mm from the guide it works at"
+                )
+            )
+    # the two hands, the other one holding the pivot while the routing hand works
+    hands = (
+        (r_arm, "ending its slide", SLIDE, [gp.slide[-1]], o_arm, gp.pivot, OPEN),
+        (o_arm, "grasping at the pivot", OPEN, [gp.other_above], r_arm, gp.slide[-1], GRASP),
+        (r_arm, "pulling", GRASP, gp.pull_path, o_arm, gp.pivot, GRASP),
+        (r_arm, "lifting", GRASP, gp.lift, o_arm, gp.pivot, GRASP),
+        (r_arm, "swinging over the slot", GRASP, gp.swing, o_arm, gp.pivot, GRASP),
+        (r_arm, "inserting", GRASP, gp.insert, o_arm, gp.pivot, GRASP),
+    )
+    for arm, what, mode, poses, other, T_other, other_mode in hands:
+        near = ctx.probe.between(arm, [*poses[::2], poses[-1]], mode, other, T_other, other_mode)
+        if near is not None and near.distance < ctx.clearance:
+            raise _Blocked.of(
+                near.distance - ctx.clearance,
+                f"{gp.where}: {near.tool} would pass {_mm(near.distance)} mm from "
+                f"{near.other} {what} (sliding at theta = {math.degrees(gp.theta):.1f} deg, "
+                f"stopping {_mm(gp.a)} mm before the guide); the cell's clearance is "
+                f"{_mm(ctx.clearance)} mm",
             )
 
 

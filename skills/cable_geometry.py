@@ -25,14 +25,17 @@ already points to increasing ``s``.
 The gripper as the method sees it (:class:`Hand`): ``W_gripper`` is the tool's
 ``finger_width``, its extent across the cable (DESIGN 3.1 names it so); along the cable the
 fingers are ``finger_thickness`` thick (the paper's pull_distance uses "the fingers
-thickness" with "the guides thickness", both along the cable). The motion layer checks
-collisions against a stand-in box ``finger_width`` square (motion/robot.py), so clearances
-along the cable use half the larger of the two: what the executor will check.
+thickness" with "the guides thickness", both along the cable). Clearances along the cable use
+what the executor will check: the tool's finger boxes (``fingers.size`` along x) when the
+tool declares them, else the motion layer's stand-in, a box ``finger_width`` square
+(motion/robot.py), so half the larger of the two.
 
 Symbols of the published formulas, with where each value comes from:
 
-- ``L`` guide length along the cable, ``W_guide`` its width across it, ``H`` its height:
-  ``world.dimensions(guide)`` (``length``, ``width``, ``height``);
+- ``L`` guide length along the cable, ``W_guide`` its width across it:
+  ``world.dimensions(guide)`` (``length``, ``width``); ``H`` how far the guide's top stands
+  over the cable held at its slot (:func:`rise`, from the element's bounds; its ``height``
+  dimension when it has none);
 - ``W_gripper``: the tool's ``finger_width``;
 - ``A``: the gap between the routing gripper's front and the guide's near face when it stops
   before the guide (Fig. 4(a)); :data:`APPROACH_GAP`;
@@ -44,9 +47,10 @@ Symbols of the published formulas, with where each value comes from:
 
 Then ``R_lift = sqrt((L + X_offset)^2 + (H + Z_offset)^2)``, ``R_insert = L + 2 X_offset``,
 ``R_cable = max(R_lift, R_insert)`` and the sliding angle ``theta > atan((W_gripper +
-W_guide) / (2 A))``. ``H`` is the guide's full height, as published: the hands hold the cable
-at slot height, so this over-estimates what the lift must clear (the slot is near the top)
-and errs towards more cable, never less.
+W_guide) / (2 A))``. The paper's figure lays the cable at the guide's
+foot, where ``H`` is the guide's height; held at the slot, the cable is lifted over what
+stands above it. (Taken as the full height, a 60 mm guide whose slot is near its top would
+send the routing hand 30-40 mm farther past the guide, onto the next one on a dense board.)
 """
 
 from __future__ import annotations
@@ -218,7 +222,12 @@ class Hand:
             raise InputError(
                 Problem(f"tool '{tool_name}' has no {missing}: the cable skills need both")
             )
-        half = max(tool.finger_width, tool.finger_thickness) / 2.0
+        # The fingers' own boxes when the tool has them; else the motion layer's stand-in, a
+        # box finger_width square.
+        if tool.fingers is not None:
+            half = tool.fingers.size[0] / 2.0
+        else:
+            half = max(tool.finger_width, tool.finger_thickness) / 2.0
         return cls(tool.finger_width, tool.finger_thickness, half)
 
     @property
@@ -448,6 +457,18 @@ def _corners(element: Element) -> Vec | None:
         box: Vec = unit_box * size + np.array([0.0, 0.0, dims["height"] / 2.0])
         return box
     return None
+
+
+def rise(world: World, ref: str, up: Vec) -> float | None:
+    """How far the top of the element ``ref`` is on stands over the keypoint ``ref`` (along
+    up): what a cable held at the keypoint is lifted over. None when it has no bounds."""
+    platform, element, _ = world.resolve(ref)
+    corners = _corners(element)
+    if corners is None:
+        return None
+    T = platform.T_cell_platform @ element.T_platform_element
+    top = float((g.transform_points(T, corners) @ up).max())
+    return max(top - float(position(world, ref) @ up), 0.0)
 
 
 def segment_distance(p: Vec, a: Vec, b: Vec, up: Vec) -> float:

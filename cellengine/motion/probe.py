@@ -8,6 +8,7 @@ bounding-sphere test skips pairs that cannot be within the distance asked about.
 
 from __future__ import annotations
 
+import hashlib
 import math
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass
@@ -49,6 +50,8 @@ class ToolProbe:
             _solid(s.name, np.asarray(s.T_cell_shape, dtype=float), s.shape) for s in scene.statics
         ]
         self._tools: dict[tuple[str, float | None], list[_Solid]] = {}
+        # Skills ask again about the same paths (RouteCable's ways share their inserts).
+        self._asked: dict[tuple[object, ...], Nearest | None] = {}
 
     def nearest(
         self,
@@ -62,6 +65,21 @@ class ToolProbe:
         fingers at jaw ``mode``'s opening (None: the widest); objects named in ``skip`` (or
         their parts ``name#k``) left out; only pairs closer than ``within`` (m) are measured,
         None when none is."""
+        # poses to 0.1 um and 1e-7 rad: the same path computed along another way's arcs
+        digest = hashlib.sha1(np.round(np.asarray(poses, dtype=float), 7).tobytes()).digest()
+        key = (arm, mode, frozenset(skip), within, digest)
+        if key not in self._asked:
+            self._asked[key] = self._nearest(arm, poses, mode, skip, within)
+        return self._asked[key]
+
+    def _nearest(
+        self,
+        arm: str,
+        poses: Sequence[Mat],
+        mode: str | None,
+        skip: Collection[str],
+        within: float,
+    ) -> Nearest | None:
         tool = self._tool(arm, mode)
         best: Nearest | None = None
         limit = within
@@ -79,6 +97,36 @@ class ToolProbe:
                     result.clear()
                     d = coal.distance(
                         t.shape, _transform(T), s.shape, _transform(s.T), request, result
+                    )
+                    if d < limit:
+                        limit = float(d)
+                        best = Nearest(float(d), t.name, s.name)
+        return best
+
+    def between(
+        self,
+        arm: str,
+        poses: Sequence[Mat],
+        mode: str | None,
+        other: str,
+        T_cell_other: Mat,
+        other_mode: str | None,
+    ) -> Nearest | None:
+        """The closest pair of solids of ``arm``'s tool over ``poses`` and ``other``'s tool
+        held at ``T_cell_other`` (both T_cell_tcp, fingers at their modes), None when no
+        pair is nearer than 1 m."""
+        mine, theirs = self._tool(arm, mode), self._tool(other, other_mode)
+        best: Nearest | None = None
+        limit = 1.0
+        request, result = coal.DistanceRequest(), coal.DistanceResult()
+        placed = [(s, T_cell_other @ s.T) for s in theirs]
+        for T_cell_tcp in poses:
+            for t in mine:
+                T = T_cell_tcp @ t.T
+                for s, T_s in placed:
+                    result.clear()
+                    d = coal.distance(
+                        t.shape, _transform(T), s.shape, _transform(T_s), request, result
                     )
                     if d < limit:
                         limit = float(d)
