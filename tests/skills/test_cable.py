@@ -330,55 +330,58 @@ def test_segments_start_where_the_arm_is(plan: Planned) -> None:
 
 def test_r_cable_and_theta_for_the_reference_guide() -> None:
     """The reference U guide (routing/models.xml guide_u) and the cable gripper (cell.yaml):
-    L = 10, W_guide = 24, H = 60 mm; W_gripper = finger_width = 20 mm, finger_thickness 8 mm.
-    Hand half-length along the cable h = max(20, 8) / 2 = 10 mm (the motion layer's tool
-    box is finger_width square); A = 25 mm, so X_offset = A + h = 35 mm; Z_offset = 10 mm.
-      R_lift   = sqrt((L + X_offset)^2 + (H + Z_offset)^2) = sqrt(45^2 + 70^2)
-               = sqrt(2025 + 4900) = sqrt(6925) = 83.2166 mm
-      R_insert = L + 2 X_offset = 10 + 70 = 80 mm
-      R_cable  = max(83.2166, 80) = 83.2166 mm
+    L = 10, W_guide = 24 mm, its top 60 mm and its slot 55 mm over its foot, so H = 5 mm
+    over the held cable; W_gripper = finger_width = 20 mm, fingers 8 mm along the cable
+    (tools.cable_gripper.fingers), so the hand's half-length h = 4 mm; A = 25 mm, so
+    X_offset = A + h = 29 mm; Z_offset = 10 mm.
+      R_lift   = sqrt((L + X_offset)^2 + (H + Z_offset)^2) = sqrt(39^2 + 15^2)
+               = sqrt(1521 + 225) = sqrt(1746) = 41.7852 mm
+      R_insert = L + 2 X_offset = 10 + 58 = 68 mm
+      R_cable  = max(41.7852, 68) = 68 mm
       theta_min = atan((W_gripper + W_guide) / (2 A)) = atan(44 / 50) = atan(0.88) = 41.3478 deg
-      theta     = theta_min + 5 deg margin = 46.3478 deg
+      theta     = theta_min + 5 deg margin = 46.3478 deg, as published; but the hand turns
+                  with the slide and its trailing finger would pass within 5 mm of the guide
+                  (RouteCable screens it), so the next angle, 5 deg steeper: 51.3478 deg
     """
     p = planned("plan_straight")
     slide_index = labels(p).index("RouteCable routing.guide1: slide R_cable")
     facts = p.segments[slide_index].facts
-    assert facts["R_lift"] == pytest.approx(83.2166 * MM, abs=1e-7)
-    assert facts["R_insert"] == pytest.approx(80.0 * MM, abs=1e-12)
-    assert facts["R_cable"] == pytest.approx(83.2166 * MM, abs=1e-7)
+    assert facts["R_lift"] == pytest.approx(41.7852 * MM, abs=1e-7)
+    assert facts["R_insert"] == pytest.approx(68.0 * MM, abs=1e-9)
+    assert facts["R_cable"] == pytest.approx(68.0 * MM, abs=1e-9)
     assert math.degrees(facts["theta_min"]) == pytest.approx(41.3478, abs=1e-4)
-    assert math.degrees(facts["theta"]) == pytest.approx(46.3478, abs=1e-4)
-    assert facts["X_offset"] == pytest.approx(35 * MM) and facts["A"] == pytest.approx(25 * MM)
+    assert math.degrees(facts["theta"]) == pytest.approx(51.3478, abs=1e-4)
+    assert facts["X_offset"] == pytest.approx(29 * MM) and facts["A"] == pytest.approx(25 * MM)
     # The slide itself: R_cable long, at theta to the guide's axis (+y here).
     P = poses_during(p, slide_index, "left")[:, :3, 3]
     step = P[-1] - P[0]
-    assert np.linalg.norm(step) == pytest.approx(83.2166 * MM, abs=1e-7)
-    assert math.degrees(g.angle_between(step, [0.0, 1.0, 0.0])) == pytest.approx(46.3478, abs=1e-4)
-    # It starts X_offset before the near face: slot y -60 mm, minus L / 2 + X_offset = 40 mm.
-    assert P[0] * 1000 == pytest.approx([430.0, -100.0, 65.0], abs=1e-3)
+    assert np.linalg.norm(step) == pytest.approx(68.0 * MM, abs=1e-7)
+    assert math.degrees(g.angle_between(step, [0.0, 1.0, 0.0])) == pytest.approx(51.3478, abs=1e-4)
+    # It starts X_offset before the near face: slot y -60 mm, minus L / 2 + X_offset = 34 mm.
+    assert P[0] * 1000 == pytest.approx([430.0, -94.0, 65.0], abs=1e-3)
     # Lift and insert are on the circle of R_cable + the pull (2 %) about the other hand.
     insert = p.segments[labels(p).index("RouteCable routing.guide1: insert")]
-    assert insert.facts["radius"] == pytest.approx(83.2166 * 1.02 * MM, abs=1e-7)
+    assert insert.facts["radius"] == pytest.approx(68.0 * 1.02 * MM, abs=1e-7)
 
 
 def test_pull_distance_and_route_after_placing() -> None:
     """pull_distance after PlaceConnector: the cable from the seated connector's rear face to
     the routing fingertips. The connector guide is 44 mm long, the connector 35 mm: the guide
-    reaches (44 - 35) / 2 = 4.5 mm beyond the connector, then X_offset = 35 mm: 39.5 mm."""
+    reaches (44 - 35) / 2 = 4.5 mm beyond the connector, then X_offset = 29 mm: 33.5 mm."""
     p = planned("plan_straight")
     retract = p.segments[labels(p).index(f"PlaceConnector {CONNECTOR_GUIDE}: retract")]
-    assert retract.facts["pull_distance"] == pytest.approx(39.5 * MM, abs=1e-12)
+    assert retract.facts["pull_distance"] == pytest.approx(33.5 * MM, abs=1e-12)
     # PickCable's slide leaves the hands that far apart already.
     slide = p.segments[labels(p).index("PickCable cable1: slide to the connector")]
-    assert slide.facts["spacing"] == pytest.approx(57.0 * MM, abs=1e-12)
+    assert slide.facts["spacing"] == pytest.approx(51.0 * MM, abs=1e-12)
     up = p.segments[labels(p).index("PickCable cable1: up")]
     (raised,) = [pa.poses[-1] for pa in up.paths]
     i_up = labels(p).index("PickCable cable1: up")
-    assert np.linalg.norm(raised[:3, 3] - p.end[i_up]["right"][:3, 3]) == pytest.approx(57.0 * MM)
-    # Between the hands while placing: connector centre to fingertips, 17.5 + 39.5 = 57 mm.
+    assert np.linalg.norm(raised[:3, 3] - p.end[i_up]["right"][:3, 3]) == pytest.approx(51.0 * MM)
+    # Between the hands while placing: connector centre to fingertips, 17.5 + 33.5 = 51 mm.
     i = labels(p).index(f"PlaceConnector {CONNECTOR_GUIDE}: insert")
     gap = np.linalg.norm(p.end[i]["left"][:3, 3] - p.end[i]["right"][:3, 3])
-    assert gap == pytest.approx(57.0 * MM, abs=1e-9)
+    assert gap == pytest.approx(51.0 * MM, abs=1e-9)
 
 
 def test_the_state_after_the_plan(plan: Planned) -> None:
@@ -392,9 +395,9 @@ def test_the_state_after_the_plan(plan: Planned) -> None:
 def test_route_cable_state_counts_the_cable_it_lays() -> None:
     """Chained by hand, the state after RouteCable knows the guides, the laid route and how
     much cable the routing hand holds out past the last slot. Straight route, slots every
-    110 mm along +y: rear face y -152.5, then (approach point, slot) per guide, 40 mm apart,
-    so the route is 52.5 + 40 + 2 * (70 + 40) = 312.5 mm (the plan file's own figure). The
-    routing hand ends R_cable + pull - (L / 2 + X_offset) = 84.8809 - 40 = 44.8809 mm past it."""
+    110 mm along +y: rear face y -152.5, then (approach point, slot) per guide, 34 mm apart,
+    so the route is 58.5 + 34 + 2 * (76 + 34) = 312.5 mm (the plan file's own figure). The
+    routing hand ends R_cable + pull - (L / 2 + X_offset) = 69.36 - 34 = 35.36 mm past it."""
     loaded = load_plan(CELLS / "cable_routing" / "plan_straight.yaml")
     world, steps = loaded.world, loaded.plan.steps
     state = replace(
@@ -405,9 +408,9 @@ def test_route_cable_state_counts_the_cable_it_lays() -> None:
         _, state = step.plan(context(world), replace(state, step=i))
     assert state.guides == (CONNECTOR_GUIDE, "routing.guide1", "routing.guide2", "routing.guide3")
     assert state.route_length() == pytest.approx(312.5 * MM, abs=1e-9)
-    assert state.pull_distance == pytest.approx((83.2166 * 1.02 - 40.0) * MM, abs=1e-7)
+    assert state.pull_distance == pytest.approx((68.0 * 1.02 - 34.0) * MM, abs=1e-7)
     assert state.held["left"].s == pytest.approx(state.route_length() + state.pull_distance)
-    assert state.held["right"].s == pytest.approx((312.5 - 40.0) * MM, abs=1e-9)
+    assert state.held["right"].s == pytest.approx((312.5 - 34.0) * MM, abs=1e-9)
 
 
 # ---------------------------------------------------------------------- feasibility
@@ -444,28 +447,28 @@ def _fails(world: World, steps: tuple[object, ...]) -> str:
 
 def test_a_route_longer_than_the_cable_fails_naming_the_guide() -> None:
     """A 300 mm cable on the straight route. At guide3: laid from the rear face to its
-    approach point 52.5 + 40 + 70 + 40 + 70 = 272.5 mm, R_cable 83.2 mm, pull 2 % of it
-    1.7 mm, 15 mm beyond the fingertips (h 10 + clearance 5): 372.4 mm > 300 mm. (guide2
-    needs 162.5 + 84.9 + 15 = 262.4 mm and passes.)"""
+    approach point 58.5 + 34 + 76 + 34 + 76 = 278.5 mm, R_cable 68.0 mm, pull 2 % of it
+    1.36 mm, 9 mm beyond the fingertips (h 4 + clearance 5): 356.9 mm > 300 mm. (guide2
+    needs 168.5 + 69.4 + 9 = 246.9 mm and passes.)"""
     world, steps = _world()
     cable = world.cable("cable1").model_copy(update={"length": 0.3})
     world = replace(world, objects=world.objects.model_copy(update={"cables": {"cable1": cable}}))
     assert _fails(world, steps) == (
         "steps[2] RouteCable routing.guide3: cable 'cable1' is too short for the route: this "
-        "guide needs 372.4 mm (272.5 mm laid from the connector's rear face to the approach "
-        "point, R_cable 83.2 mm slid past it, 1.7 mm pulled to tension, 15.0 mm for the "
+        "guide needs 356.9 mm (278.5 mm laid from the connector's rear face to the approach "
+        "point, R_cable 68.0 mm slid past it, 1.4 mm pulled to tension, 9.0 mm for the "
         "fingers to hold) but the cable is 300.0 mm long"
     )
 
 
 def test_a_guide_out_of_reach_fails_naming_the_guide_and_the_arm() -> None:
     """guide3 moved to y = 1500 mm: 1.2 m from the routing (left) arm's base, past a UR5e's
-    reach. Its approach point is 40 mm before the slot, at y = 1460 mm."""
+    reach. Its approach point is 34 mm before the slot, at y = 1466 mm."""
     world, steps = _world()
     world = _with_element(world, "routing.guide3", xyz=[0.43, 1.5, 0.01])
     assert _fails(world, steps) == (
         "steps[2] RouteCable routing.guide3: out of reach of arm 'left': the approach pose at "
-        "(430.0, 1460.0, 65.0) mm has no inverse kinematics solution within its joint limits"
+        "(430.0, 1466.0, 65.0) mm has no inverse kinematics solution within its joint limits"
     )
 
 
@@ -492,7 +495,9 @@ def test_a_slide_blocked_at_the_published_angle_takes_a_steeper_one() -> None:
     assert slides[0].label == "RouteCable routing.guide1: slide R_cable"
     # 71.3 deg clears their footprints but passes a finger within the cell's 10 mm of one
     assert math.degrees(slides[0].facts["theta"]) == pytest.approx(46.3478 + 30.0, abs=1e-4)
-    assert [round(math.degrees(s.facts["theta"]), 1) for s in slides[1:]] == [46.3, 46.3]
+    # the others as on the reference board: one step over the published angle, whose turning
+    # hand would pass within 5 mm of its guide
+    assert [round(math.degrees(s.facts["theta"]), 1) for s in slides[1:]] == [51.3, 51.3]
 
 
 def test_a_slide_blocked_at_every_angle_fails_naming_what_blocks_it() -> None:
@@ -504,8 +509,8 @@ def test_a_slide_blocked_at_every_angle_fails_naming_what_blocks_it() -> None:
     assert _fails(world, steps) == (
         "steps[2] RouteCable routing.guide1: no sliding angle clears the guide: sliding at "
         "theta = 46.3 deg is blocked on the left by routing.guide4 (its footprint and the "
-        "sliding hand's overlap by 9.2 mm) and on the right by routing.guide2 (its footprint "
-        "and the sliding hand's overlap by 8.9 mm), and so is every angle up to 80 deg with the "
+        "sliding hand's overlap by 4.8 mm) and on the right by routing.guide2 (its footprint "
+        "and the sliding hand's overlap by 4.6 mm), and so is every angle up to 80 deg with the "
         "hand stopping 10.0-25.0 mm before the guide: move the guides that block it farther "
         "from the slide, or use narrower fingers"
     )

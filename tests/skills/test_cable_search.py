@@ -200,17 +200,18 @@ def refused(path: Path, out: Path, capsys: pytest.CaptureFixture[str]) -> str:
 def test_a_cable_too_short_for_the_route_is_refused_at_the_step(
     tmp_path: Path, watch: Watch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """plan_straight with a 150 mm cable: guide1 needs 52.5 mm laid from the connector's rear
-    face to its approach point, R_cable 83.2 mm, the pull 1.7 mm and 15 mm for the fingers:
-    152.4 mm. No way of any choice helps; the first error is printed at the RouteCable step
+    """plan_straight with a 110 mm cable: guide1 needs 58.5 mm laid from the connector's rear
+    face to its approach point, R_cable 68 mm, the pull 1.36 mm and 9 mm for the fingers:
+    136.9 mm (the ways stopping closer to the guide need less, but more than 110 mm too). No
+    way of any choice helps; the first error is printed at the RouteCable step
     (plan_straight.yaml line 15, column 5)."""
-    cell = board(tmp_path, {}, cable_mm=150)
+    cell = board(tmp_path, {}, cable_mm=110)
     path = cell / "plan_straight.yaml"
     assert refused(path, tmp_path / "out", capsys) == (
         f"{path}:15:5: steps[2] RouteCable routing.guide1: cable 'cable1' is too short for the "
-        "route: this guide needs 152.4 mm (52.5 mm laid from the connector's rear face to the "
-        "approach point, R_cable 83.2 mm slid past it, 1.7 mm pulled to tension, 15.0 mm for "
-        "the fingers to hold) but the cable is 150.0 mm long\n"
+        "route: this guide needs 136.9 mm (58.5 mm laid from the connector's rear face to the "
+        "approach point, R_cable 68.0 mm slid past it, 1.4 mm pulled to tension, 9.0 mm for "
+        "the fingers to hold) but the cable is 110.0 mm long\n"
     )
     # guide1 had no way: the search went back to PickCable's every way (3 tips x 2 arms)
     assert watch.at(0) == [0, 1, 2, 3, 4, 5]
@@ -226,7 +227,7 @@ def test_a_guide_out_of_reach_of_both_arms_is_refused_at_the_step(
     path = cell / "plan_straight.yaml"
     assert refused(path, tmp_path / "out", capsys) == (
         f"{path}:15:5: steps[2] RouteCable routing.guide1: out of reach of arm 'left': the "
-        "approach pose at (1150.0, -40.0, 65.0) mm has no inverse kinematics solution within "
+        "approach pose at (1150.0, -34.0, 65.0) mm has no inverse kinematics solution within "
         "its joint limits\n"
     )
     # PickCable's ways: 3 tips x the far hand as published or turned; those giving the
