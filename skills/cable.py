@@ -1339,7 +1339,7 @@ def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) ->
                     f"the cell's clearance is {_mm(ctx.clearance)} mm"
                     if skip
                     else f"a hand keeps {_mm(cg.CLEARANCE)} mm from the guide it works at"
-                )
+                ),
             )
     # the two hands, the other one holding the pivot while the routing hand works
     hands = (
