@@ -1342,16 +1342,17 @@ def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) ->
                 ),
             )
     # the two hands, the other one holding the pivot while the routing hand works
+    descend = cg.line(gp.other_above, gp.pivot)
     hands = (
         (r_arm, "ending its slide", SLIDE, [gp.slide[-1]], o_arm, gp.pivot, OPEN),
-        (o_arm, "grasping at the pivot", OPEN, [gp.other_above], r_arm, gp.slide[-1], GRASP),
+        (o_arm, "grasping at the pivot", OPEN, descend, r_arm, gp.slide[-1], GRASP),
         (r_arm, "pulling", GRASP, gp.pull_path, o_arm, gp.pivot, GRASP),
         (r_arm, "lifting", GRASP, gp.lift, o_arm, gp.pivot, GRASP),
         (r_arm, "swinging over the slot", GRASP, gp.swing, o_arm, gp.pivot, GRASP),
         (r_arm, "inserting", GRASP, gp.insert, o_arm, gp.pivot, GRASP),
     )
-    for arm, what, mode, poses, other, T_other, other_mode in hands:
-        near = ctx.probe.between(arm, [*poses[::2], poses[-1]], mode, other, T_other, other_mode)
+    for arm, what, mode, path, other, T_other, other_mode in hands:
+        near = ctx.probe.between(arm, [*path[::2], path[-1]], mode, other, T_other, other_mode)
         if near is not None and near.distance < ctx.clearance:
             raise _Blocked.of(
                 near.distance - ctx.clearance,
