@@ -987,7 +987,11 @@ def _guide_plan(
     # Sliding, the hand turns about the vertical to hold the cable along the slide; the swing
     # over the slot turns it back, so it inserts in the approach orientation.
     T_slid = g.transform(g.axis_angle_to_matrix(up, side * theta) @ T_ap[:3, :3], ap + r_cable * d)
-    slide = cg.line(T_ap, T_slid)
+    # The hand turns first, then slides: turned, it is as wide across the slide as the
+    # published sliding angle assumes (W_gripper); turning as it goes, its fingers' ends
+    # would sweep towards the guide's corner.
+    turn = cg.turn_in_place(T_ap, T_slid)
+    slide = np.concatenate([turn, cg.line(turn[-1], T_slid)[1:]])
     pull_path = cg.line(slide[-1], cg.at(slide[-1], ap + (r_cable + pull_r) * d))
     # Lift: up on the circle about the pivot in the vertical plane of the slide, to the
     # elevation at which radius >= R_lift puts the hand over the guide's far face and
