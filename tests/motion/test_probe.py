@@ -40,3 +40,24 @@ def test_nothing_within_reports_none_and_skip_leaves_an_object_out(ctx) -> None:
     assert hit is not None and hit.other == "routing.guide1" and hit.distance < 0.01
     skipped = ctx.probe.nearest("left", at_slot, "grasp", skip={"routing.guide1"}, within=0.01)
     assert skipped is None or skipped.other != "routing.guide1"
+
+
+def test_two_tools_side_by_side_are_their_fingers_gap_apart(ctx) -> None:  # type: ignore[no-untyped-def]
+    """Both hands pointing down at one height, 100 mm apart along the TCP x: the bodies
+    (cell.yaml: 50 mm along x) are 100 - 50 = 50 mm apart, nearer than the fingers
+    (8 mm along x: 92 mm)."""
+    near = ctx.probe.between(
+        "left", [tcp(0.5, 0.1, 0.2)], "grasp", "right", tcp(0.6, 0.1, 0.2), "grasp"
+    )
+    assert near is not None
+    assert near.distance == pytest.approx(0.050, abs=1e-9)
+    assert (near.tool, near.other) == ("left/tool", "right/tool")
+
+
+def test_a_path_asked_about_again_gives_the_same_answer(ctx) -> None:  # type: ignore[no-untyped-def]
+    poses = [tcp(0.9, 0.5, 0.03), tcp(0.9, 0.5, 0.04)]
+    first = ctx.probe.nearest("left", poses, "grasp", within=0.05)
+    assert first is not None and first.distance == pytest.approx(0.03, abs=1e-9)
+    assert ctx.probe.nearest("left", poses, "grasp", within=0.05) == first
+    # another jaw opening is another question
+    assert ctx.probe.nearest("left", poses, "open", within=0.05) is not None
