@@ -818,6 +818,7 @@ class GuideWay:
     gap: float = cg.APPROACH_GAP  # A: the routing hand stops this far before the guide
     # the routing hand's front ends this far past the guide's far face (None: A, as published)
     gap_after: float | None = None
+    turn_first: bool = False  # the routing hand turns to the sliding angle, then slides
 
 
 @dataclass(frozen=True)
@@ -913,13 +914,13 @@ def guide_ways(world: World, state: CableState, guide: str, r_arm: str) -> Itera
             if not first_blocked:
                 first_blocked = blocked
             for rank, side in enumerate(clear):
-                for lean, pivot, back, after in itertools.product(
-                    cg.LEANS, cg.PIVOT_LEANS, cg.STAND_BACKS, afters
+                for lean, pivot, back, after, first in itertools.product(
+                    cg.LEANS, cg.PIVOT_LEANS, cg.STAND_BACKS, afters, (False, True)
                 ):
                     cost = (theta - theta0) + 0.05 * rank + abs(back - cg.STAND_BACK)
                     cost += 0.5 * (abs(lean - cg.LEAN) + abs(pivot - cg.PIVOT_LEAN))
-                    cost += 0.0 if after is None else abs(after - gap)
-                    way = GuideWay(theta, side, lean, pivot, back, gap, after)
+                    cost += (0.0 if after is None else abs(after - gap)) + 0.01 * first
+                    way = GuideWay(theta, side, lean, pivot, back, gap, after, first)
                     ranked.append((cost, len(ranked), way))
     if not ranked:
         raise _error(
@@ -987,11 +988,13 @@ def _guide_plan(
     # Sliding, the hand turns about the vertical to hold the cable along the slide; the swing
     # over the slot turns it back, so it inserts in the approach orientation.
     T_slid = g.transform(g.axis_angle_to_matrix(up, side * theta) @ T_ap[:3, :3], ap + r_cable * d)
-    # The hand turns first, then slides: turned, it is as wide across the slide as the
-    # published sliding angle assumes (W_gripper); turning as it goes, its fingers' ends
-    # would sweep towards the guide's corner.
-    turn = cg.turn_in_place(T_ap, T_slid)
-    slide = np.concatenate([turn, cg.line(turn[-1], T_slid)[1:]])
+    slide = cg.line(T_ap, T_slid)
+    if way.turn_first:
+        # turned first, the hand is as wide across the slide as the published sliding angle
+        # assumes (W_gripper); turning as it goes, its fingers' ends sweep towards the
+        # guide's corner, but its body swings less near the other hand
+        turn = cg.turn_in_place(T_ap, T_slid)
+        slide = np.concatenate([turn, cg.line(turn[-1], T_slid)[1:]])
     pull_path = cg.line(slide[-1], cg.at(slide[-1], ap + (r_cable + pull_r) * d))
     # Lift: up on the circle about the pivot in the vertical plane of the slide, to the
     # elevation at which radius >= R_lift puts the hand over the guide's far face and
