@@ -211,26 +211,50 @@ class RouteCable(Skill):
         # clearance, else the first way's
         closest: tuple[float, InputError] | None = None
         found = False
+        # Where the other hand stands back to is not part of what is checked here: ways that
+        # differ only in it are checked once.
+        checked: dict[GuideWay, GuidePlan | InputError] = {}
         for way in guide_ways(world, state, guide, r_arm):
-            try:
-                gp = _guide_plan(world, state, self.cable, guide, r_arm, o_arm, way)
-                _check_reach(ctx, r_arm, gp.reach_routing(), gp.where)
-                _check_reach(ctx, o_arm, gp.reach_other(), gp.where)
-                _check_length(world, self.cable, _hand(world, r_arm), gp)
-                _check_clear(ctx, gp, r_arm, o_arm)
-            except InputError as e:
-                score = e.distance if isinstance(e, _Blocked) else -math.inf
+            key = replace(way, stand_back=cg.STAND_BACK)
+            if key not in checked:
+                checked[key] = self._checked(ctx, state, guide, way, r_arm, o_arm)
+            gp = checked[key]
+            if isinstance(gp, InputError):
+                score = gp.distance if isinstance(gp, _Blocked) else -math.inf
                 if closest is None or score > closest[0]:
-                    closest = (score, e)
+                    closest = (score, gp)
                 continue
             found = True
-            yield gp
+            yield replace(gp, stand_back=way.stand_back)
         if not found:
             raise (
                 closest[1]
                 if closest is not None
                 else _error(f"steps[{state.step}] RouteCable {guide}: no way to route it")
             )
+
+    def _checked(
+        self,
+        ctx: PlanningContext,
+        state: CableState,
+        guide: str,
+        way: GuideWay,
+        r_arm: str,
+        o_arm: str,
+    ) -> GuidePlan | InputError:
+        """The plan of ``way`` if it passes the checks (reach, cable length, clearances),
+        else why not."""
+        world = ctx.world
+        try:
+            gp = _guide_plan(world, state, self.cable, guide, r_arm, o_arm, way)
+            _check_reach(ctx, r_arm, gp.reach_routing(), gp.where)
+            _check_reach(ctx, o_arm, gp.reach_other(), gp.where)
+            _check_length(world, self.cable, _hand(world, r_arm), gp)
+            _check_clear(ctx, gp, r_arm, o_arm)
+            _check_pivot_free(ctx, gp, r_arm, o_arm)
+        except InputError as e:
+            return e
+        return gp
 
 
 CableSkill = PickCable | PlaceConnector | RouteCable
@@ -906,6 +930,7 @@ def guide_ways(world: World, state: CableState, guide: str, r_arm: str) -> Itera
     for gap in (*cg.APPROACH_GAPS, *_centred_gap(world, guide, b0, after=False)):
         b = _basics(world, state, guide, r_arm, gap)
         afters = (None, *_centred_gap(world, guide, b, after=True))
+        afters += tuple(a for a in cg.APPROACH_GAPS if a < gap)
         start = b.theta_min + cg.THETA_MARGIN
         n = int((cg.THETA_MAX - start) / cg.THETA_STEP + 1e-9) + 1 if start <= cg.THETA_MAX else 0
         for k in range(n):
@@ -1297,22 +1322,43 @@ def _check_both_free(
     configuration, where both hands go first) is free of collisions, between the arms and
     with the cell: else the way is not handed to the compiler."""
     above = {a: cg.lifted(geo.grasp[a], geo.up, cg.APPROACH_HEIGHT) for a in (c_arm, f_arm)}
-    q = ctx.home.copy()
-    sols = {a: ctx.iks[a].solve_all(T) for a, T in above.items()}
-    nearest = None
-    for q_c in sols[c_arm]:
-        q[ctx.cell.slices[c_arm]] = q_c
-        for q_f in sols[f_arm]:
-            q[ctx.cell.slices[f_arm]] = q_f
-            contact = ctx.checker.check(q)
-            if contact is None:
-                return
-            nearest = nearest or contact
-    raise _error(
-        f"{where}: every inverse kinematics solution of the pick configuration ({c_arm} "
-        f"over {geo.end(c_arm)}, {f_arm} over {geo.end(f_arm)}) is in collision"
-        + (f" ({nearest})" if nearest is not None else "")
-    )
+    why = _pair_blocked(ctx, above)
+    if why is not None:
+        raise _error(
+            f"{where}: every inverse kinematics solution of the pick configuration ({c_arm} "
+            f"over {geo.end(c_arm)}, {f_arm} over {geo.end(f_arm)}) is in collision"
+            + (f" ({why})" if why else "")
+        )
+
+
+def _pair_blocked(ctx: PlanningContext, poses: Mapping[str, Mat]) -> str | None:
+    """None when some pair of the two arms' inverse kinematics solutions at ``poses``
+    (T_cell_tcp per arm) is free of collisions; else why none is ("" when an arm has no
+    solution, else the first pair's contact)."""
+    (a, T_a), (b, T_b) = poses.items()
+    sols_a, sols_b = ctx.iks[a].solve_all(T_a), ctx.iks[b].solve_all(T_b)
+    if len(sols_a) == 0 or len(sols_b) == 0:
+        return ""
+    Q = np.repeat(ctx.home[None, :], len(sols_a) * len(sols_b), axis=0)
+    Q[:, ctx.cell.slices[a]] = np.repeat(sols_a, len(sols_b), axis=0)
+    Q[:, ctx.cell.slices[b]] = np.tile(sols_b, (len(sols_a), 1))
+    if not bool(ctx.checker.check_batch(Q).all()):
+        return None
+    return str(ctx.checker.check(Q[0]))
+
+
+def _check_pivot_free(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) -> None:
+    """While the routing hand holds still at the slide's end, the other arm comes down to the
+    pivot: some pair of the arms' solutions is free there and above it."""
+    for what, T in (("above the pivot", gp.other_above), ("at the pivot", gp.pivot)):
+        why = _pair_blocked(ctx, {r_arm: gp.slide[-1], o_arm: T})
+        if why is not None:
+            raise _error(
+                f"{gp.where}: every inverse kinematics solution of the other arm {what} is in "
+                f"collision with the routing arm at the slide's end (sliding at theta = "
+                f"{math.degrees(gp.theta):.1f} deg, stopping {_mm(gp.a)} mm before the guide)"
+                + (f" ({why})" if why else "")
+            )
 
 
 def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) -> None:
