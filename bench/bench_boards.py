@@ -156,6 +156,7 @@ def _remodel_boards(out: Path) -> dict[str, Path]:
 
 
 def _import_remodel(src: Path, dest: Path, pose: str) -> None:
+    dest.parent.mkdir(parents=True, exist_ok=True)  # with --boards 0 nothing made it yet
     cmd = [sys.executable, "-m", "cellengine", "import", "remodel", str(src), str(dest)]
     subprocess.run([*cmd, f"--pose={pose}"], check=True, capture_output=True)
 
