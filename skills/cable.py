@@ -1378,8 +1378,8 @@ def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) ->
     )
     for arm, what, mode, poses in paths:
         sampled = [*poses[::2], poses[-1]]
-        for skip, within in ((own, ctx.clearance), ((), cg.CLEARANCE)):
-            near = ctx.probe.nearest(arm, sampled, mode, skip, within)
+        for skip, within, only in ((own, ctx.clearance, None), ((), cg.CLEARANCE, own)):
+            near = ctx.probe.nearest(arm, sampled, mode, skip, within, only)
             if near is None:
                 continue
             side = "left" if gp.side > 0 else "right"

@@ -60,11 +60,14 @@ class ToolProbe:
         mode: str | None = None,
         skip: Collection[str] = (),
         within: float = math.inf,
+        only: Collection[str] | None = None,
     ) -> Nearest | None:
         """The closest environment object to ``arm``'s tool over ``poses`` (T_cell_tcp), its
         fingers at jaw ``mode``'s opening (None: the widest); objects named in ``skip`` (or
-        their parts ``name#k``) left out; only pairs closer than ``within`` (m) are measured,
-        None when none is."""
+        their parts ``name#k``) left out, and with ``only`` every object it does not name;
+        only pairs closer than ``within`` (m) are measured, None when none is."""
+        if only is not None:
+            skip = {*skip, *(s.name for s in self.statics if s.name.split("#")[0] not in only)}
         # poses to 0.1 um and 1e-7 rad: the same path computed along another way's arcs
         digest = hashlib.sha1(np.round(np.asarray(poses, dtype=float), 7).tobytes()).digest()
         key = (arm, mode, frozenset(skip), within, digest)

@@ -61,3 +61,13 @@ def test_a_path_asked_about_again_gives_the_same_answer(ctx) -> None:  # type: i
     assert ctx.probe.nearest("left", poses, "grasp", within=0.05) == first
     # another jaw opening is another question
     assert ctx.probe.nearest("left", poses, "open", within=0.05) is not None
+
+
+def test_only_measures_the_objects_it_names(ctx) -> None:  # type: ignore[no-untyped-def]
+    """At guide1's slot the fingers are in guide1; asked only about guide2 (its slot 110 mm
+    on), guide2 is what is reported, and nothing within 10 mm."""
+    slot = ctx.world.pose("routing.guide1")[:3, 3]
+    at_slot = [tcp(*slot)]
+    near = ctx.probe.nearest("left", at_slot, "grasp", within=0.2, only={"routing.guide2"})
+    assert near is not None and near.other.split("#")[0] == "routing.guide2"
+    assert ctx.probe.nearest("left", at_slot, "grasp", within=0.01, only={"routing.guide2"}) is None
