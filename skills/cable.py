@@ -927,9 +927,10 @@ def guide_ways(world: World, state: CableState, guide: str, r_arm: str) -> Itera
         )
     ranked: list[tuple[float, int, GuideWay]] = []
     first_blocked: list[str] = []
+    centred_after = _centred_gap(world, guide, b0, after=True)  # the same for every A
     for gap in (*cg.APPROACH_GAPS, *_centred_gap(world, guide, b0, after=False)):
         b = _basics(world, state, guide, r_arm, gap)
-        afters = (None, *_centred_gap(world, guide, b, after=True))
+        afters = (None, *centred_after)
         afters += tuple(a for a in cg.APPROACH_GAPS if a < gap)
         start = b.theta_min + cg.THETA_MARGIN
         n = int((cg.THETA_MAX - start) / cg.THETA_STEP + 1e-9) + 1 if start <= cg.THETA_MAX else 0
@@ -973,7 +974,10 @@ def _centred_gap(world: World, guide: str, b: _Basics, after: bool) -> tuple[flo
     elements = [f for f in cg.footprints(world, guide, b.up) if f.top > height]
     across = b.hand.width / 2.0 * np.cross(b.up, b.axis)
     reach = 2.0 * (max(cg.APPROACH_GAPS) + b.hand.half_length)
-    for k in range(1, int(reach / CENTRING_STEP) + 1):
+    # only what stands within the hand's half width of its line (most elements do not)
+    end = face + reach * direction
+    elements = [f for f in elements if f.distance(face, end, b.up) <= b.hand.width / 2.0]
+    for k in range(1, int(reach / CENTRING_STEP) + 1 if elements else 0):
         p = face + k * CENTRING_STEP * direction
         if any(f.distance(p - across, p + across, b.up) <= 0.0 for f in elements):
             gap = k * CENTRING_STEP / 2.0 - b.hand.half_length

@@ -493,8 +493,11 @@ def test_a_slide_blocked_at_the_published_angle_takes_a_steeper_one() -> None:
     segments, _ = plan_cable_steps(context(world), steps)
     slides = [s for s in segments if "theta" in s.facts]
     assert slides[0].label == "RouteCable routing.guide1: slide R_cable"
-    # 71.3 deg clears their footprints but passes a finger within the cell's 10 mm of one
-    assert math.degrees(slides[0].facts["theta"]) == pytest.approx(46.3478 + 30.0, abs=1e-4)
+    # 71.3 deg clears their footprints; sliding R_cable for an insert ending 25 mm past
+    # guide1 it passes a finger 5.8 mm from guide2, for one ending 10 mm past (a shorter
+    # slide) it keeps the cell's 10 mm
+    assert math.degrees(slides[0].facts["theta"]) == pytest.approx(46.3478 + 25.0, abs=1e-4)
+    assert slides[0].facts["R_insert"] == pytest.approx((10.0 + 29.0 + 14.0) * MM, abs=1e-9)
     # the others as on the reference board: one step over the published angle, whose turning
     # hand would pass within 5 mm of its guide
     assert [round(math.degrees(s.facts["theta"]), 1) for s in slides[1:]] == [51.3, 51.3]
