@@ -46,6 +46,7 @@ from cellengine.world import World
 
 if TYPE_CHECKING:  # planning needs the motion stack; parsing a plan does not
     from cellengine.context import PlanningContext
+    from cellengine.motion.probe import Nearest
 
 OPEN, SLIDE, GRASP = "open", "slide", "grasp"  # jaw modes the method uses (the tool's table)
 CENTRING_STEP = 0.001  # m: how finely the room after a guide is measured for a centred hand
@@ -1386,18 +1387,19 @@ def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) ->
             near = ctx.probe.nearest(arm, sampled, mode, skip, within, only)
             if near is None:
                 continue
-            side = "left" if gp.side > 0 else "right"
-            raise _Blocked.of(
-                near.distance - within,
-                f"{gp.where}: {near.tool} would pass {_mm(near.distance)} mm from "
-                f"{near.other} {what} (sliding at theta = {math.degrees(gp.theta):.1f} deg on "
-                f"the {side}, stopping {_mm(gp.a)} mm before the guide); "
-                + (
-                    f"the cell's clearance is {_mm(ctx.clearance)} mm"
-                    if skip
-                    else f"a hand keeps {_mm(cg.CLEARANCE)} mm from the guide it works at"
-                ),
-            )
+            if skip:
+                fix = (
+                    f"the cell's clearance is {_mm(ctx.clearance)} mm: {near.other} would "
+                    f"have to stand {_mm(ctx.clearance - near.distance)} mm farther from the "
+                    "hand's path, or the fingers be narrower"
+                )
+            else:
+                fix = (
+                    f"a hand keeps {_mm(cg.CLEARANCE)} mm from the guide it works at: more "
+                    "room before the guide (the hand stopping farther from it) or narrower "
+                    "fingers would clear it"
+                )
+            raise _Blocked.of(near.distance - within, _blocked(gp, near, what, within, fix))
     # the two hands, the other one holding the pivot while the routing hand works
     descend = cg.line(gp.other_above, gp.pivot)
     hands = (
@@ -1411,13 +1413,25 @@ def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) ->
     for arm, what, mode, path, other, T_other, other_mode in hands:
         near = ctx.probe.between(arm, [*path[::2], path[-1]], mode, other, T_other, other_mode)
         if near is not None and near.distance < ctx.clearance:
-            raise _Blocked.of(
-                near.distance - ctx.clearance,
-                f"{gp.where}: {near.tool} would pass {_mm(near.distance)} mm from "
-                f"{near.other} {what} (sliding at theta = {math.degrees(gp.theta):.1f} deg, "
-                f"stopping {_mm(gp.a)} mm before the guide); the cell's clearance is "
-                f"{_mm(ctx.clearance)} mm",
+            fix = (
+                f"the cell's clearance is {_mm(ctx.clearance)} mm: the hands would need "
+                f"{_mm(ctx.clearance - near.distance)} mm more between them (a longer span of "
+                "cable between guides) or narrower tools"
             )
+            raise _Blocked.of(
+                near.distance - ctx.clearance, _blocked(gp, near, what, ctx.clearance, fix)
+            )
+
+
+def _blocked(gp: GuidePlan, near: Nearest, what: str, limit: float, fix: str) -> str:
+    side = "left" if gp.side > 0 else "right"
+    # a distance that rounds to the limit it is under is shown to 0.01 mm
+    d = _mm(near.distance) if _mm(near.distance) != _mm(limit) else f"{near.distance * 1e3:.2f}"
+    return (
+        f"{gp.where}: {near.tool} would pass {d} mm from {near.other} {what} "
+        f"(sliding at theta = {math.degrees(gp.theta):.1f} deg on the {side}, stopping "
+        f"{_mm(gp.a)} mm before the guide); {fix}"
+    )
 
 
 def _placed_by_either(rest: Sequence[Skill], cable: str) -> bool:
