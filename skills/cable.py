@@ -215,10 +215,14 @@ class RouteCable(Skill):
         # Where the other hand stands back to is not part of what is checked here: ways that
         # differ only in it are checked once.
         checked: dict[GuideWay, GuidePlan | InputError] = {}
+        pivots: dict[tuple[float, float, bool], InputError | None] = {}
         for way in guide_ways(world, state, guide, r_arm):
             key = replace(way, stand_back=cg.STAND_BACK)
+            p_key = (way.gap, way.pivot_lean, way.towards_base)
+            if p_key not in pivots:
+                pivots[p_key] = _pivot_blocked(ctx, state, guide, r_arm, o_arm, way)
             if key not in checked:
-                checked[key] = self._checked(ctx, state, guide, way, r_arm, o_arm)
+                checked[key] = pivots[p_key] or self._checked(ctx, state, guide, way, r_arm, o_arm)
             gp = checked[key]
             if isinstance(gp, InputError):
                 score = gp.distance if isinstance(gp, _Blocked) else -math.inf
@@ -844,6 +848,7 @@ class GuideWay:
     # the routing hand's front ends this far past the guide's far face (None: A, as published)
     gap_after: float | None = None
     turn_first: bool = False  # the routing hand turns to the sliding angle, then slides
+    towards_base: bool = True  # the hands tip towards their bases too, not only along the cable
 
 
 @dataclass(frozen=True)
@@ -941,13 +946,14 @@ def guide_ways(world: World, state: CableState, guide: str, r_arm: str) -> Itera
             if not first_blocked:
                 first_blocked = blocked
             for rank, side in enumerate(clear):
-                for lean, pivot, back, after, first in itertools.product(
-                    cg.LEANS, cg.PIVOT_LEANS, cg.STAND_BACKS, afters, (False, True)
+                for lean, pivot, back, after, first, base in itertools.product(
+                    cg.LEANS, cg.PIVOT_LEANS, cg.STAND_BACKS, afters, (False, True), (True, False)
                 ):
-                    cost = (theta - theta0) + 0.05 * rank + abs(back - cg.STAND_BACK)
+                    cost = abs(theta - theta0) + 0.05 * rank + abs(back - cg.STAND_BACK)
                     cost += 0.5 * (abs(lean - cg.LEAN) + abs(pivot - cg.PIVOT_LEAN))
                     cost += (0.0 if after is None else abs(after - gap)) + 0.01 * first
-                    way = GuideWay(theta, side, lean, pivot, back, gap, after, first)
+                    cost += 0.0 if base else 0.3
+                    way = GuideWay(theta, side, lean, pivot, back, gap, after, first, base)
                     ranked.append((cost, len(ranked), way))
     if not ranked:
         raise _error(
@@ -1002,11 +1008,13 @@ def _guide_plan(
     last = np.asarray(state.route[-1], dtype=float)
     # The routing hand tips forward and towards its base, the other hand back and towards
     # its base (the other hand by more): see cg.LEAN and cg.PIVOT_LEAN.
-    tip_r = g.unit(axis + _towards_base(world, r_arm, slot, up))
-    tip_o = g.unit(-axis + _towards_base(world, o_arm, slot, up))
+    # (or only along the cable: tipped sideways, open fingers dip towards the plate)
+    base = 1.0 if way.towards_base else 0.0
+    tip_r = g.unit(axis + base * _towards_base(world, r_arm, slot, up))
+    tip_o = g.unit(-axis + base * _towards_base(world, o_arm, slot, up))
     T_r0 = state.tcp[r_arm]
     T_ap = cg.nearer_turn(T_r0, cg.tcp_frame(ap, axis, up, tip_r, way.lean))
-    T_pivot = cg.nearer_turn(state.tcp[o_arm], cg.tcp_frame(ap, axis, up, tip_o, way.pivot_lean))
+    T_pivot = _pivot(state, b, o_arm, tip_o, way)
     r_cable, pull_r = b.r_cable, b.pull
     left = np.cross(up, axis)
     d = math.cos(theta) * axis + side * math.sin(theta) * left
@@ -1068,6 +1076,41 @@ def _guide_plan(
         laid=laid,
         stand_back=way.stand_back,
     )
+
+
+def _pivot(state: CableState, b: _Basics, o_arm: str, tip_o: Vec, way: GuideWay) -> Mat:
+    """The other hand's grasp at the pivot, tipped back along the cable (and towards its base
+    when ``tip_o`` says so)."""
+    return cg.nearer_turn(state.tcp[o_arm], cg.tcp_frame(b.ap, b.axis, b.up, tip_o, way.pivot_lean))
+
+
+def _pivot_blocked(
+    ctx: PlanningContext, state: CableState, guide: str, r_arm: str, o_arm: str, way: GuideWay
+) -> InputError | None:
+    """Why the other hand cannot come down to the pivot of ``way`` keeping its clearances
+    (what depends only on A, the pivot's tip and its direction: checked before the rest of
+    the way is built), or None."""
+    b = _basics(ctx.world, state, guide, r_arm, way.gap, way.gap_after)
+    base = 1.0 if way.towards_base else 0.0
+    tip_o = g.unit(-b.axis + base * _towards_base(ctx.world, o_arm, b.slot, b.up))
+    T_pivot = _pivot(state, b, o_arm, tip_o, way)
+    poses = cg.line(cg.lifted(T_pivot, b.up, cg.APPROACH_HEIGHT), T_pivot)
+    sampled = [*poses[::2], poses[-1]]
+    own = {_element_of(guide)}
+    for skip, within, only in ((own, ctx.clearance, None), ((), cg.CLEARANCE, own)):
+        near = ctx.probe.nearest(o_arm, sampled, OPEN, skip, within, only)
+        if near is not None:
+            return _Blocked.of(
+                near.distance - within,
+                f"{b.where}: {near.tool} would pass {_mm(near.distance)} mm from {near.other} "
+                f"grasping at the pivot (stopping {_mm(b.gap)} mm before the guide); the "
+                + (
+                    f"cell's clearance is {_mm(ctx.clearance)} mm"
+                    if skip
+                    else f"hand keeps {_mm(cg.CLEARANCE)} mm from the guide it works at"
+                ),
+            )
+    return None
 
 
 def _slide_sides(
