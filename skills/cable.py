@@ -917,9 +917,11 @@ def guide_ways(world: World, state: CableState, guide: str, r_arm: str) -> Itera
     """The ways to route ``guide``, best first: the published sliding angle (its minimum plus
     THETA_MARGIN) on the side farther from the other elements, with the hands' default
     tips, first; then every angle up to THETA_MAX in THETA_STEP steps on each side whose
-    slide clears the other elements, and the other tips (LEANS, PIVOT_LEANS), ranked by how
-    much longer the motion gets (a steeper slide swings farther). An error naming what
-    blocks when no angle clears the guide."""
+    slide clears the other elements, each stop before the guide (APPROACH_GAPS, and centred
+    in the room there), insert end (as far past as the stop, centred in the room after the
+    guide, or nearer), the other tips (LEANS, PIVOT_LEANS, only along the cable), turning
+    before sliding and the stand-backs, ranked by how much longer the motion gets (a steeper
+    slide swings farther). An error naming what blocks when no angle clears the guide."""
     b0 = _basics(world, state, guide, r_arm)
     theta0 = b0.theta_min + cg.THETA_MARGIN
     if theta0 > cg.THETA_MAX:
