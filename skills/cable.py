@@ -1368,17 +1368,27 @@ def _base_distance(ctx: PlanningContext, arm: str, ref: str) -> float:
 def _check_both_free(
     ctx: PlanningContext, geo: _PickGeometry, c_arm: str, f_arm: str, where: str
 ) -> None:
-    """Some pair of the two arms' inverse kinematics solutions over the combs (the pick
-    configuration, where both hands go first) is free of collisions, between the arms and
-    with the cell: else the way is not handed to the compiler."""
+    """At each of the pick's key configurations (over the combs, where both hands go first;
+    turned along the cable; the far hand slid to the connector hand, and raised), some pair
+    of the two arms' inverse kinematics solutions is free of collisions, between the arms
+    and with the cell: else the way is not handed to the compiler."""
     above = {a: cg.lifted(geo.grasp[a], geo.up, cg.APPROACH_HEIGHT) for a in (c_arm, f_arm)}
-    why = _pair_blocked(ctx, above)
-    if why is not None:
-        raise _error(
-            f"{where}: every inverse kinematics solution of the pick configuration ({c_arm} "
-            f"over {geo.end(c_arm)}, {f_arm} over {geo.end(f_arm)}) is in collision"
-            + (f" ({why})" if why else "")
-        )
+    turned = {a: geo.faced[a][-1] for a in (c_arm, f_arm)}
+    configurations = (
+        (f"the pick configuration ({c_arm} over {geo.end(c_arm)}, {f_arm} over "
+         f"{geo.end(f_arm)})", above),
+        ("both hands turned along the cable", turned),
+        (f"{f_arm} slid to the connector hand", {c_arm: turned[c_arm], f_arm: geo.slide[-1]}),
+        (f"{f_arm} raised beside the connector hand",
+         {c_arm: turned[c_arm], f_arm: geo.raise_[-1]}),
+    )  # fmt: skip
+    for what, poses in configurations:
+        why = _pair_blocked(ctx, poses)
+        if why is not None:
+            raise _error(
+                f"{where}: every inverse kinematics solution of {what} is in collision"
+                + (f" ({why})" if why else "")
+            )
 
 
 def _pair_blocked(ctx: PlanningContext, poses: Mapping[str, Mat]) -> str | None:
