@@ -47,10 +47,10 @@ Symbols of the published formulas, with where each value comes from:
 
 Then ``R_lift = sqrt((L + X_offset)^2 + (H + Z_offset)^2)``, ``R_insert = L + 2 X_offset``,
 ``R_cable = max(R_lift, R_insert)`` and the sliding angle ``theta > atan((W_gripper +
-W_guide) / (2 A))``. The paper's figure lays the cable at the guide's
-foot, where ``H`` is the guide's height; held at the slot, the cable is lifted over what
-stands above it. (Taken as the full height, a 60 mm guide whose slot is near its top would
-send the routing hand 30-40 mm farther past the guide, onto the next one on a dense board.)
+W_guide) / (2 A))``. The paper calls ``H`` the guide's height; what the lift must clear is
+the part of the guide above the cable, and the hands hold the cable at the slot. (Taken as
+the full height, a 60 mm guide whose slot is near its top would send the routing hand 30-40
+mm farther past the guide, onto the next one on a dense board.)
 """
 
 from __future__ import annotations
