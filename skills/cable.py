@@ -1097,22 +1097,16 @@ def _pivot_blocked(
     tip_o = g.unit(-b.axis + base * _towards_base(ctx.world, o_arm, b.slot, b.up))
     T_pivot = _pivot(state, b, o_arm, tip_o, way)
     poses = cg.line(cg.lifted(T_pivot, b.up, cg.APPROACH_HEIGHT), T_pivot)
-    sampled = [*poses[::2], poses[-1]]
-    own = {_element_of(guide)}
-    for skip, within, only in ((own, ctx.clearance, None), ((), cg.CLEARANCE, own)):
-        near = ctx.probe.nearest(o_arm, sampled, OPEN, skip, within, only)
-        if near is not None:
-            return _Blocked.of(
-                near.distance - within,
-                f"{b.where}: {near.tool} would pass {_mm(near.distance)} mm from {near.other} "
-                f"grasping at the pivot (stopping {_mm(b.gap)} mm before the guide); the "
-                + (
-                    f"cell's clearance is {_mm(ctx.clearance)} mm"
-                    if skip
-                    else f"hand keeps {_mm(cg.CLEARANCE)} mm from the guide it works at"
-                ),
-            )
-    return None
+    found = _env_near(ctx, o_arm, poses, OPEN, guide)
+    if found is None:
+        return None
+    near, limit, own = found
+    return _Blocked.of(
+        near.distance - limit,
+        f"{b.where}: {near.tool} would pass {_mm(near.distance)} mm from {near.other} "
+        f"grasping at the pivot (stopping {_mm(b.gap)} mm before the guide); "
+        + _env_fix(ctx, near, own),
+    )
 
 
 def _slide_sides(
@@ -1422,39 +1416,25 @@ def _check_pivot_free(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: st
 
 
 def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) -> None:
-    """Both hands' tools keep the cell's clearance from everything but the guide they work
-    at, and cg.CLEARANCE from that guide, along the way's Cartesian paths (every other pose:
+    """The routing hand's tool keeps the cell's clearance from everything but the guide it
+    works at, and cg.CLEARANCE from that guide, and the two hands the clearance from each
+    other, along the way's Cartesian paths (every other pose:
     the compiler checks them all, with the arms), so a way that cannot is not handed to the
     compiler. (The hand turning with the slide swings its fingers towards the guide by more
     than the published sliding angle allows for.)"""
-    own = {_element_of(gp.guide)}
     paths = (
         (r_arm, "sliding", SLIDE, gp.slide),
         (r_arm, "pulling", GRASP, gp.pull_path),
         (r_arm, "lifting", GRASP, gp.lift),
         (r_arm, "swinging over the slot", GRASP, gp.swing),
         (r_arm, "inserting", GRASP, gp.insert),
-        (o_arm, "grasping at the pivot", OPEN, cg.line(gp.other_above, gp.pivot)),
-    )
+    )  # the other hand's descent to the pivot: _pivot_blocked, before the way is built
     for arm, what, mode, poses in paths:
-        sampled = [*poses[::2], poses[-1]]
-        for skip, within, only in ((own, ctx.clearance, None), ((), cg.CLEARANCE, own)):
-            near = ctx.probe.nearest(arm, sampled, mode, skip, within, only)
-            if near is None:
-                continue
-            if skip:
-                fix = (
-                    f"the cell's clearance is {_mm(ctx.clearance)} mm: {near.other} would "
-                    f"have to stand {_mm(ctx.clearance - near.distance)} mm farther from the "
-                    "hand's path, or the fingers be narrower"
-                )
-            else:
-                fix = (
-                    f"a hand keeps {_mm(cg.CLEARANCE)} mm from the guide it works at: more "
-                    "room before the guide (the hand stopping farther from it) or narrower "
-                    "fingers would clear it"
-                )
-            raise _Blocked.of(near.distance - within, _blocked(gp, near, what, within, fix))
+        found = _env_near(ctx, arm, poses, mode, gp.guide)
+        if found is not None:
+            near, limit, own = found
+            fix = _env_fix(ctx, near, own)
+            raise _Blocked.of(near.distance - limit, _blocked(gp, near, what, limit, fix))
     # the two hands, the other one holding the pivot while the routing hand works
     descend = cg.line(gp.other_above, gp.pivot)
     hands = (
@@ -1466,16 +1446,47 @@ def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) ->
         (r_arm, "inserting", GRASP, gp.insert, o_arm, gp.pivot, GRASP),
     )
     for arm, what, mode, path, other, T_other, other_mode in hands:
-        near = ctx.probe.between(arm, [*path[::2], path[-1]], mode, other, T_other, other_mode)
-        if near is not None and near.distance < ctx.clearance:
+        pair = ctx.probe.between(arm, [*path[::2], path[-1]], mode, other, T_other, other_mode)
+        if pair is not None and pair.distance < ctx.clearance:
             fix = (
                 f"the cell's clearance is {_mm(ctx.clearance)} mm: the hands would need "
-                f"{_mm(ctx.clearance - near.distance)} mm more between them (a longer span of "
+                f"{_mm(ctx.clearance - pair.distance)} mm more between them (a longer span of "
                 "cable between guides) or narrower tools"
             )
             raise _Blocked.of(
-                near.distance - ctx.clearance, _blocked(gp, near, what, ctx.clearance, fix)
+                pair.distance - ctx.clearance, _blocked(gp, pair, what, ctx.clearance, fix)
             )
+
+
+def _env_near(
+    ctx: PlanningContext, arm: str, poses: Poses, mode: str, guide: str
+) -> tuple[Nearest, float, bool] | None:
+    """The first object ``arm``'s tool comes too near along ``poses`` (every other pose and
+    the last), the distance it had to keep and whether it is the element of ``guide``: the
+    cell's clearance from everything else, cg.CLEARANCE from that one; None when it keeps
+    both."""
+    sampled = [*poses[::2], poses[-1]]
+    own = {_element_of(guide)}
+    for skip, limit, only in ((own, ctx.clearance, None), ((), cg.CLEARANCE, own)):
+        near = ctx.probe.nearest(arm, sampled, mode, skip, limit, only)
+        if near is not None:
+            return near, limit, only is not None
+    return None
+
+
+def _env_fix(ctx: PlanningContext, near: Nearest, own: bool) -> str:
+    """What would clear ``near`` (found by :func:`_env_near`)."""
+    if own:
+        return (
+            f"a hand keeps {_mm(cg.CLEARANCE)} mm from the guide it works at: more room "
+            "before the guide (the hand stopping farther from it) or narrower fingers would "
+            "clear it"
+        )
+    return (
+        f"the cell's clearance is {_mm(ctx.clearance)} mm: {near.other} would have to stand "
+        f"{_mm(ctx.clearance - near.distance)} mm farther from the hand's path, or the "
+        "fingers be narrower"
+    )
 
 
 def _blocked(gp: GuidePlan, near: Nearest, what: str, limit: float, fix: str) -> str:

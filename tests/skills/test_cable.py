@@ -706,3 +706,29 @@ def test_route_cable_first_way_is_the_published_one() -> None:
     assert all(w.theta >= first.theta - 1e-12 for w in ways if w.gap == first.gap)
     assert len(set(ways)) == len(ways)
     assert not first.turn_first and first.gap_after is None
+
+
+def test_route_cable_way_parameters_shape_the_motion() -> None:
+    """A way turning first turns in place at the stop, then slides straight; a way tipping
+    only along the cable keeps both tools' axes in the vertical plane of the guide's axis;
+    guide2 44 mm after guide1 (34 mm face to face) offers an insert end centred between
+    them: 17 mm from each face less the fingers' 4 mm half thickness, 13 mm."""
+    from cellengine.skills.cable import GuideWay, _basics, _centred_gap, _guide_plan
+
+    plan = planned("plan_straight")
+    state = replace(plan.home, route=((0.43, -0.19, 0.065),))
+    world = plan.world
+    way = GuideWay(theta=math.radians(60.0), side=1.0, turn_first=True, towards_base=False)
+    gp = _guide_plan(world, state, "cable1", "routing.guide1", "left", "right", way)
+    P = gp.slide[:, :3, 3]
+    moving = np.linalg.norm(P - P[0], axis=1) > 1e-9
+    k = int(np.argmax(moving))  # the first pose that moves
+    assert k > 1 and np.allclose(P[:k], P[0], atol=1e-9)
+    assert g.rotation_angle(gp.slide[0], gp.slide[k - 1]) == pytest.approx(math.radians(60.0))
+    normal = np.cross(gp.axis, gp.up)  # horizontal, across the guide's axis
+    for T in (gp.approach[-1], gp.pivot):
+        assert float(T[:3, 2] @ normal) == pytest.approx(0.0, abs=1e-9)
+    moved = _with_element(world, "routing.guide2", xyz=[0.43, -0.016, 0.01])
+    b = _basics(moved, state, "routing.guide1", "left")
+    assert _centred_gap(moved, "routing.guide1", b, after=True) == pytest.approx((0.013,), abs=1e-9)
+    assert _centred_gap(world, "routing.guide1", b, after=True) == ()
