@@ -2,7 +2,7 @@ PY ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 
-.PHONY: run test lint bench clean
+.PHONY: run test browser lint bench clean
 
 $(BIN)/python:
 	$(PY) -m venv $(VENV)
@@ -21,7 +21,11 @@ RUN_PLAN ?= cells/cable_routing/plan_two_turns.yaml
 run: $(VENV)/.installed
 	$(BIN)/cellengine run $(RUN_PLAN) --out run
 
-test: $(VENV)/.installed-test
+# the report's browser tests need Chromium: Debian's package, installed when none is on PATH
+browser:
+	bash .ci/browser
+
+test: $(VENV)/.installed-test browser
 	$(BIN)/python -m pytest
 
 # report.html's scripts are checked with ESLint from npm, installed under .venv (git-ignored; the

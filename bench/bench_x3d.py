@@ -17,7 +17,7 @@ import numpy as np
 
 from cellengine.info.x3d import load_x3d
 
-REMODEL = Path("/work/shared/remodel")
+REMODEL = Path(__file__).resolve().parent.parent / "tests" / "data" / "shared" / "remodel"
 
 HEAD = """<?xml version="1.0" encoding="UTF-8"?>
 <!DOCTYPE X3D PUBLIC "ISO//Web3D//DTD X3D 3.0//EN" "http://www.web3d.org/specifications/x3d-3.0.dtd">

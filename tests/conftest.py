@@ -1,4 +1,4 @@
-"""Shared fixtures: paths to the reference cells and the REMODEL sample."""
+"""Shared fixtures: paths to the reference cells, DESIGN.md and the REMODEL sample."""
 
 from __future__ import annotations
 
@@ -13,18 +13,19 @@ DATA = Path(__file__).resolve().parent / "data"
 
 
 def _shared() -> Path:
-    """The team's shared folder (DESIGN.md, the REMODEL sample): $CELLENGINE_SHARED, or the
-    nearest 'shared' folder beside the checkout or one of its parents."""
+    """The team's shared folder for DESIGN.md (the contract): $CELLENGINE_SHARED, or the nearest
+    'shared' folder beside the checkout or one of its parents, or the copy in tests/data."""
     if "CELLENGINE_SHARED" in os.environ:
         return Path(os.environ["CELLENGINE_SHARED"])
     for parent in ROOT.parents:
-        if (parent / "shared" / "remodel").is_dir():
+        if (parent / "shared" / "DESIGN.md").is_file():
             return parent / "shared"
-    return ROOT.parent / "shared"
+    return DATA / "shared"
 
 
 SHARED = _shared()
-REMODEL = SHARED / "remodel"
+# The REMODEL sample the tests read: a copy in tests/data, so that a checkout alone passes.
+REMODEL = DATA / "shared" / "remodel"
 
 
 @pytest.fixture

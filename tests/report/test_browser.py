@@ -1,4 +1,4 @@
-"""report.html in headless Chromium (Debian's chromium; .ci/run installs it): it loads
+"""report.html in headless Chromium (Debian's chromium; `make test` installs it): it loads
 without errors and draws the cell.
 
 Two runs per page: --dump-dom reads what the page says of itself (``data-status``, the 3D
@@ -49,7 +49,7 @@ def chromium() -> str:
             return found
     pytest.fail(
         "Chromium not found (looked for $CELLENGINE_CHROMIUM, chromium, chromium-browser): "
-        "install Debian's chromium with `apt-get install -y chromium` (.ci/run does); "
+        "install Debian's chromium with `apt-get install -y chromium` (`make test` does); "
         "the report's browser tests cannot run without it"
     )
 
