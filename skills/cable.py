@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Collection, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Annotated, Any, Literal
@@ -794,6 +794,9 @@ class GuidePlan:
     insert: Poses
     laid: float  # route length from the connector's rear face to Ap
     stand_back: float  # the other hand, released at the previous guide, backs off this far
+    # the elements the hands work between (this guide, and the one the cable leaves before
+    # the pivot): cg.CLEARANCE from them, the cell's clearance from everything else
+    beside: tuple[str, ...]
 
     @property
     def radius(self) -> float:
@@ -1077,7 +1080,15 @@ def _guide_plan(
         insert=insert,
         laid=laid,
         stand_back=way.stand_back,
+        beside=_beside(state, guide),
     )
+
+
+def _beside(state: CableState, guide: str) -> tuple[str, ...]:
+    """The elements a hand works between at ``guide``: its own and the one the cable leaves
+    before the pivot (the last routed guide, or the connector guide)."""
+    before = (_element_of(state.guides[-1]),) if state.guides else ()
+    return (_element_of(guide), *before)
 
 
 def _pivot(state: CableState, b: _Basics, o_arm: str, tip_o: Vec, way: GuideWay) -> Mat:
@@ -1097,7 +1108,7 @@ def _pivot_blocked(
     tip_o = g.unit(-b.axis + base * _towards_base(ctx.world, o_arm, b.slot, b.up))
     T_pivot = _pivot(state, b, o_arm, tip_o, way)
     poses = cg.line(cg.lifted(T_pivot, b.up, cg.APPROACH_HEIGHT), T_pivot)
-    found = _env_near(ctx, o_arm, poses, OPEN, guide)
+    found = _env_near(ctx, o_arm, poses, OPEN, _beside(state, guide))
     if found is None:
         return None
     near, limit, own = found
@@ -1183,6 +1194,7 @@ def _emit_guide(
             f"{label}: release the previous guide",
             [_cartesian(o_arm, _stand_back(b.state, o_arm, gp.up, gp.stand_back))],
             before=[GripperEvent(o_arm, OPEN)],
+            near=[(o_arm, _element_of(e)) for e in state.guides[-2:]],  # its pivot's guides
         )
     if gp.reorient is not None:
         b.add(
@@ -1190,16 +1202,18 @@ def _emit_guide(
             [_cartesian(r_arm, gp.reorient)],
             before=b.mode_event(r_arm, SLIDE, cable),
         )
+    near = [(r_arm, e) for e in gp.beside]  # the hands work between these (GuidePlan)
     b.add(
         f"{label}: approach sliding",
         [_cartesian(r_arm, gp.approach)],
         before=b.mode_event(r_arm, SLIDE, cable),
+        near=near,
     )
     b.add(
         f"{label}: slide R_cable",
         [_cartesian(r_arm, gp.slide)],
         after=[GripperEvent(r_arm, GRASP, cable)],
-        near=[(r_arm, _element_of(gp.guide))],  # the slide ends A before the guide
+        near=near,
         facts={
             "guide": gp.guide,
             "R_lift": gp.r_lift,
@@ -1222,16 +1236,22 @@ def _emit_guide(
         f"{label}: other arm grasps",
         [_cartesian(o_arm, cg.line(gp.other_above, gp.pivot))],
         after=[GripperEvent(o_arm, GRASP, cable)],
+        near=[(o_arm, e) for e in gp.beside],
     )
     # The distance between the hands grows by the pull here, by design: no keep_distance.
-    b.add(f"{label}: pull to tension", [_cartesian(r_arm, gp.pull_path)], facts={"pull": gp.pull})
-    b.add(f"{label}: lift", [_cartesian(r_arm, gp.lift)], keep_distance=pair)
-    b.add(f"{label}: over the slot", [_cartesian(r_arm, gp.swing)], keep_distance=pair)
+    b.add(
+        f"{label}: pull to tension",
+        [_cartesian(r_arm, gp.pull_path)],
+        facts={"pull": gp.pull},
+        near=near,
+    )
+    b.add(f"{label}: lift", [_cartesian(r_arm, gp.lift)], keep_distance=pair, near=near)
+    b.add(f"{label}: over the slot", [_cartesian(r_arm, gp.swing)], keep_distance=pair, near=near)
     b.add(
         f"{label}: insert",
         [_cartesian(r_arm, gp.insert)],
         keep_distance=pair,
-        near=[(r_arm, _element_of(gp.guide))],  # the fingers take the cable down by the slot
+        near=near,  # the fingers take the cable down by the slot
         annotations=[Anchor(cable, _point(gp.slot), gp.guide)],
         facts={
             "guide": gp.guide,
@@ -1430,7 +1450,7 @@ def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) ->
         (r_arm, "inserting", GRASP, gp.insert),
     )  # the other hand's descent to the pivot: _pivot_blocked, before the way is built
     for arm, what, mode, poses in paths:
-        found = _env_near(ctx, arm, poses, mode, gp.guide)
+        found = _env_near(ctx, arm, poses, mode, gp.beside)
         if found is not None:
             near, limit, own = found
             fix = _env_fix(ctx, near, own)
@@ -1459,14 +1479,14 @@ def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) ->
 
 
 def _env_near(
-    ctx: PlanningContext, arm: str, poses: Poses, mode: str, guide: str
+    ctx: PlanningContext, arm: str, poses: Poses, mode: str, beside: Collection[str]
 ) -> tuple[Nearest, float, bool] | None:
     """The first object ``arm``'s tool comes too near along ``poses`` (every other pose and
-    the last), the distance it had to keep and whether it is the element of ``guide``: the
-    cell's clearance from everything else, cg.CLEARANCE from that one; None when it keeps
-    both."""
+    the last), the distance it had to keep and whether it is one of the elements it works
+    ``beside``: the cell's clearance from everything else, cg.CLEARANCE from those; None
+    when it keeps both."""
     sampled = [*poses[::2], poses[-1]]
-    own = {_element_of(guide)}
+    own = set(beside)
     for skip, limit, only in ((own, ctx.clearance, None), ((), cg.CLEARANCE, own)):
         near = ctx.probe.nearest(arm, sampled, mode, skip, limit, only)
         if near is not None:
@@ -1478,9 +1498,9 @@ def _env_fix(ctx: PlanningContext, near: Nearest, own: bool) -> str:
     """What would clear ``near`` (found by :func:`_env_near`)."""
     if own:
         return (
-            f"a hand keeps {_mm(cg.CLEARANCE)} mm from the guide it works at: more room "
-            "before the guide (the hand stopping farther from it) or narrower fingers would "
-            "clear it"
+            f"a hand keeps {_mm(cg.CLEARANCE)} mm from the guides it works between: "
+            f"{near.other} would have to stand {_mm(cg.CLEARANCE - near.distance)} mm farther "
+            "from the hand's path (more room between the guides), or the fingers be narrower"
         )
     return (
         f"the cell's clearance is {_mm(ctx.clearance)} mm: {near.other} would have to stand "

@@ -521,16 +521,17 @@ def test_a_slide_blocked_at_every_angle_fails_naming_what_blocks_it() -> None:
 
 def test_a_guide_too_close_after_another_fails_with_the_closest_way_and_what_to_change() -> None:
     """guide2 moved to 40 mm after guide1 (slot to slot; 30 mm face to face): guide1 routes
-    (its insert ends nearer), but every way of guide2 brings the hand within the cell's
-    10 mm of guide1 or within 5 mm of guide2. The way that came closest is named, with how
-    far guide1 would have to move for it."""
+    (its insert ends nearer), but every way of guide2 brings a hand within 5 mm of one of
+    the two guides it works between. The way that came closest is named, with how far the
+    guide would have to move for it."""
     world, steps = _world()
     world = _with_element(world, "routing.guide2", xyz=[0.43, -0.02, 0.01])
     assert _fails(world, steps) == (
-        "steps[2] RouteCable routing.guide2: left/tool/finger_left would pass 7.0 mm from "
-        "routing.guide1 sliding (sliding at theta = 75.6 deg on the right, stopping 10.0 mm "
-        "before the guide); the cell's clearance is 10.0 mm: routing.guide1 would have to "
-        "stand 3.0 mm farther from the hand's path, or the fingers be narrower"
+        "steps[2] RouteCable routing.guide2: left/tool/finger_left would pass 1.4 mm from "
+        "routing.guide2 sliding (sliding at theta = 75.6 deg on the left, stopping 10.0 mm "
+        "before the guide); a hand keeps 5.0 mm from the guides it works between: "
+        "routing.guide2 would have to stand 3.6 mm farther from the hand's path (more room "
+        "between the guides), or the fingers be narrower"
     )
 
 
