@@ -69,7 +69,11 @@ class CellError(Exception):
 
 
 class InputError(CellError):
-    """Invalid input, or a plan that cannot run (exit 1)."""
+    """Invalid input, or a plan that cannot run (exit 1). ``blames``: what a search over
+    candidates should change first to avoid it (a key of :attr:`Candidate.decides
+    <cellengine.family.Candidate.decides>`, e.g. which arm does what), or None."""
+
+    blames: str | None = None
 
 
 class StepError(InputError):
@@ -86,7 +90,9 @@ class StepError(InputError):
         """``error`` as a StepError of ``step`` (kept as it is if it knows its step)."""
         if isinstance(error, StepError) and error.step is not None:
             return error
-        return cls(error.problems, step)
+        wrapped = cls(error.problems, step)
+        wrapped.blames = getattr(error, "blames", None)
+        return wrapped
 
     def located(self, file: str | Path, line: int | None, col: int | None) -> InputError:
         """The problems placed at the step in its plan file (a problem placed already keeps

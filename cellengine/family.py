@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib.metadata import entry_points
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
@@ -39,11 +39,15 @@ class Candidate:
     """One way to do the next part of a plan: its segments, then what comes after it
     (``then()``: the candidates of the next choice, best first; None: the plan ends here).
     ``report``: entries for report.json once the program is compiled (e.g. a mission with
-    the actual times of its parts), from the compiled program."""
+    the actual times of its parts), from the compiled program. ``decides``: what this
+    candidate fixes for the rest of the plan, by name (e.g. ``{"arms": "left holds the
+    connector"}``): an error that blames one of these names sends the search straight back
+    to the latest choice that decided it, to a candidate that decides it otherwise."""
 
     segments: tuple[Segment, ...]
     then: Callable[[], Iterator[Candidate]] | None = None
     report: Callable[[Program], Mapping[str, Any]] | None = None
+    decides: Mapping[str, str] = field(default_factory=dict)
 
 
 @runtime_checkable

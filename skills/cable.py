@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Collection, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Annotated, Any, Literal
@@ -216,7 +216,7 @@ class RouteCable(Skill):
         # differ only in it are checked once.
         checked: dict[GuideWay, GuidePlan | InputError] = {}
         pivots: dict[tuple[float, float, bool], InputError | None] = {}
-        for way in guide_ways(world, state, guide, r_arm):
+        for way in guide_ways(world, state, guide, r_arm, self._clear_from(ctx, state, k)):
             key = replace(way, stand_back=cg.STAND_BACK)
             p_key = (way.gap, way.pivot_lean, way.towards_base)
             if p_key not in pivots:
@@ -238,6 +238,38 @@ class RouteCable(Skill):
                 else _error(f"steps[{state.step}] RouteCable {guide}: no way to route it")
             )
 
+    def _clear_from(
+        self, ctx: PlanningContext, state: CableState, k: int
+    ) -> Callable[[_Basics, float, bool], float | None]:
+        """The least sliding angle (to 0.5 deg, by bisection) at which the routing hand's
+        tool, sliding with the default tips, keeps cg.CLEARANCE from guide ``k``, for a stop,
+        side and turning first or not; None when not even THETA_MAX does. (The published
+        minimum assumes a hand W_gripper wide that does not turn; the steps of THETA_STEP
+        above it miss a narrow range of angles that clear the guide and the elements on
+        the slide's side.)"""
+        guide = self.guides[k]
+        r_arm, o_arm = self.arms(ctx, state)
+        own = {_element_of(guide)}
+
+        def clear(b: _Basics, side: float, first: bool, theta: float) -> bool:
+            way = GuideWay(theta, side, gap=b.gap, turn_first=first)
+            gp = _guide_plan(ctx.world, state, self.cable, guide, r_arm, o_arm, way)
+            poses = [*gp.slide[::2], gp.slide[-1]]
+            return ctx.probe.nearest(r_arm, poses, SLIDE, (), cg.CLEARANCE, own) is None
+
+        def least(b: _Basics, side: float, first: bool) -> float | None:
+            lo, hi = b.theta_min + cg.THETA_MARGIN, cg.THETA_MAX
+            if clear(b, side, first, lo):
+                return lo
+            if not clear(b, side, first, hi):
+                return None
+            while hi - lo > math.radians(0.5):
+                mid = (lo + hi) / 2.0
+                lo, hi = (lo, mid) if clear(b, side, first, mid) else (mid, hi)
+            return hi
+
+        return least
+
     def _checked(
         self,
         ctx: PlanningContext,
@@ -252,8 +284,12 @@ class RouteCable(Skill):
         world = ctx.world
         try:
             gp = _guide_plan(world, state, self.cable, guide, r_arm, o_arm, way)
-            _check_reach(ctx, r_arm, gp.reach_routing(), gp.where)
-            _check_reach(ctx, o_arm, gp.reach_other(), gp.where)
+            try:
+                _check_reach(ctx, r_arm, gp.reach_routing(), gp.where)
+                _check_reach(ctx, o_arm, gp.reach_other(), gp.where)
+            except InputError as e:
+                e.blames = "arms"  # the other arm might reach: PickCable decides which
+                raise
             _check_length(world, self.cable, _hand(world, r_arm), gp)
             _check_clear(ctx, gp, r_arm, o_arm)
             _check_pivot_free(ctx, gp, r_arm, o_arm)
@@ -916,7 +952,13 @@ def _basics(
     )
 
 
-def guide_ways(world: World, state: CableState, guide: str, r_arm: str) -> Iterator[GuideWay]:
+def guide_ways(
+    world: World,
+    state: CableState,
+    guide: str,
+    r_arm: str,
+    clear_from: Callable[[_Basics, float, bool], float | None] | None = None,
+) -> Iterator[GuideWay]:
     """The ways to route ``guide``, best first: the published sliding angle (its minimum plus
     THETA_MARGIN) on the side farther from the other elements, with the hands' default
     tips, first; then every angle up to THETA_MAX in THETA_STEP steps on each side whose
@@ -924,7 +966,10 @@ def guide_ways(world: World, state: CableState, guide: str, r_arm: str) -> Itera
     in the room there), insert end (as far past as the stop, centred in the room after the
     guide, or nearer), the other tips (LEANS, PIVOT_LEANS, only along the cable), turning
     before sliding and the stand-backs, ranked by how much longer the motion gets (a steeper
-    slide swings farther). An error naming what blocks when no angle clears the guide."""
+    slide swings farther). ``clear_from(basics, side, turn_first)``, when given, is the
+    least angle at which the slide keeps its hand clear of the guide (None: none does); that
+    angle is offered too, the steps missing it by up to THETA_STEP. An error naming what
+    blocks when no angle clears the guide."""
     b0 = _basics(world, state, guide, r_arm)
     theta0 = b0.theta_min + cg.THETA_MARGIN
     if theta0 > cg.THETA_MAX:
@@ -945,14 +990,22 @@ def guide_ways(world: World, state: CableState, guide: str, r_arm: str) -> Itera
         afters += tuple(a for a in cg.APPROACH_GAPS if a < gap)
         start = b.theta_min + cg.THETA_MARGIN
         n = int((cg.THETA_MAX - start) / cg.THETA_STEP + 1e-9) + 1 if start <= cg.THETA_MAX else 0
-        for k in range(n):
-            theta = start + k * cg.THETA_STEP
+        angles: list[tuple[float, tuple[float, bool] | None]]
+        angles = [(start + k * cg.THETA_STEP, None) for k in range(n)]
+        for side, first in itertools.product((1.0, -1.0), (False, True)):
+            least = None if clear_from is None or n == 0 else clear_from(b, side, first)
+            if least is not None and least > start:
+                angles.append((least, (side, first)))
+        for theta, only in angles:
             clear, blocked = _slide_sides(world, guide, b, theta)
             if not first_blocked:
                 first_blocked = blocked
             for rank, side in enumerate(clear):
+                if only is not None and side != only[0]:
+                    continue
+                firsts = (False, True) if only is None else (only[1],)
                 for lean, pivot, back, after, first, base in itertools.product(
-                    cg.LEANS, cg.PIVOT_LEANS, cg.STAND_BACKS, afters, (False, True), (True, False)
+                    cg.LEANS, cg.PIVOT_LEANS, cg.STAND_BACKS, afters, firsts, (True, False)
                 ):
                     cost = abs(theta - theta0) + 0.05 * rank + abs(back - cg.STAND_BACK)
                     cost += 0.5 * (abs(lean - cg.LEAN) + abs(pivot - cg.PIVOT_LEAN))

@@ -46,8 +46,13 @@ def _from(
     if isinstance(step, RouteCable):
         yield from _guide(ctx, steps, i, replace(state, step=i), 0)
         return
+    # a PickCable decides which arm holds the connector end and which routes: a guide out of
+    # the routing arm's reach (errors that blame "arms") comes back here, to the other arm
+    picks = isinstance(step, PickCable)
     for segments, after in step_ways(ctx, steps, i, state):
-        yield Candidate(tuple(segments), then=functools.partial(_from, ctx, steps, i + 1, after))
+        decides = {"arms": f"{after.connector_arm} holds the connector"} if picks else {}
+        then = functools.partial(_from, ctx, steps, i + 1, after)
+        yield Candidate(tuple(segments), then=then, decides=decides)
 
 
 def _guide(

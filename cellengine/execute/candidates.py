@@ -6,8 +6,11 @@ When that fails, the choice that produced the failing segment is asked for its n
 then the choices before it; what is compiled before that choice is kept (the compiler is
 restored to where that choice's segments began) and compiling goes on with the new
 candidates. A family that cannot plan a choice at all (its generator raises) sends the search
-to the choice before. ``MAX_TRIES`` candidates taken in all; then the first error is raised:
-with one candidate per choice, exactly the error of compiling the first candidates.
+to the choice before. An error that blames something a choice decided (``InputError.blames``,
+``Candidate.decides``) sends it straight back to the latest choice that decided it, to its
+next candidate that decides it otherwise: the choices between could not change it.
+``MAX_TRIES`` candidates taken in all; then the first error is raised: with one candidate
+per choice, exactly the error of compiling the first candidates.
 
 Deterministic: candidates are tried in the order the family offers them.
 """
@@ -56,11 +59,12 @@ def compile_candidates(
             return [c.taken for c in chosen]
         except _Grown as e:  # the choice after the last one taken offered nothing
             first_error = first_error or e.error
-            failed = len(chosen)
+            failed, blames = len(chosen), e.error.blames if e.error is not None else None
         except InputError as e:
             first_error = first_error or e
-            failed = current[0]
-        k = _next_candidate(chosen, failed)
+            failed, blames = current[0], e.blames
+        k = _jump(chosen, failed, blames) if blames is not None else None
+        k = k if k is not None else _next_candidate(chosen, failed)
         if k is None:
             break
         for j in [j for j in marks if j > k]:
@@ -124,6 +128,27 @@ def _compile_from(
 
     current[0] = start
     add_all(compiler, segments, before)
+
+
+def _jump(chosen: list[_Choice], failed: int, blames: str) -> int | None:
+    """Take, at the latest choice up to ``failed`` that decided ``blames``, its next
+    candidate that decides it otherwise; the choices after it are dropped. The choice
+    changed, or None (nothing decided it, or no candidate decides it otherwise: the search
+    then goes on as without the blame)."""
+    for k in range(min(failed, len(chosen) - 1), -1, -1):
+        was = chosen[k].taken.decides.get(blames)
+        if was is None:
+            continue
+        while True:
+            try:
+                taken = next(chosen[k].options)
+            except (StopIteration, InputError):
+                return None
+            if taken.decides.get(blames) != was:
+                del chosen[k + 1 :]
+                chosen[k].taken = taken
+                return k
+    return None
 
 
 def _next_candidate(chosen: list[_Choice], failed: int) -> int | None:

@@ -104,3 +104,42 @@ def test_what_comes_before_the_choice_changed_is_not_compiled_again() -> None:
     compile_candidates(c, choice(first), lambda s: seen.append(f"{s.step} {s.label}"))
     assert labels(c) == [f"to {NEAR}", f"to {NEAR}", f"to {ALSO}"]
     assert seen.count(f"0 to {NEAR}") == 1
+
+
+def blamed(step: int, blames: str) -> Iterator[Candidate]:
+    e = StepError(Problem(f"steps[{step}]: out of reach"), step)
+    e.blames = blames
+    raise e
+    yield  # a generator
+
+
+def test_an_error_that_blames_a_decision_goes_back_to_the_choice_that_made_it() -> None:
+    """Choice 0 decides the arms; choice 1 has two ways, after each of which choice 2 fails
+    blaming the arms. The search skips choice 1's second way and choice 0's candidate that
+    decides the arms as the first did, straight to the one that decides them otherwise."""
+    c = compiler()
+    seen: list[str] = []
+
+    def middle(label: tuple[float, float, float]) -> Iterator[Candidate]:
+        return choice(
+            Candidate((hop(1, label),), then=lambda: blamed(2, "arms")),
+            Candidate((hop(1, FAR),), then=lambda: blamed(2, "arms")),
+        )
+
+    same = {"arms": "left holds the connector"}
+    first = Candidate((hop(0, NEAR),), then=lambda: middle(ALSO), decides=same)
+    again = Candidate((hop(0, ALSO),), then=lambda: middle(ALSO), decides=same)
+    other = Candidate((hop(0, ALSO),), decides={"arms": "right holds the connector"})
+    taken = compile_candidates(c, choice(first, again, other), lambda s: seen.append(s.label))
+    assert taken == [other]
+    assert labels(c) == [f"to {ALSO}"]
+    # choice 1's FAR way was never compiled
+    assert f"to {FAR}" not in seen
+
+
+def test_a_blame_no_choice_decided_backtracks_as_usual() -> None:
+    c = compiler()
+    stuck = Candidate((hop(0, NEAR),), then=lambda: blamed(1, "arms"))
+    way = Candidate((hop(0, ALSO),))
+    compile_candidates(c, choice(stuck, way))
+    assert labels(c) == [f"to {ALSO}"]
