@@ -55,6 +55,11 @@ CENTRING_STEP = 0.001  # m: how finely the room after a guide is measured for a 
 # =========================================================================== the skills
 
 
+# PlaceConnector carries the pair to over the connector guide: turned to the guide where it
+# is first (as published), turned while carried, or turned over the guide
+PLACE_ORDERS = ("align first", "together", "approach first")
+
+
 class PickCable(Skill):
     """Grasp both ends of a cable from two combs, connector end first."""
 
@@ -155,10 +160,33 @@ class PlaceConnector(Skill):
         f_arm = _other(arms, c_arm)
         _require_hold(state, c_arm, self.cable, where, "the connector end (plan PickCable first)")
         _require_hold(state, f_arm, self.cable, where, "the cable (plan PickCable first)")
-        geo = _place_geometry(world, state, self, c_arm, f_arm, where)
-        _check_reach(ctx, c_arm, geo.reach(c_arm), where)
-        _check_reach(ctx, f_arm, geo.reach(f_arm), where)
-        return _emit_place(self, state, geo, c_arm, f_arm)
+        return next(self.ways(ctx, state))
+
+    def ways(
+        self, ctx: PlanningContext, state: CableState
+    ) -> Iterator[tuple[list[Segment], CableState]]:
+        """The ways to place the connector, best first: the pair turned to the guide where
+        it is, then carried over the slot (as published); or turned while carried; or carried
+        first and turned over the slot; each with the connector hand retracting straight up,
+        then along its tipped tool axis. The first way's error when none reaches."""
+        world = ctx.world
+        where = f"steps[{state.step}] PlaceConnector {self.guide}"
+        c_arm = self.connector_arm(world, state.connector_arm, state.step)
+        f_arm = _other(_two_arms(world, where), c_arm)
+        _require_hold(state, c_arm, self.cable, where, "the connector end (plan PickCable first)")
+        _require_hold(state, f_arm, self.cable, where, "the cable (plan PickCable first)")
+        first: InputError | None = None
+        for order, along_tool in itertools.product(PLACE_ORDERS, (False, True)):
+            geo = _place_geometry(world, state, self, c_arm, f_arm, where, order, along_tool)
+            try:
+                _check_reach(ctx, c_arm, geo.reach(c_arm), where)
+                _check_reach(ctx, f_arm, geo.reach(f_arm), where)
+            except InputError as e:
+                first = first or e
+                continue
+            yield _emit_place(self, state, geo, c_arm, f_arm)
+        if first is not None:
+            raise first
 
 
 class RouteCable(Skill):
@@ -319,15 +347,19 @@ def plan_cable_steps(
 def step_ways(
     ctx: PlanningContext, steps: Sequence[Skill], i: int, state: CableState
 ) -> Iterator[tuple[list[Segment], CableState]]:
-    """The ways to do ``steps[i]`` from ``state``, best first, each with the state after it:
-    one, the geometry of paper 003. Before a PickCable, the cable held is released (its last
+    """The ways to do ``steps[i]`` from ``state``, best first, each with the state after it
+    (a RouteCable's: one, each guide's first way; the cable family offers each guide's
+    ways as a choice of its own). Before a PickCable, the cable held is released (its last
     step is done) and the PlaceConnector of the same cable is looked up for its arm and
     guide. A step that cannot be done raises StepError with its index."""
     step = steps[i]
     if not isinstance(step, PickCable | PlaceConnector | RouteCable):
         raise TypeError(f"steps[{i}]: {step.skill} is not a cable skill")
     with at_step(i):
-        if not isinstance(step, PickCable):
+        if isinstance(step, PlaceConnector):
+            yield from step.ways(ctx, replace(state, step=i))
+            return
+        if isinstance(step, RouteCable):
             yield step.plan(ctx, replace(state, step=i))
             return
         segments: list[Segment] = []
@@ -639,8 +671,7 @@ class _PlaceGeometry:
     gap: float
     adjust: Poses | None  # the other hand slides to where the placing needs it
     T_c_f: Mat  # the other hand in the connector hand's TCP frame, while both carry
-    align: tuple[Poses, Poses]
-    approach: tuple[Poses, Poses]
+    carry: tuple[tuple[str, tuple[Poses, Poses]], ...]  # to over the slot, turned to the guide
     insert: tuple[Poses, Poses]
     retract: Poses
     rear: Vec  # the connector's rear face, seated
@@ -649,7 +680,7 @@ class _PlaceGeometry:
 
     def reach(self, arm: str) -> list[tuple[str, Mat]]:
         i = 0 if arm == self.connector_arm else 1
-        out = [("aligned", self.align[i][-1]), ("connector approach", self.approach[i][-1])]
+        out = [(what, paths[i][-1]) for what, paths in self.carry]
         out += [("connector insert", self.insert[i][-1])]
         if i == 0:
             out += [("connector retract", self.retract[-1])]
@@ -663,7 +694,12 @@ def _place_geometry(
     c_arm: str,
     f_arm: str,
     where: str,
+    order: str = "align first",
+    along_tool: bool = False,
 ) -> _PlaceGeometry:
+    """The poses of placing the connector: the pair carried to over the slot in ``order``
+    (PLACE_ORDERS), then inserted; the connector hand retracting straight up, or back along
+    its tool axis (``along_tool``)."""
     cable = world.cable(step.cable)
     conn_len = cable.connector.length if cable.connector is not None else 0.0
     up = cg.platform_up(world, step.guide)
@@ -685,11 +721,12 @@ def _place_geometry(
         adjust = cg.line(T_f0, T_f_want)
     T_c_ins = cg.tcp_frame(slot, axis, up, -axis, state.lean)
     T_c_app = cg.lifted(T_c_ins, up, cg.APPROACH_HEIGHT)
-    T_c_al = cg.tcp_frame(T_c0[:3, 3], axis, up, -axis, state.lean)
-    align = cg.pair_line(T_c0, T_c_al, T_c_f)
-    approach = cg.pair_line(T_c_al, T_c_app, T_c_f)
+    carry = _carry(
+        T_c0, T_c_app, T_c_f, cg.tcp_frame(T_c0[:3, 3], axis, up, -axis, state.lean), order
+    )
     insert = cg.pair_line(T_c_app, T_c_ins, T_c_f)
-    retract = cg.line(T_c_ins, cg.lifted(T_c_ins, up, cg.RETRACT_HEIGHT))
+    back = -T_c_ins[:3, 2] if along_tool else up
+    retract = cg.line(T_c_ins, cg.at(T_c_ins, T_c_ins[:3, 3] + cg.RETRACT_HEIGHT * back))
     # pull_distance: the cable from the seated connector's rear face to the routing
     # fingertips: the guide beyond the connector (its exit wall, and the connector's play in
     # the pocket) plus X_offset (the fingers' half-length and the gap A).
@@ -703,13 +740,32 @@ def _place_geometry(
         gap=dims.get("gap", 0.0),
         adjust=adjust,
         T_c_f=T_c_f,
-        align=align,
-        approach=approach,
+        carry=carry,
         insert=insert,
         retract=retract,
         rear=slot + conn_len / 2.0 * axis,
         pull_distance=pull,
         s_other=pull,
+    )
+
+
+def _carry(
+    T_c0: Mat, T_c_app: Mat, T_c_f: Mat, T_c_aligned: Mat, order: str
+) -> tuple[tuple[str, tuple[Poses, Poses]], ...]:
+    """The pair's paths from the connector hand at ``T_c0`` to over the slot (``T_c_app``),
+    turned to the guide: where it is first (``T_c_aligned``: there, turned), while carried,
+    or over the slot."""
+    if order == "align first":
+        return (
+            ("align with the guide", cg.pair_line(T_c0, T_c_aligned, T_c_f)),
+            ("approach", cg.pair_line(T_c_aligned, T_c_app, T_c_f)),
+        )
+    if order == "together":
+        return (("approach", cg.pair_line(T_c0, T_c_app, T_c_f)),)
+    over = cg.at(T_c0, T_c_app[:3, 3])
+    return (
+        ("approach", cg.pair_line(T_c0, over, T_c_f)),
+        ("align with the guide", cg.pair_line(over, T_c_app, T_c_f)),
     )
 
 
@@ -752,7 +808,7 @@ def _emit_place(
         )
     # The cable between the connector and the other hand is short and straight: both hands
     # carry it as one rigid piece, and its length between them stays what it is.
-    for what, paths in (("align with the guide", geo.align), ("approach", geo.approach)):
+    for what, paths in geo.carry:
         if all(_same_pose(path[0], path[-1], 1e-9, cg.TINY_ANGLE) for path in paths):
             continue  # aligned already (the pick left the pair along the guide)
         b.add(
@@ -1458,10 +1514,11 @@ def _check_both_free(
             )
 
 
-def _pair_blocked(ctx: PlanningContext, poses: Mapping[str, Mat]) -> str | None:
+def _pair_blocked(ctx: PlanningContext, poses: Mapping[str, Mat], keep: float = 0.0) -> str | None:
     """None when some pair of the two arms' inverse kinematics solutions at ``poses``
-    (T_cell_tcp per arm) is free of collisions; else why none is ("" when an arm has no
-    solution, else the first pair's contact)."""
+    (T_cell_tcp per arm) is free of collisions, and keeps ``keep`` (m) between the arms;
+    else why none is ("" when an arm has no solution, else the first pair's contact or
+    least distance)."""
     (a, T_a), (b, T_b) = poses.items()
     sols_a, sols_b = ctx.iks[a].solve_all(T_a), ctx.iks[b].solve_all(T_b)
     if len(sols_a) == 0 or len(sols_b) == 0:
@@ -1469,20 +1526,31 @@ def _pair_blocked(ctx: PlanningContext, poses: Mapping[str, Mat]) -> str | None:
     Q = np.repeat(ctx.home[None, :], len(sols_a) * len(sols_b), axis=0)
     Q[:, ctx.cell.slices[a]] = np.repeat(sols_a, len(sols_b), axis=0)
     Q[:, ctx.cell.slices[b]] = np.tile(sols_b, (len(sols_a), 1))
-    if not bool(ctx.checker.check_batch(Q).all()):
+    free = np.flatnonzero(~ctx.checker.check_batch(Q))
+    if len(free) == 0:
+        return str(ctx.checker.check(Q[0]))
+    if keep <= 0.0:
         return None
-    return str(ctx.checker.check(Q[0]))
+    nearest = (math.inf, ("", ""))
+    for i in free:
+        d, pair = ctx.checker.distance(Q[i], between=(a, b))
+        if d >= keep:
+            return None
+        nearest = min(nearest, (d, pair))
+    return f"the arms {_mm(nearest[0])} mm apart at best ({', '.join(nearest[1])})"
 
 
 def _check_pivot_free(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) -> None:
     """While the routing hand holds still at the slide's end, the other arm comes down to the
-    pivot: some pair of the arms' solutions is free there and above it."""
+    pivot: some pair of the arms' solutions is free there and above it, and keeps the
+    cell's clearance between the arms."""
     for what, T in (("above the pivot", gp.other_above), ("at the pivot", gp.pivot)):
-        why = _pair_blocked(ctx, {r_arm: gp.slide[-1], o_arm: T})
+        why = _pair_blocked(ctx, {r_arm: gp.slide[-1], o_arm: T}, ctx.clearance)
         if why is not None:
             raise _error(
                 f"{gp.where}: every inverse kinematics solution of the other arm {what} is in "
-                f"collision with the routing arm at the slide's end (sliding at theta = "
+                f"collision with the routing arm at the slide's end, or within the cell's "
+                f"clearance ({_mm(ctx.clearance)} mm) of it (sliding at theta = "
                 f"{math.degrees(gp.theta):.1f} deg, stopping {_mm(gp.a)} mm before the guide)"
                 + (f" ({why})" if why else "")
             )

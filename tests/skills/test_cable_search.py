@@ -87,6 +87,7 @@ class Watch:
                 c.segments,
                 then=None if then is None else self._then(then, (*path, n)),
                 report=c.report,
+                decides=c.decides,
             )
             n += 1
 
@@ -213,8 +214,10 @@ def test_a_cable_too_short_for_the_route_is_refused_at_the_step(
         "approach point, R_cable 68.0 mm slid past it, 1.4 mm pulled to tension, 9.0 mm for "
         "the fingers to hold) but the cable is 110.0 mm long\n"
     )
-    # guide1 had no way: the search went back to PickCable's every way (3 tips x 2 arms)
-    assert watch.at(0) == [0, 1, 2, 3, 4, 5]
+    # guide1 had no way: the search went back to PlaceConnector's every way (3 orders x 2
+    # retracts), then to PickCable's next, until the search's budget (MAX_TRIES) ran out
+    assert watch.at(0) == [0, 1, 2]
+    assert watch.at(1) == [*range(6), *range(6), *range(6)]
     assert watch.at(2) == []
 
 
