@@ -312,6 +312,7 @@ class RouteCable(Skill):
         world = ctx.world
         try:
             gp = _guide_plan(world, state, self.cable, guide, r_arm, o_arm, way)
+            gp = replace(gp, beside=(*gp.beside, *_under(ctx, gp.slot, gp.up)))
             try:
                 _check_reach(ctx, r_arm, gp.reach_routing(), gp.where)
                 _check_reach(ctx, o_arm, gp.reach_other(), gp.where)
@@ -887,7 +888,8 @@ class GuidePlan:
     laid: float  # route length from the connector's rear face to Ap
     stand_back: float  # the other hand, released at the previous guide, backs off this far
     # the elements the hands work between (this guide, and the one the cable leaves before
-    # the pivot): cg.CLEARANCE from them, the cell's clearance from everything else
+    # the pivot) and, once screened, what lies under the cable (_under): cg.CLEARANCE from
+    # them, the cell's clearance from everything else
     beside: tuple[str, ...]
 
     @property
@@ -1193,6 +1195,13 @@ def _guide_plan(
     )
 
 
+def _under(ctx: PlanningContext, slot: Vec, up: Vec) -> tuple[str, ...]:
+    """What lies wholly under the cable held at ``slot`` (the table, a plate): fingers that
+    take the cable where it lies come down towards it, so they keep cg.CLEARANCE from it,
+    as from the guides they work between."""
+    return tuple(sorted(ctx.probe.under(float(slot @ up), up)))
+
+
 def _beside(state: CableState, guide: str) -> tuple[str, ...]:
     """The elements a hand works between at ``guide``: its own and the one the cable leaves
     before the pivot (the last routed guide, or the connector guide)."""
@@ -1217,7 +1226,7 @@ def _pivot_blocked(
     tip_o = g.unit(-b.axis + base * _towards_base(ctx.world, o_arm, b.slot, b.up))
     T_pivot = _pivot(state, b, o_arm, tip_o, way)
     poses = cg.line(cg.lifted(T_pivot, b.up, cg.APPROACH_HEIGHT), T_pivot)
-    found = _env_near(ctx, o_arm, poses, OPEN, _beside(state, guide))
+    found = _env_near(ctx, o_arm, poses, OPEN, (*_beside(state, guide), *_under(ctx, b.slot, b.up)))
     if found is None:
         return None
     near, limit, own = found

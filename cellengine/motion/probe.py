@@ -106,6 +106,20 @@ class ToolProbe:
                         best = Nearest(float(d), t.name, s.name)
         return best
 
+    def under(self, level: float, up: Vec) -> frozenset[str]:
+        """The environment objects (names without ``#k``) wholly below ``level`` (m, along
+        ``up``): the surfaces something held at that level lies over."""
+        tops: dict[str, float] = {}
+        for s in self.statics:
+            box = s.shape.aabb_local
+            lo, hi = np.asarray(box.min_), np.asarray(box.max_)
+            corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                                for z in (lo[2], hi[2])])  # fmt: skip
+            top = float(((corners @ s.T[:3, :3].T + s.T[:3, 3]) @ up).max())
+            name = s.name.split("#")[0]
+            tops[name] = max(tops.get(name, -math.inf), top)
+        return frozenset(name for name, top in tops.items() if top < level)
+
     def between(
         self,
         arm: str,

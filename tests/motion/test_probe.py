@@ -71,3 +71,13 @@ def test_only_measures_the_objects_it_names(ctx) -> None:  # type: ignore[no-unt
     near = ctx.probe.nearest("left", at_slot, "grasp", within=0.2, only={"routing.guide2"})
     assert near is not None and near.other.split("#")[0] == "routing.guide2"
     assert ctx.probe.nearest("left", at_slot, "grasp", within=0.01, only={"routing.guide2"}) is None
+
+
+def test_under_names_what_lies_wholly_below_a_level(ctx) -> None:  # type: ignore[no-untyped-def]
+    """On the reference cell the table's top is at z = 0 and the guides and combs stand
+    about 60 mm (the platforms' plates are not in the scene): up to the slots' 65 mm only
+    the table lies under, at 200 mm everything does."""
+    probe = ctx.probe
+    up = np.array([0.0, 0.0, 1.0])
+    assert probe.under(0.005, up) == probe.under(0.065, up) == {"table"}
+    assert {"routing.guide1", "holder.comb_a", "table"} <= probe.under(0.2, up)
