@@ -22,13 +22,15 @@ stands on a 10 mm pad. The cable's length is the route (connector slot to last s
 Rejected (and the walk drawn again from the next draws of the same generator), exactly:
 a guide's footprint (+2 mm) overlapping another guide's or the holder plate's; the straight
 cable between two consecutive guides crossing the footprint of a third; a guide more than
-700 mm horizontally from both bases (out of both arms' reach) or within 150 mm of one (inside
-the robot's base); a guide off the table (x -200..1200, |y| <= 700 mm).
+700 mm horizontally from either base (out of that arm's reach: the dual-arm method works
+every guide with both hands, one holding the pivot before it while the other lays the cable
+in) or within 150 mm of one (inside the robot's base); a guide off the table (x -200..1200,
+|y| <= 700 mm).
 
 ``remodel_placements()`` are the 8 poses at which the REMODEL sample is imported instead:
 yaw 0, 90, 180, 270 deg, its keypoints' centre at the nearest and the farthest x (10 mm
 steps; y within 200 mm of 0 in 10 mm steps, the nearest to 0) where every keypoint is in
-front of the bases (x >= 150 mm) and within 700 mm of a base.
+front of the bases (x >= 150 mm) and within 700 mm of both bases.
 """
 
 from __future__ import annotations
@@ -163,8 +165,8 @@ def rejection(cg: Guide, guides: tuple[Guide, ...], base_distance: float) -> str
     bases = ((0.0, base_distance / 2), (0.0, -base_distance / 2))
     for g in every:
         d = [math.dist((g.x, g.y), b) for b in bases]
-        if min(d) > REACH:
-            return f"{g.name} out of both arms' reach"
+        if max(d) > REACH:  # the method works every guide with both hands
+            return f"{g.name} out of an arm's reach"
         if min(d) < BASE_KEEP_OUT:
             return f"{g.name} inside a robot's base"
         if not _inside(_corners(g, 0.0), TABLE_BOX):
@@ -465,6 +467,6 @@ def remodel_placements(keypoints: list[tuple[float, float]]) -> list[tuple[str, 
 def _placement_ok(turned: list[Pt], x: float, y: float) -> bool:
     bases = ((0.0, 350.0), (0.0, -350.0))  # the import's default robots
     return all(
-        px + x >= BASE_KEEP_OUT and min(math.dist((px + x, py + y), b) for b in bases) <= REACH
+        px + x >= BASE_KEEP_OUT and max(math.dist((px + x, py + y), b) for b in bases) <= REACH
         for px, py in turned
     )

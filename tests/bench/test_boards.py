@@ -54,7 +54,11 @@ def test_overlapping_guides_are_rejected() -> None:
     b = Guide("guide2", 405.0, 0.0, 0.0, 10.0, 24.0, 40.0, 10.0, 10.0)
     far = Guide("guide3", 900.0, 0.0, 0.0, 10.0, 24.0, 40.0, 10.0, 10.0)
     assert rejection(a, (b,), 700.0) == "guide1 overlaps guide2"
-    assert rejection(a, (far,), 700.0) == "guide3 out of both arms' reach"
+    assert rejection(a, (far,), 700.0) == "guide3 out of an arm's reach"
+    # 506 mm from the right base (0, -350), 796 mm from the left one: the left arm cannot
+    # hold the pivot there
+    one_arm = Guide("guide3", 500.0, -270.0, 0.0, 10.0, 24.0, 40.0, 10.0, 10.0)
+    assert rejection(a, (one_arm,), 700.0) == "guide3 out of an arm's reach"
 
 
 @pytest.fixture(scope="module")
