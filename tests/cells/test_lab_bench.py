@@ -262,11 +262,11 @@ def test_cartesian_robots_are_the_published_ones() -> None:
     for name, arm in m.arms.items():
         assert arm.home is not None
         J = arm.jacobian(arm.home)
-        assert J[:3, 0] == pytest.approx((0, 0, 1))  # Z lifts everything after it
-        assert J[:3, 1] == pytest.approx((1, 0, 0))
-        assert J[:3, 2] == pytest.approx((0, towards_other[name], 0))
+        assert J[:3, 0] == pytest.approx((0, 0, 1), abs=1e-9)  # Z lifts everything after it
+        assert J[:3, 1] == pytest.approx((1, 0, 0), abs=1e-9)
+        assert J[:3, 2] == pytest.approx((0, towards_other[name], 0), abs=1e-9)
         assert np.abs(J[3:, :3]).max() == 0  # three linear axes
-        assert J[3:, 3] == pytest.approx(last_axis[name])
+        assert J[3:, 3] == pytest.approx(last_axis[name], abs=1e-9)
         lim = arm.limits
         assert (lim.upper - lim.lower)[:3] == pytest.approx((0.30, 1.5, 0.93))
         assert lim.velocity[0] < min(lim.velocity[1], lim.velocity[2]) <= 0.5
@@ -285,8 +285,8 @@ def test_tools_are_the_published_grippers() -> None:
     assert (tools["robot2"].grasp, tools["robot2"].load_cell) == ("top", False)
     # where each gripper's fingers point at home: robot1's along +x, robot2's down
     approach = {r: arm.fk(np.asarray(arm.home))[:3, 2] for r, arm in model(CARTESIAN).arms.items()}
-    assert approach["robot1"] == pytest.approx((1, 0, 0))
-    assert approach["robot2"] == pytest.approx((0, 0, -1))
+    assert approach["robot1"] == pytest.approx((1, 0, 0), abs=1e-9)
+    assert approach["robot2"] == pytest.approx((0, 0, -1), abs=1e-9)
 
 
 @pytest.mark.parametrize("cell", [CARTESIAN, UR], ids=["cartesian", "ur"])

@@ -58,7 +58,7 @@ def test_split_really_splits_when_the_arms_come_close() -> None:
     assert at["right"] == int(at["left"] * len(right) / len(left))
     # the arms stop together at the split: one rest in the middle of the segment
     traj = seg.trajectory
-    resting = np.flatnonzero(np.abs(traj.qd).max(axis=1) < 1e-12)
+    resting = np.flatnonzero(np.abs(traj.qd).max(axis=1) < 1e-9)
     inner = traj.t[resting[(resting > 0) & (resting < len(traj) - 1)]]
     assert len(inner) >= 1
     q_mid, _, _ = traj.sample(inner[0])

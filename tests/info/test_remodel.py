@@ -73,7 +73,7 @@ def test_sample_models_dimensions_and_boxes_in_metres() -> None:
     np.testing.assert_allclose(box.T_element_box, transform(np.eye(3), [0.0184, 0, 0.055]))
     _, box = models["0012"].boxes  # yaw 0.2883 rad about its z
     np.testing.assert_allclose(
-        box.T_element_box, transform(rot_z(0.2883), [0.01444, 0.00795, 0.055]), atol=1e-15
+        box.T_element_box, transform(rot_z(0.2883), [0.01444, 0.00795, 0.055]), atol=1e-9
     )
     # the comb: only its body; its guide's collision box is all zeros
     (body,) = models["0000210"].boxes
@@ -200,14 +200,14 @@ def test_key_rotation_is_rotx_roty_rotz_about_moving_axes() -> None:
     # (x, y, z) -> (z, y, -x) gives (10, 5, 2); RotX (x, y, z) -> (x, -z, y) gives
     # (10, -2, 5); plus pos (10, 20, 30) -> (20, 18, 35) mm. (URDF's Rz·Ry·Rx would give
     # (20, 30, 35).)
-    np.testing.assert_allclose(key[:3, 3], np.array([20, 18, 35]) * MM, atol=1e-12)
+    np.testing.assert_allclose(key[:3, 3], np.array([20, 18, 35]) * MM, atol=1e-9)
     # Columns are the images of the axes: x -> (0, 0, 1), y -> (0, -1, 0), z -> (1, 0, 0).
     R = np.array([[0, 0, 1], [0, -1, 0], [1, 0, 0]], dtype=float)
-    np.testing.assert_allclose(key[:3, :3], R, atol=1e-12)
-    np.testing.assert_allclose(key[:3, :3], rot_x(q) @ rot_y(q) @ rot_z(q), atol=1e-12)
+    np.testing.assert_allclose(key[:3, :3], R, atol=1e-9)
+    np.testing.assert_allclose(key[:3, :3], rot_x(q) @ rot_y(q) @ rot_z(q), atol=1e-9)
     # JA = ID1 at (0.1, 0.2, 0) turned 90° about z: (20, 18, 35) mm -> (-18, 20, 35) mm.
     np.testing.assert_allclose(
-        keypoint(p, "JA", "1")[:3, 3], [0.1 - 0.018, 0.2 + 0.020, 0.035], atol=1e-12
+        keypoint(p, "JA", "1")[:3, 3], [0.1 - 0.018, 0.2 + 0.020, 0.035], atol=1e-9
     )
     assert dict(p.elements["JA"].keypoints["1"].dimensions) == pytest.approx(
         {"length": 0.010, "gap": 0.004, "height": 0.020, "height_corner": 0.025}
@@ -223,7 +223,7 @@ def test_fixture_boxes_keypoint_order_and_models_without_guides() -> None:
     (box,) = ja.boxes  # guide 2's all-zero box is skipped
     assert box.size == pytest.approx((0.002, 0.004, 0.006))
     np.testing.assert_allclose(
-        box.T_element_box, transform(rot_z(np.pi / 2), [0.001, 0.002, 0.003]), atol=1e-15
+        box.T_element_box, transform(rot_z(np.pi / 2), [0.001, 0.002, 0.003]), atol=1e-9
     )
     bx = p.elements["BX"]
     assert (bx.model, dict(bx.keypoints), bx.note) == ("B1", {}, "")

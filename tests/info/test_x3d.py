@@ -71,11 +71,11 @@ def test_translation_and_rotation_chain(tmp_path: Path) -> None:
     # A: at (1,0,0), Rz90. B: (1,0,0) + Rz90 (0,2,0) = (-1,0,0), Rz180.
     # C: (-1,0,0) + Rz180 (3,0,0) = (-4,0,0), Rz180.
     assert list(s.nodes) == ["A", "B", "C"]
-    np.testing.assert_allclose(origin(s, "A"), [1, 0, 0], atol=1e-12)
-    np.testing.assert_allclose(origin(s, "B"), [-1, 0, 0], atol=1e-12)
-    np.testing.assert_allclose(origin(s, "C"), [-4, 0, 0], atol=1e-12)
-    np.testing.assert_allclose(rotation(s, "A"), RZ90, atol=1e-12)
-    np.testing.assert_allclose(rotation(s, "C"), RZ180, atol=1e-12)
+    np.testing.assert_allclose(origin(s, "A"), [1, 0, 0], atol=1e-9)
+    np.testing.assert_allclose(origin(s, "B"), [-1, 0, 0], atol=1e-9)
+    np.testing.assert_allclose(origin(s, "C"), [-4, 0, 0], atol=1e-9)
+    np.testing.assert_allclose(rotation(s, "A"), RZ90, atol=1e-9)
+    np.testing.assert_allclose(rotation(s, "C"), RZ180, atol=1e-9)
     np.testing.assert_allclose(s.nodes["C"].T_scene_node[3], [0, 0, 0, 1])
 
 
@@ -91,17 +91,17 @@ def test_scale_center_and_scale_orientation(tmp_path: Path) -> None:
     # SR S SR^-1 with SR = Rz90 scales world y by 2: diag(1,2,1); L = Rz90 diag(1,2,1) maps
     # v -> (-2 vy, vx, vz). P' = t + c + L (P - c).
     # N's origin: (1,1,0) + L (0,-1,0) = (1,1,0) + (2,0,0) = (3,1,0); orientation Rz90 only.
-    np.testing.assert_allclose(origin(s, "N"), [3, 1, 0], atol=1e-12)
-    np.testing.assert_allclose(rotation(s, "N"), RZ90, atol=1e-12)
+    np.testing.assert_allclose(origin(s, "N"), [3, 1, 0], atol=1e-9)
+    np.testing.assert_allclose(rotation(s, "N"), RZ90, atol=1e-9)
     # K: (1,1,0) + L (1,-1,0) = (1,1,0) + (2,1,0) = (3,2,0); still Rz90 (frames stay rigid).
-    np.testing.assert_allclose(origin(s, "K"), [3, 2, 0], atol=1e-12)
-    np.testing.assert_allclose(rotation(s, "K"), RZ90, atol=1e-12)
+    np.testing.assert_allclose(origin(s, "K"), [3, 2, 0], atol=1e-9)
+    np.testing.assert_allclose(rotation(s, "K"), RZ90, atol=1e-9)
     # Vertices: (1,1,1) -> world (1,1,0) + L (1,0,1) = (1,2,1); in N's frame
     # Rz90^T ((1,2,1) - (3,1,0)) = Rz(-90) (-2,1,1) = (1,2,1). (0,1,0) -> world (1,1,0)
     # -> Rz(-90) (-2,0,0) = (0,2,0). The scale shows in the mesh, not in the frame.
     mesh = s.nodes["N"].mesh
     assert mesh is not None
-    np.testing.assert_allclose(mesh.vertices, [[0, 0, 0], [0, 2, 0], [1, 2, 1]], atol=1e-12)
+    np.testing.assert_allclose(mesh.vertices, [[0, 0, 0], [0, 2, 0], [1, 2, 1]], atol=1e-9)
     np.testing.assert_array_equal(mesh.faces, [[0, 1, 2]])
 
 
@@ -112,7 +112,7 @@ def test_scale_orientation_changes_where_children_go(tmp_path: Path) -> None:
                        scale="2 1 1"><Transform DEF="K" translation="1 0 0"/></Transform>""",
     )
     # Without scaleOrientation L = Rz90 diag(2,1,1): K at (1,1,0) + Rz90 (2,-1,0) = (2,3,0).
-    np.testing.assert_allclose(origin(s, "K"), [2, 3, 0], atol=1e-12)
+    np.testing.assert_allclose(origin(s, "K"), [2, 3, 0], atol=1e-9)
 
 
 def test_root_scaled_to_metres(tmp_path: Path) -> None:
@@ -122,8 +122,8 @@ def test_root_scaled_to_metres(tmp_path: Path) -> None:
                 </Transform>
               </Transform>"""
     s = load(tmp_path, body)
-    np.testing.assert_allclose(origin(s, "part"), [0.1, 0.2, 0.3], atol=1e-12)
-    np.testing.assert_allclose(rotation(s, "part"), np.eye(3), atol=1e-12)
+    np.testing.assert_allclose(origin(s, "part"), [0.1, 0.2, 0.3], atol=1e-9)
+    np.testing.assert_allclose(rotation(s, "part"), np.eye(3), atol=1e-9)
     mesh = s.nodes["part"].mesh
     assert mesh is not None
     np.testing.assert_allclose(mesh.bounds, [[-0.005, -0.01, -0.015], [0.005, 0.01, 0.015]])
@@ -135,11 +135,11 @@ def test_y_up_turned_to_z_up(tmp_path: Path) -> None:
     # Rx90 maps (1,2,3) to (1,-3,2). Rx90 Ry90 = [[0,0,1],[1,0,0],[0,1,0]]: the node's y,
     # X3D's up, becomes the platform's z.
     s = load_x3d(write(tmp_path, "y.x3d", body), tmp_path)
-    np.testing.assert_allclose(origin(s, "P"), [1, -3, 2], atol=1e-12)
-    np.testing.assert_allclose(rotation(s, "P"), [[0, 0, 1], [1, 0, 0], [0, 1, 0]], atol=1e-12)
+    np.testing.assert_allclose(origin(s, "P"), [1, -3, 2], atol=1e-9)
+    np.testing.assert_allclose(rotation(s, "P"), [[0, 0, 1], [1, 0, 0], [0, 1, 0]], atol=1e-9)
     z = load_x3d(write(tmp_path, "z.x3d", body), tmp_path, up="z")
-    np.testing.assert_allclose(origin(z, "P"), [1, 2, 3], atol=1e-12)
-    np.testing.assert_allclose(rotation(z, "P"), [[0, 0, 1], [0, 1, 0], [-1, 0, 0]], atol=1e-12)
+    np.testing.assert_allclose(origin(z, "P"), [1, 2, 3], atol=1e-9)
+    np.testing.assert_allclose(rotation(z, "P"), [[0, 0, 1], [0, 1, 0], [-1, 0, 0]], atol=1e-9)
 
 
 def test_meshes_are_in_the_node_frame_whatever_the_up_axis(tmp_path: Path) -> None:
@@ -148,7 +148,7 @@ def test_meshes_are_in_the_node_frame_whatever_the_up_axis(tmp_path: Path) -> No
     mesh = s.nodes["P"].mesh
     assert mesh is not None
     np.testing.assert_allclose(mesh.extents, [1, 2, 3])
-    np.testing.assert_allclose(rotation(s, "P"), RX90, atol=1e-12)
+    np.testing.assert_allclose(rotation(s, "P"), RX90, atol=1e-9)
 
 
 def test_unnamed_transforms_fold_into_the_named_ancestor(tmp_path: Path) -> None:
@@ -191,8 +191,8 @@ def test_blender_style_file(monkeypatch: pytest.MonkeyPatch) -> None:
     np.testing.assert_array_equal(
         mesh.faces, [[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7], [4, 7, 8]]
     )
-    np.testing.assert_allclose(mesh.vertices[6], [0.012, 0.010, 0.004], atol=1e-12)
-    np.testing.assert_allclose(mesh.vertices[2], [0.010, 0.020, 0.0], atol=1e-12)
+    np.testing.assert_allclose(mesh.vertices[6], [0.012, 0.010, 0.004], atol=1e-9)
+    np.testing.assert_allclose(mesh.vertices[2], [0.010, 0.020, 0.0], atol=1e-9)
     assert s.nodes["ID0001"].mesh is None
 
 
@@ -200,9 +200,9 @@ def test_freecad_style_file() -> None:
     s = load_x3d(DATA / "freecad.x3d", DATA)
     assert list(s.nodes) == ["Body", "Pad", "Pocket"]
     # rotation "0 0 0 0" is no rotation; (0,0,10) y-up -> (0,-10,0) z-up.
-    np.testing.assert_allclose(origin(s, "Pad"), [0, -10, 0], atol=1e-12)
-    np.testing.assert_allclose(rotation(s, "Pad"), RX90, atol=1e-12)
-    np.testing.assert_allclose(origin(s, "Pocket"), [2, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(origin(s, "Pad"), [0, -10, 0], atol=1e-9)
+    np.testing.assert_allclose(rotation(s, "Pad"), RX90, atol=1e-9)
+    np.testing.assert_allclose(origin(s, "Pocket"), [2, 0, 0], atol=1e-9)
     pad, pocket = s.nodes["Pad"].mesh, s.nodes["Pocket"].mesh
     assert pad is not None and pocket is not None
     # The edges' IndexedLineSet adds nothing; the Coordinate USE'd by id is the same triangle.
@@ -445,13 +445,13 @@ def test_primitives(tmp_path: Path) -> None:
     np.testing.assert_allclose(meshes["unit"].bounds, [[-1, -1, -1], [1, 1, 1]])  # type: ignore[union-attr]
     # Cylinders and cones stand along y, centred on the origin.
     np.testing.assert_allclose(
-        meshes["cyl"].bounds, [[-0.5, -1.5, -0.5], [0.5, 1.5, 0.5]], atol=1e-12
+        meshes["cyl"].bounds, [[-0.5, -1.5, -0.5], [0.5, 1.5, 0.5]], atol=1e-9
     )  # type: ignore[union-attr]
     cone = meshes["cone"]
     assert cone is not None
-    np.testing.assert_allclose(cone.bounds, [[-1, -1, -1], [1, 1, 1]], atol=1e-12)
+    np.testing.assert_allclose(cone.bounds, [[-1, -1, -1], [1, 1, 1]], atol=1e-9)
     apex = cone.vertices[np.argmax(cone.vertices[:, 1])]
-    np.testing.assert_allclose(apex, [0, 1, 0], atol=1e-12)
+    np.testing.assert_allclose(apex, [0, 1, 0], atol=1e-9)
     np.testing.assert_allclose(np.linalg.norm(meshes["ball"].vertices, axis=1), 2.0)  # type: ignore[union-attr]
 
 

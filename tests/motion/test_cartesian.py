@@ -146,7 +146,7 @@ def test_a_reachable_1_m_line_is_followed_on_one_branch(cell: CellModel) -> None
     assert r.ok and r.stop is None and r.fraction == 1.0
     assert r.q.shape == (1001, 6) and r.n_waypoints == 1001
     assert residuals(arm, r.q, W) <= 1e-9
-    np.testing.assert_allclose(r.s, np.linspace(0.0, 1.0, 1001), atol=1e-12)
+    np.testing.assert_allclose(r.s, np.linspace(0.0, 1.0, 1001), atol=1e-9)
     assert np.abs(np.diff(np.vstack([q0, r.q]), axis=0)).max() < 0.05  # continuous
     ik = arm_ik(arm)
     assert {ik.branch(q) for q in r.q[::50]} == {ik.branch(q0)}
@@ -188,7 +188,7 @@ def test_leaving_the_workspace_stops_at_the_first_unreachable_waypoint(cell: Cel
     assert r.stop.waypoint == first_out and len(r.q) == first_out
     assert "no IK branch reaches it" in r.stop.message and r.stop.arm == "left"
     assert r.stop.waypoints == {"left": first_out}
-    assert r.fraction == pytest.approx((first_out - 1) / 1000, abs=1e-12)
+    assert r.fraction == pytest.approx((first_out - 1) / 1000, abs=1e-9)
     assert residuals(arm, r.q, W[:first_out]) <= 1e-9
 
 
@@ -226,7 +226,7 @@ def test_a_wrist_flip_stops_the_path_at_the_singularity(cell: CellModel) -> None
     r = cartesian_path(arm, W, q0)
     assert r.stop is not None and r.stop.value == pytest.approx(math.pi, abs=0.01)
     assert r.stop.bound == 0.3
-    assert r.fraction == pytest.approx(99 / 199, abs=1e-12)
+    assert r.fraction == pytest.approx(99 / 199, abs=1e-9)
 
 
 def test_a_joint_limit_stops_the_path_where_it_is_crossed(cell: CellModel) -> None:
@@ -281,7 +281,7 @@ def test_a_stand_in_sphere_stops_the_path_at_the_waypoint_entering_it(cell: Cell
     assert r.stop.waypoint == 150 and len(r.q) == 150
     assert r.stop.pair == ("left/tcp", "sphere") and r.stop.arm == "left"
     assert "on the way there from waypoint 149" in r.stop.message
-    assert r.fraction == pytest.approx(149 / 400, abs=1e-12)
+    assert r.fraction == pytest.approx(149 / 400, abs=1e-9)
     assert sphere.calls["segment"] == 151  # start -> 0, then 0 -> 1 ... 149 -> 150
 
 
@@ -314,7 +314,7 @@ def test_the_left_tcp_driven_into_the_table_stops_there(
         assert r.stop is not None and r.stop.kind == "collision"
         assert r.stop.waypoint == 121 and r.stop.pair == ("left/tool/finger_left", "table")
         assert r.stop.arm == "left"
-        assert r.fraction == pytest.approx(120 / 200, abs=1e-12)
+        assert r.fraction == pytest.approx(120 / 200, abs=1e-9)
 
 
 def test_a_free_line_passes_the_real_checker(cell: CellModel, checker: CollisionChecker) -> None:
@@ -359,7 +359,7 @@ def test_dual_paths_collide_only_when_both_move_stand_in(cell: CellModel) -> Non
     assert r.stop.waypoint == 200 and r.q.shape == (200, 12)
     assert r.stop.pair == ("left/tcp", "right/tcp") and r.stop.arm is None
     assert r.stop.waypoints == {"left": 200, "right": 200}
-    assert r.fraction == pytest.approx(199 / 300, abs=1e-12)
+    assert r.fraction == pytest.approx(199 / 300, abs=1e-9)
     q_cell = cell.join(seeds)
     for name in ("left", "right"):  # each against the other standing still: free
         alone = cartesian_path(
@@ -416,7 +416,7 @@ def test_dual_stop_names_the_arm_and_its_own_waypoint(cell: CellModel) -> None:
     assert r.stop is not None and r.stop.kind == "unreachable" and r.stop.arm == "left"
     assert r.stop.waypoint == 467
     assert r.stop.waypoints == {"left": 467, "right": math.ceil(467 / 10)}
-    assert r.fraction == pytest.approx(0.466, abs=1e-12)
+    assert r.fraction == pytest.approx(0.466, abs=1e-9)
 
 
 def test_an_arm_without_waypoints_stands_at_its_seed(cell: CellModel) -> None:
@@ -450,7 +450,7 @@ def test_closed_chain_keeps_the_relative_pose(cell: CellModel) -> None:
         rel = g.inverse(left.fk(qs["left"])) @ right.fk(qs["right"])
         np.testing.assert_allclose(rel, T_lf, atol=1e-9)
     explicit = closed_chain_path(cell, "left", "right", W, seeds, T_lf)
-    np.testing.assert_allclose(explicit.q, r.q, atol=1e-12)
+    np.testing.assert_allclose(explicit.q, r.q, atol=1e-9)
     with pytest.raises(ValueError, match="two arms"):
         closed_chain_path(cell, "left", "left", W, seeds)
 
@@ -494,4 +494,4 @@ def test_a_numerical_arm_follows_a_line_until_its_axis_ends() -> None:
     assert r.stop is not None and r.stop.kind == "unreachable" and r.stop.waypoint == 501
     assert "against the limit: gantry_x" in r.stop.message
     np.testing.assert_allclose(r.q[:, 0], 0.5 + 0.001 * np.arange(501), atol=1e-6)
-    assert r.fraction == pytest.approx(500 / 800, abs=1e-12)
+    assert r.fraction == pytest.approx(500 / 800, abs=1e-9)

