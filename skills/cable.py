@@ -312,7 +312,9 @@ class RouteCable(Skill):
         world = ctx.world
         try:
             gp = _guide_plan(world, state, self.cable, guide, r_arm, o_arm, way)
-            gp = replace(gp, beside=(*gp.beside, *_under(ctx, gp.slot, gp.up)))
+            k = self.guides.index(guide)
+            after = (_element_of(self.guides[k + 1]),) if k + 1 < len(self.guides) else ()
+            gp = replace(gp, beside=(*gp.beside, *after, *_under(ctx, gp.slot, gp.up)))
             try:
                 _check_reach(ctx, r_arm, gp.reach_routing(), gp.where)
                 _check_reach(ctx, o_arm, gp.reach_other(), gp.where)
@@ -431,7 +433,7 @@ class _Builder:
         for event in seg.before:
             state = state.gripped(event)
         for path in seg.paths:
-            state = state.moved(path.arm, path.poses[-1])
+            state = state.moved_along(path.arm, path.poses)
         for event in seg.after:
             state = state.gripped(event)
         self.state = state
@@ -888,8 +890,9 @@ class GuidePlan:
     laid: float  # route length from the connector's rear face to Ap
     stand_back: float  # the other hand, released at the previous guide, backs off this far
     # the elements the hands work between (this guide, and the one the cable leaves before
-    # the pivot) and, once screened, what lies under the cable (_under): cg.CLEARANCE from
-    # them, the cell's clearance from everything else
+    # the pivot) and, once screened, the next guide (the insert ends before it) and what
+    # lies under the cable (_under): cg.CLEARANCE from them, the cell's clearance from
+    # everything else
     beside: tuple[str, ...]
 
     @property
@@ -1129,7 +1132,9 @@ def _guide_plan(
     tip_r = g.unit(axis + base * _towards_base(world, r_arm, slot, up))
     tip_o = g.unit(-axis + base * _towards_base(world, o_arm, slot, up))
     T_r0 = state.tcp[r_arm]
-    T_ap = cg.nearer_turn(T_r0, cg.tcp_frame(ap, axis, up, tip_r, way.lean))
+    T_ap = cg.nearer_turn(
+        T_r0, cg.tcp_frame(ap, axis, up, tip_r, way.lean), state.wound.get(r_arm, 0.0)
+    )
     T_pivot = _pivot(state, b, o_arm, tip_o, way)
     r_cable, pull_r = b.r_cable, b.pull
     left = np.cross(up, axis)
@@ -1154,8 +1159,10 @@ def _guide_plan(
     # elevation at which radius >= R_lift puts the hand over the guide's far face and
     # Z_offset over its top. The hand keeps its orientation: turning with the circle would
     # lean the tool back over the other hand.
+    # Higher when a taller element stands in the sector the swing sweeps.
     dims = b.dims
     elevation = math.atan2(b.rise + cg.Z_OFFSET, dims.length + x_off)
+    elevation = max(elevation, _swept_elevation(world, guide, b, theta, side))
     lift = cg.arc(pull_path[-1], ap, np.cross(d, up), elevation, turn=False)
     # Swing about the vertical through the pivot until the cable is over the slot, turning
     # the hand with it (a turn about the vertical keeps its z down).
@@ -1209,10 +1216,46 @@ def _beside(state: CableState, guide: str) -> tuple[str, ...]:
     return (_element_of(guide), *before)
 
 
+def _swept_elevation(world: World, guide: str, b: _Basics, theta: float, side: float) -> float:
+    """The least elevation (seen from the pivot) at which the cable and the routing hand,
+    swinging from the slide's direction back to the guide's axis, pass Z_offset over every
+    other element standing within the sector they sweep (out to the hand's reach and its
+    half width either side); 0 when none stands there."""
+    up, axis, ap = b.up, b.axis, b.ap
+    left = np.cross(up, axis)
+    level = float(b.slot @ up)
+    out = 0.0
+    for f in cg.footprints(world, guide, up):
+        rise = f.top - level
+        if rise <= 0.0:
+            continue
+        for p in _outline_points(f.outline):
+            v = p - ap
+            v = v - float(v @ up) * up
+            r = float(np.linalg.norm(v))
+            if r < 1e-6 or r > b.reach + b.hand.width / 2.0:
+                continue
+            phi = math.atan2(side * float(v @ left), float(v @ axis))
+            spread = math.atan2(b.hand.width / 2.0 + cg.CLEARANCE, r)
+            if -spread <= phi <= theta + spread:
+                out = max(out, math.atan2(rise + cg.Z_OFFSET, r))
+    return out
+
+
+def _outline_points(outline: Vec, step: float = 0.005) -> list[Vec]:
+    """The outline's corners and points along its edges every ``step`` (m)."""
+    out: list[Vec] = []
+    for a, c in zip(outline, np.roll(outline, -1, axis=0), strict=True):
+        n = max(1, math.ceil(float(np.linalg.norm(c - a)) / step))
+        out += [a + (c - a) * (i / n) for i in range(n)]
+    return out
+
+
 def _pivot(state: CableState, b: _Basics, o_arm: str, tip_o: Vec, way: GuideWay) -> Mat:
     """The other hand's grasp at the pivot, tipped back along the cable (and towards its base
     when ``tip_o`` says so)."""
-    return cg.nearer_turn(state.tcp[o_arm], cg.tcp_frame(b.ap, b.axis, b.up, tip_o, way.pivot_lean))
+    T = cg.tcp_frame(b.ap, b.axis, b.up, tip_o, way.pivot_lean)
+    return cg.nearer_turn(state.tcp[o_arm], T, state.wound.get(o_arm, 0.0))
 
 
 def _pivot_blocked(

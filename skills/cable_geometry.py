@@ -114,6 +114,11 @@ APPROACH_GAPS = (APPROACH_GAP, 0.015, 0.010)
 # properties"; objects.yaml gives no stiffness, so only the distance is used.
 TENSION_STRAIN = 0.02
 TINY_ANGLE = 1e-6  # rad: a reorientation smaller than this is no segment
+# A hand holding only the cable turns the other way round (nearer_turn) rather than leave its
+# TCP turned more than this about the vertical since home: a UR wrist 3 turns 2 pi either way
+# from home, and within a guide the slide turns the hand by up to THETA_MAX more and the
+# shoulder's pan adds its own turn.
+WIND_LIMIT = math.pi
 # RouteCable turns the routing hand in place to face the next guide when its heading changes
 # by more than this; a smaller change (the tip towards the base differs a little from guide
 # to guide) is spread over the approach line.
@@ -172,19 +177,34 @@ def turn_in_place(T0: Mat, T_target: Mat) -> Poses:
     return ip.line(T0, at(T_target, T0[:3, 3]))
 
 
-def nearer_turn(T_from: Mat, T_to: Mat) -> Mat:
+def nearer_turn(T_from: Mat, T_to: Mat, wound: float = 0.0) -> Mat:
     """``T_to`` or ``T_to`` turned half a turn about its z, whichever is the smaller rotation
     from ``T_from``. The parallel gripper is symmetric about its tool axis, so a hand holding
     only a cable (never one holding the connector, which turns with it) may face either way
     along it; taking the nearer keeps the wrist from winding up over a route (plan_two_turns
-    turned the routing hand's wrist past its 2 pi limit). The first wins a tie."""
+    turned the routing hand's wrist past its 2 pi limit). The first wins a tie. But when the
+    hand has ``wound`` (rad, about the vertical since home) so far that the nearer would
+    leave it wound more than WIND_LIMIT, the other, if it unwinds it."""
     flipped = np.array(T_to, dtype=float)
     flipped[:3, :2] *= -1.0  # Rz(pi): x and y reversed, z kept
-    return (
-        flipped
+    near, far = (
+        (flipped, T_to)
         if g.rotation_angle(T_from, flipped) < g.rotation_angle(T_from, T_to) - 1e-9
-        else T_to
+        else (T_to, flipped)
     )
+    after_near = abs(wound + turn_about_vertical(T_from, near))
+    if after_near > WIND_LIMIT and abs(wound + turn_about_vertical(T_from, far)) < after_near:
+        return far
+    return near
+
+
+def turn_about_vertical(T0: Mat, T1: Mat) -> float:
+    """The signed turn (rad, in (-pi, pi]) about the cell's z from T0's TCP x to T1's, seen
+    from above: the shorter way round."""
+    a0 = math.atan2(T0[1, 0], T0[0, 0])
+    a1 = math.atan2(T1[1, 0], T1[0, 0])
+    d = (a1 - a0 + math.pi) % (2.0 * math.pi) - math.pi
+    return math.pi if d == -math.pi else d
 
 
 def pair_line(T_leader0: Mat, T_leader1: Mat, T_leader_follower: Mat) -> tuple[Poses, Poses]:

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 
 from cellengine.arrays import Mat
 from cellengine.program import GripperEvent
-from cellengine.skills.cable_geometry import LEAN
+from cellengine.skills.cable_geometry import LEAN, turn_about_vertical
 
 if TYPE_CHECKING:
     from cellengine.context import PlanningContext
@@ -78,6 +78,9 @@ class CableState:
     # how far both hands tip their flanges apart along the cable while they hold it (the
     # connector hand keeps it until the connector is placed): PickCable's way sets it
     lean: float = LEAN
+    # how far each TCP has turned about the vertical since home (rad, signed, summed along
+    # every path): the wrist's winding, which nearer_turn keeps within WIND_LIMIT
+    wound: Mapping[str, float] = field(default_factory=lambda: MappingProxyType({}))
 
     def __post_init__(self) -> None:
         object.__setattr__(
@@ -85,6 +88,7 @@ class CableState:
         )
         object.__setattr__(self, "mode", MappingProxyType(dict(self.mode)))
         object.__setattr__(self, "held", MappingProxyType(dict(self.held)))
+        object.__setattr__(self, "wound", MappingProxyType(dict(self.wound)))
 
     @classmethod
     def at_home(cls, ctx: PlanningContext) -> CableState:
@@ -98,7 +102,17 @@ class CableState:
         return tuple(self.tcp)
 
     def moved(self, arm: str, T_cell_tcp: Mat) -> CableState:
-        return replace(self, tcp={**self.tcp, arm: T_cell_tcp})
+        return self.moved_along(arm, np.asarray(T_cell_tcp)[None])
+
+    def moved_along(self, arm: str, poses: NDArray[np.float64]) -> CableState:
+        """The arm's TCP at the last of ``poses`` (n, 4, 4), its turn about the vertical
+        summed pose to pose from where it is (each step the shorter way round)."""
+        turn, T = 0.0, self.tcp[arm]
+        for T_next in poses:
+            turn += turn_about_vertical(T, T_next)
+            T = T_next
+        wound = {**self.wound, arm: self.wound.get(arm, 0.0) + turn}
+        return replace(self, tcp={**self.tcp, arm: poses[-1]}, wound=wound)
 
     def gripped(self, event: GripperEvent) -> CableState:
         """After a gripper event: its mode; nothing held when it opens (an event that holds
