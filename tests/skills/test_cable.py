@@ -735,3 +735,31 @@ def test_route_cable_way_parameters_shape_the_motion() -> None:
     b = _basics(moved, state, "routing.guide1", "left")
     assert _centred_gap(moved, "routing.guide1", b, after=True) == pytest.approx((0.013,), abs=1e-9)
     assert _centred_gap(world, "routing.guide1", b, after=True) == ()
+
+
+def test_the_lift_rises_over_a_taller_element_in_the_swept_sector() -> None:
+    """guide4 set 50 mm from guide1's pivot, 25 deg off the axis towards a 60-deg slide:
+    the swing sweeps over it, so the cable, from the pivot to the hand, passes Z_offset
+    over its top there at every pose of the swing; without it the lift is the published
+    one (guide1's top over the slot)."""
+    from cellengine.skills.cable import GuideWay, _basics, _guide_plan
+
+    plan = planned("plan_straight")
+    state = replace(plan.home, route=((0.43, -0.19, 0.065),))
+    way = GuideWay(theta=math.radians(60.0), side=1.0)
+    plain = _guide_plan(plan.world, state, "cable1", "routing.guide1", "left", "right", way)
+    b = _basics(plan.world, state, "routing.guide1", "left")
+    left = np.cross(b.up, b.axis)
+    a = math.radians(25.0)
+    centre = b.ap + 0.05 * (math.cos(a) * b.axis + math.sin(a) * left)
+    world = _with_element(plan.world, "routing.guide4", xyz=[centre[0], centre[1], 0.01])
+    gp = _guide_plan(world, state, "cable1", "routing.guide1", "left", "right", way)
+    assert plain.elevation == pytest.approx(math.atan2(0.005 + cg.Z_OFFSET, 0.010 + 0.029))
+    assert gp.elevation > plain.elevation
+    (guide4,) = [f for f in cg.footprints(world, "routing.guide1", b.up) if "guide4" in f.name]
+    top = guide4.top
+    for T in gp.swing:
+        v = T[:3, 3] - b.ap
+        reach = float(np.linalg.norm(v - (v @ b.up) * b.up))
+        height = float(b.ap @ b.up) + float(v @ b.up) * 0.05 / reach  # on the cable, 50 mm out
+        assert height >= top + cg.Z_OFFSET - 1e-9
