@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from cellengine.arrays import Vec
+from cellengine.execute import winding
 from cellengine.execute.checks import gate, kept_distance
 from cellengine.execute.held import Held, Holding
 from cellengine.execute.merge import MERGES, Merge, Merged, merge_rows, on_one_axis
@@ -170,6 +171,9 @@ class Compiler:
         self.holding.touch(segment.contacts)
         has_transit = any(p.kind == "transit" for p in segment.paths)
         accept = preview(self.cell, self.checker, following) if has_transit else None
+        ahead = None
+        if has_transit:
+            ahead = {p.arm: winding.ahead(following, p.arm) for p in segment.paths}
         parts = solve_segment(
             self.cell,
             self.checker,
@@ -180,6 +184,7 @@ class Compiler:
             accept,
             choice,
             self.transit_clearance,
+            ahead,
         )
         merge = self._merge_for(segment)
         near = self._near(segment)

@@ -23,6 +23,7 @@ import numpy as np
 from cellengine.arrays import Poses, Vec
 from cellengine.execute.refused import NoMoreChoices, Refused
 from cellengine.execute.retime import fastest, thinned
+from cellengine.execute.winding import rewound
 from cellengine.motion.cartesian import (
     ArmInCell,
     CartesianResult,
@@ -38,6 +39,7 @@ from cellengine.motion.topp import SplinePath
 from cellengine.motion.transit import CellChecker, plan_for_arms
 
 Accept = Callable[[Vec], bool]  # a goal configuration -> whether what follows can run from it
+Ahead = Mapping[str, Poses | None]  # each arm's Cartesian poses up to its next transit
 
 PLANNER_SEED = 0  # OMPL is re-seeded per query: the same segment gives the same path
 PLANNER_TIME = 1.0  # s per transit query
@@ -66,6 +68,7 @@ def transit(
     accept: Accept | None = None,
     choice: int = 0,
     clearance: float | None = None,
+    ahead: Ahead | None = None,
 ) -> Vec:
     """Whole-cell rows from ``q`` to a configuration putting each arm's TCP at its goal pose
     (4, 4), the arms moving together; the other arms stand. ``clearance`` (m): what the arms
@@ -79,11 +82,19 @@ def transit(
     configuration a pose is reached in decides what the arms can do from there, and only the
     next moves tell.
 
+    ``ahead``: each arm's Cartesian poses after the transit, up to its next one: a joint
+    that turns more than a full turn is put on the turn from which they stay within its
+    limits (:mod:`~cellengine.execute.winding`).
+
     ``choice`` > 0: the choice-th goal configuration in that order, and only it (the compiler
     comes back with the next choice when a later segment cannot run from the first);
     :class:`NoMoreChoices` past the last."""
     arms = tuple(goals)
-    per_arm = [_ik_goals(cell, arm, goals[arm], q) for arm in arms]
+    ahead = ahead or {}
+    per_arm = [
+        rewound(cell, arm, _ik_goals(cell, arm, goals[arm], q), ahead.get(arm), q[cell.slices[arm]])
+        for arm in arms
+    ]
     tiers = _goal_configurations(cell, arms, per_arm, q)
     free = [[g for g in tier if not checker.in_collision(g)] for tier in tiers]
     if not any(free):

@@ -30,7 +30,7 @@ import numpy as np
 from cellengine.arrays import Vec
 from cellengine.execute import solve
 from cellengine.execute.refused import Refused
-from cellengine.execute.solve import Accept
+from cellengine.execute.solve import Accept, Ahead
 from cellengine.execute.split import SPLIT_THRESHOLD, split_point
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.robot import CellModel
@@ -77,11 +77,13 @@ def solve_segment(
     accept: Accept | None = None,
     choice: int = 0,
     clearance: float | None = None,
+    ahead: Ahead | None = None,
 ) -> list[Part]:
     """The parts of ``segment`` from the cell configuration ``q``. ``accept``: whether the
     segments after this one can run from a configuration: a transit prefers goals it accepts.
     ``choice``: which goal configuration a transit takes (0: the first that works; see
-    solve.transit). ``clearance``: what transits keep (m; None: only collisions refused)."""
+    solve.transit). ``clearance``: what transits keep (m; None: only collisions refused).
+    ``ahead``: each arm's Cartesian poses up to its next transit (solve.transit)."""
     paths = _by_arm(cell, segment)
     if not paths:
         return [Part(q, {}, None, {}, "still")]
@@ -99,12 +101,13 @@ def solve_segment(
                 accept=accept,
                 choice=choice,
                 clearance=clearance,
+                ahead=ahead,
             )
         ]
     coupled = segment.keep_distance is not None
     if kinds == {"transit"} and strategy != "async":
         goals = {a: p.poses[-1] for a, p in paths.items()}
-        rows = solve.transit(cell, checker, goals, q, accept, choice, clearance)
+        rows = solve.transit(cell, checker, goals, q, accept, choice, clearance, ahead)
         return [_coupled_part(cell, q, rows, {}, tuple(paths))]
     if kinds == {"cartesian"} and (strategy == "sync" or coupled):
         return [_cartesian_together(cell, checker, paths, q)]
@@ -123,6 +126,7 @@ def solve_segment(
             accept=accept,
             choice=choice,
             clearance=clearance,
+            ahead=ahead,
         )
     ]
 
@@ -187,6 +191,7 @@ def _apart(
     accept: Accept | None = None,
     choice: int = 0,
     clearance: float | None = None,
+    ahead: Ahead | None = None,
 ) -> Part:
     """Each arm on its own from ``q``, the other arms standing there (the published way).
 
@@ -200,7 +205,7 @@ def _apart(
     for arm, p in paths.items():
         if p.kind == "transit":
             found = solve.transit(
-                cell, checker, {arm: p.poses[-1]}, here, accept, choice, clearance
+                cell, checker, {arm: p.poses[-1]}, here, accept, choice, clearance, ahead
             )
             rows[arm] = found[:, cell.slices[arm]]
         else:
