@@ -260,11 +260,13 @@ class RouteCable(Skill):
             found = True
             yield replace(gp, stand_back=way.stand_back)
         if not found:
-            raise (
-                closest[1]
-                if closest is not None
-                else _error(f"steps[{state.step}] RouteCable {guide}: no way to route it")
-            )
+            # too little room between two guides explains it better than any way's distance
+            where = f"steps[{state.step}] RouteCable {guide}"
+            before = state.guides[-1] if state.guides else None
+            after = self.guides[k + 1] if k + 1 < len(self.guides) else None
+            _check_room(world, where, _hand(world, o_arm), before, guide)
+            _check_room(world, where, _hand(world, r_arm), guide, after)
+            raise closest[1] if closest is not None else _error(f"{where}: no way to route it")
 
     def _clear_from(
         self, ctx: PlanningContext, state: CableState, k: int
@@ -1058,7 +1060,7 @@ def guide_ways(
             if least is not None and least > start:
                 angles.append((least, (side, first)))
         for theta, only in angles:
-            clear, blocked = _slide_sides(world, guide, b, theta)
+            clear, blocked = _slide_sides(world, guide, b, theta, _beside(state, guide))
             if not first_blocked:
                 first_blocked = blocked
             for rank, side in enumerate(clear):
@@ -1282,19 +1284,23 @@ def _pivot_blocked(
 
 
 def _slide_sides(
-    world: World, guide: str, b: _Basics, theta: float
+    world: World, guide: str, b: _Basics, theta: float, beside: Collection[str] = ()
 ) -> tuple[list[float], list[str]]:
     """The sides the slide at ``theta`` may take, farthest from every other element that
     stands up to the hand's height first (a base plate does not count; +1, left of the axis,
     on a tie), and for each blocked side what blocks it: within the hand's and the element's
-    radii plus CLEARANCE."""
+    radii plus CLEARANCE. The elements the hand starts ``beside`` (the guide before, which
+    the slide starts next to) are left to the tool probe, which measures the hand itself:
+    a round hand would stand in them."""
     up, axis, ap, hand = b.up, b.axis, b.ap, b.hand
     left = np.cross(up, axis)
     # the hand turns with the slide (its x along it): half its extent across the motion,
     # the collision checks' stand-in being square
     hand_radius = max(hand.width, 2.0 * hand.half_length) / 2.0
     height = float(ap @ up) - cg.CLEARANCE
-    elements = [f for f in cg.footprints(world, guide, up) if f.top > height]
+    elements = [
+        f for f in cg.footprints(world, guide, up) if f.top > height and f.name not in beside
+    ]
     clear: list[tuple[float, float]] = []
     blocked: list[str] = []
     for side in (1.0, -1.0):
@@ -1323,6 +1329,29 @@ def _slide_sides(
     if best is not None and ordered[0] != best[1]:
         ordered.reverse()
     return ordered, blocked
+
+
+def _check_room(
+    world: World, where: str, hand: cg.Hand, first: str | None, then: str | None
+) -> None:
+    """A hand works between two consecutive elements of the route (the other hand grasps the
+    cable between the last one routed and the guide; the routing hand inserts between the
+    guide and the next one): the cable between their footprints holds its fingers, with
+    cg.CLEARANCE either side. (Footprints are bounding boxes: an element's may be larger
+    than what stands there, so this explains a failed search, and does not replace it.)"""
+    if first is None or then is None:
+        return
+    up = cg.platform_up(world, then)
+    room = cg.room_between(world, first, then, up)
+    need = 2.0 * (hand.half_length + cg.CLEARANCE)
+    if room is not None and room < need - 1e-9:
+        a, b = _element_of(first), _element_of(then)
+        raise _error(
+            f"{where}: the cable runs {_mm(room)} mm from {a} to {b} (footprint to "
+            f"footprint); a hand works between them, its fingers {_mm(2.0 * hand.half_length)} "
+            f"mm thick along it keeping {_mm(cg.CLEARANCE)} mm from each: {_mm(need)} mm. Move {b} "
+            f"at least {_mm(need - room)} mm farther from {a}, or use thinner fingers"
+        )
 
 
 def _check_length(world: World, name: str, hand: cg.Hand, gp: GuidePlan) -> None:

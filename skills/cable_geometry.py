@@ -365,10 +365,11 @@ class Footprint:
 
 
 def footprints(world: World, exclude: str, up: Vec) -> list[Footprint]:
-    """Every platform element with geometry but the one ``exclude`` (a reference) is on.
+    """Every platform element with geometry but the one ``exclude`` (a reference; "": none)
+    is on.
     Its bounds come from its mesh, else its collision boxes, else its length, width and
     height (the native models' origin is the centre of the footprint on the plate)."""
-    _, skip, _ = world.resolve(exclude)
+    skip = world.resolve(exclude)[1] if exclude else None
     out: list[Footprint] = []
     for pname, platform in world.platforms.items():
         for element in platform.elements.values():
@@ -382,6 +383,59 @@ def footprints(world: World, exclude: str, up: Vec) -> list[Footprint]:
             name = f"{pname}.{element.name}"
             out.append(Footprint(name, _convex(flat, up), float(heights.max())))
     return out
+
+
+def room_between(world: World, a: str, b: str, up: Vec) -> float | None:
+    """How much of the straight cable from keypoint ``a`` to keypoint ``b`` (seen from
+    above) lies between their elements' footprints: from where it leaves ``a``'s to where it
+    enters ``b``'s (0 when they overlap on it); None when either has no geometry."""
+    out = {f.name: f for f in footprints(world, "", up)}
+    fa, fb = out.get(_element(a)), out.get(_element(b))
+    if fa is None or fb is None:
+        return None
+    e1, e2 = _plane(up)
+    p, q = position(world, a), position(world, b)
+    length = float(np.linalg.norm((q - p) - float((q - p) @ up) * up))
+    span_a = _clip(fa.outline, p, q, e1, e2)
+    span_b = _clip(fb.outline, p, q, e1, e2)
+    leaves = span_a[1] if span_a is not None else 0.0
+    enters = span_b[0] if span_b is not None else 1.0
+    return max(0.0, enters - leaves) * length
+
+
+def _clip(outline: Vec, p: Vec, q: Vec, e1: Vec, e2: Vec) -> tuple[float, float] | None:
+    """The part [t0, t1] of the segment p + t (q - p), t in [0, 1], inside a convex outline
+    (seen from above: Cyrus-Beck); None when it misses it."""
+    ring = [(float(v @ e1), float(v @ e2)) for v in outline]
+    a = (float(p @ e1), float(p @ e2))
+    d = (float(q @ e1) - a[0], float(q @ e2) - a[1])
+    # orient the ring counter-clockwise, so each edge's inside is on its left
+    edges = list(zip(ring, ring[1:] + ring[:1], strict=True))
+    area = sum(x0 * y1 - x1 * y0 for (x0, y0), (x1, y1) in edges)
+    if area < 0.0:
+        ring.reverse()
+        edges = list(zip(ring, ring[1:] + ring[:1], strict=True))
+    t0, t1 = 0.0, 1.0
+    for (x0, y0), (x1, y1) in edges:
+        nx, ny = -(y1 - y0), x1 - x0  # inward normal
+        num = nx * (a[0] - x0) + ny * (a[1] - y0)  # > 0: a inside this edge
+        den = nx * d[0] + ny * d[1]
+        if abs(den) < 1e-15:
+            if num < 0.0:
+                return None
+            continue
+        t = -num / den
+        if den > 0.0:
+            t0 = max(t0, t)
+        else:
+            t1 = min(t1, t)
+        if t0 > t1:
+            return None
+    return t0, t1
+
+
+def _element(ref: str) -> str:
+    return ".".join(ref.split(".")[:2])
 
 
 def _plane(up: Vec) -> tuple[Vec, Vec]:

@@ -223,6 +223,14 @@ class _Pairs:
         return float(pin.computeDistance(self.geometry, self.gdata, p).min_distance)
 
 
+def pair_distances(scene: CollisionScene, pair: Pair, Q: Vec) -> Vec:
+    """The distance of one pair (object names, either order) at each state of Q (k, nq)."""
+    index = {o.name: n for n, o in enumerate(scene.objects)}
+    i, j = sorted((index[pair[0]], index[pair[1]]))
+    p = _Pairs(scene, [(i, j)])
+    return np.array([p._distance(q)[0] for q in np.asarray(Q, dtype=float)])
+
+
 def measured_pairs(
     scene: CollisionScene, near: frozenset[Pair] = frozenset()
 ) -> tuple[list[tuple[int, int]], list[Kind]]:

@@ -5,7 +5,8 @@ value is finite, every joint stays within its position, velocity and acceleratio
 and no sampled state collides. Each violation names the joint or the pair of objects, the
 time and the value; the minimum distance between the arms is reported either way. Given the
 cell's clearance, the whole cell's gate also measures the arms' clearance (clearance.py) and
-refuses a trajectory passing closer than it.
+refuses a trajectory passing closer than it, but for a pair that is leaving: closest where
+the motion starts (the step before worked there on purpose) and farther where it ends.
 """
 
 from __future__ import annotations
@@ -18,14 +19,18 @@ import numpy as np
 from numpy.typing import NDArray
 
 from cellengine.arrays import Vec
-from cellengine.motion.clearance import Clearance, measure
+from cellengine.motion.clearance import Clearance, Closest, measure, pair_distances
 from cellengine.motion.robot import CellModel, Limits
-from cellengine.motion.scene import CollisionScene, Pair
+from cellengine.motion.scene import CollisionScene, Pair, pair_key
 from cellengine.motion.trajectory import Trajectory
 
 SAMPLE_DT = 0.001  # seconds between checked samples
 TOLERANCE = 1e-6  # relative slack on limits, for rounding in the producers
 DISTANCE_EVERY = 10  # the arms' minimum distance is computed on every 10th sample
+# A pair closer than the clearance where the motion starts, never closer after it and farther
+# at its end, is leaving (within this, m); so many such pairs per trajectory at most
+LEAVING_TOLERANCE = 1e-4
+MAX_LEAVING = 4
 
 
 class Checker(Protocol):
@@ -191,6 +196,14 @@ class CellChecker(Checker, Protocol):
     def scene(self) -> CollisionScene: ...
 
 
+def _leaving(scene: CollisionScene, c: Closest, t: Vec, q: Vec) -> bool:
+    """Whether the pair of ``c`` is at its closest where the motion starts and ends farther:
+    a motion leaving where the step before worked closer than the clearance on purpose (a
+    hand letting go of a cable by a guide) is held to the distance it starts at."""
+    d = pair_distances(scene, c.pair, q[[0, -1]])
+    return bool(c.distance >= d[0] - LEAVING_TOLERANCE and d[1] > d[0] + LEAVING_TOLERANCE)
+
+
 def check_cell_trajectory(
     traj: Trajectory,
     cell: CellModel,
@@ -221,9 +234,16 @@ def _with_clearance(
 ) -> GateReport:
     t, q, violations = _sampled(traj, cell.joint_names, cell.limits, checker, SAMPLE_DT)
     measured = measure(checker.scene, t, q, near)
+    found = measured
+    for _ in range(MAX_LEAVING):
+        leaving = [c for c, _ in found.shortfalls(clearance) if _leaving(checker.scene, c, t, q)]
+        if not leaving:
+            break
+        near = near | {pair_key(*c.pair) for c in leaving}
+        found = measure(checker.scene, t, q, near)
     short = [
         Violation("clearance", c.time, why, c.distance, clearance)
-        for c, why in measured.shortfalls(clearance)
+        for c, why in found.shortfalls(clearance)
     ]
     arms = measured.arms
     return GateReport(

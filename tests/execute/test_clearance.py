@@ -155,3 +155,26 @@ def test_a_transit_keeps_the_default_clearance_in_a_cell_set_lower() -> None:
     strict = Compiler(world, cell, checker, np.array(A), clearance=0.010)
     arms = strict.add(transit).report["clearance"]["arms"]  # the gate at 10 mm lets it pass
     assert arms["distance_m"] == pytest.approx(seg.report["clearance"]["arms"]["distance_m"])
+
+
+def test_a_motion_leaving_where_the_step_before_worked_is_held_to_its_start_distance() -> None:
+    """The left fingertips taken down to 12 mm over the table (the cell's clearance 0 for
+    it), then the clearance raised to 30 mm: going back up leaves the table, never closer
+    than where it starts, and passes; moving 5 cm sideways down there does not."""
+    world, cell, checker = cable_cell()
+    lx, ly, _ = LEFT_READY
+    low = (lx, ly, 0.012)
+    down = Segment(1, "down", (ArmPath("left", "cartesian", line(LEFT_READY, low)),))
+    c = Compiler(world, cell, checker, home(cell), clearance=0.0)
+    c.add(ready())
+    env = c.add(down).report["clearance"]["environment"]
+    assert env["pair"][1] == "table" and env["distance_m"] < 0.03
+    c.clearance = 0.03
+    mark = c.mark()
+    up = Segment(2, "up", (ArmPath("left", "cartesian", line(low, LEFT_READY)),))
+    c.add(up)  # leaving: passes
+    c.restore(mark)
+    aside = Segment(2, "aside", (ArmPath("left", "cartesian", line(low, (lx + 0.05, ly, 0.012))),))
+    with pytest.raises(StepError, match=r"step 3 \(aside\): the left arm passes .* \(left/.*, "
+                       r"table\) .* the cell's clearance is 30 mm"):  # fmt: skip
+        c.add(aside)

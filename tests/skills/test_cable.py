@@ -521,20 +521,27 @@ def test_a_slide_blocked_at_every_angle_fails_naming_what_blocks_it() -> None:
     )
 
 
-def test_a_guide_too_close_after_another_fails_with_the_closest_way_and_what_to_change() -> None:
-    """guide2 moved to 40 mm after guide1 (slot to slot; 30 mm face to face): guide1 routes
-    (its insert ends nearer), but every way of guide2 brings a hand within 5 mm of one of
-    the two guides it works between. The way that came closest is named, with how far the
-    guide would have to move for it."""
+def test_a_guide_too_close_after_another_fails_saying_how_much_room_the_hand_needs() -> None:
+    """guide2 moved to 25 mm after guide1 (slot to slot; 15 mm face to face): the routing
+    hand inserting into guide1 would end between them, its 8 mm fingers 5 mm from each."""
+    world, steps = _world()
+    world = _with_element(world, "routing.guide2", xyz=[0.43, -0.035, 0.01])
+    assert _fails(world, steps) == (
+        "steps[2] RouteCable routing.guide1: the cable runs 15.0 mm from routing.guide1 to "
+        "routing.guide2 (footprint to footprint); a hand works between them, its fingers 8.0 "
+        "mm thick along it keeping 5.0 mm from each: 18.0 mm. Move routing.guide2 at least 3.0 mm "
+        "farther from routing.guide1, or use thinner fingers"
+    )
+
+
+def test_a_guide_40_mm_after_another_is_routed_between_them() -> None:
+    """guide2 40 mm after guide1 (30 mm face to face): the pivot hand grasps, and the
+    routing hand inserts, between them, 5 mm from both."""
     world, steps = _world()
     world = _with_element(world, "routing.guide2", xyz=[0.43, -0.02, 0.01])
-    assert _fails(world, steps) == (
-        "steps[2] RouteCable routing.guide2: left/tool/finger_left would pass 1.4 mm from "
-        "routing.guide2 sliding (sliding at theta = 75.6 deg on the left, stopping 10.0 mm "
-        "before the guide); a hand keeps 5.0 mm from the guides it works between: "
-        "routing.guide2 would have to stand 3.6 mm farther from the hand's path (more room "
-        "between the guides), or the fingers be narrower"
-    )
+    segments, _ = plan_cable_steps(context(world), steps)  # type: ignore[arg-type]
+    inserts = [s for s in segments if s.label.endswith(": insert") and "RouteCable" in s.label]
+    assert [s.facts["guide"] for s in inserts][:2] == ["routing.guide1", "routing.guide2"]
 
 
 def test_route_cable_needs_a_placed_connector() -> None:
