@@ -1384,7 +1384,11 @@ def _emit_guide(
             f"{label}: release the previous guide",
             [_cartesian(o_arm, _stand_back(b.state, o_arm, gp.up, gp.stand_back))],
             before=[GripperEvent(o_arm, OPEN)],
-            near=[(o_arm, _element_of(e)) for e in state.guides[-2:]],  # its pivot's guides
+            # its pivot's guides; the routing hand stands where it inserted
+            near=[
+                *((o_arm, e) for e in sorted({*map(_element_of, state.guides[-2:]), *gp.beside})),
+                *((r_arm, e) for e in gp.beside),
+            ],
         )
     if gp.reorient is not None:
         b.add(
@@ -1421,6 +1425,7 @@ def _emit_guide(
         f"{label}: other arm to the cable",
         [_transit(o_arm, gp.other_above)],
         before=b.mode_event(o_arm, OPEN, None),
+        near=near,  # the routing hand stands at the slide's end
     )
     b.add(
         f"{label}: other arm grasps",
@@ -1428,6 +1433,8 @@ def _emit_guide(
         after=[GripperEvent(o_arm, GRASP, cable)],
         near=[(o_arm, e) for e in gp.beside],
     )
+    # From here the other hand stands at the pivot, between the guides.
+    near = [*near, *((o_arm, e) for e in gp.beside)]
     # The distance between the hands grows by the pull here, by design: no keep_distance.
     b.add(
         f"{label}: pull to tension",
