@@ -279,7 +279,7 @@ class RouteCable(Skill):
         the slide's side.)"""
         guide = self.guides[k]
         r_arm, o_arm = self.arms(ctx, state)
-        own = {_element_of(guide)}
+        own = {cg.element_of(guide)}
 
         def clear(b: _Basics, side: float, first: bool, theta: float) -> bool:
             way = GuideWay(theta, side, gap=b.gap, turn_first=first)
@@ -315,7 +315,7 @@ class RouteCable(Skill):
         try:
             gp = _guide_plan(world, state, self.cable, guide, r_arm, o_arm, way)
             k = self.guides.index(guide)
-            after = (_element_of(self.guides[k + 1]),) if k + 1 < len(self.guides) else ()
+            after = (cg.element_of(self.guides[k + 1]),) if k + 1 < len(self.guides) else ()
             gp = replace(gp, beside=(*gp.beside, *after, *_under(ctx, gp.slot, gp.up)))
             try:
                 _check_reach(ctx, r_arm, gp.reach_routing(), gp.where)
@@ -615,7 +615,7 @@ def _emit_pick(
         before=[GripperEvent(a, OPEN) for a in arms],
     )
     # each hand's fingers go down beside the comb they grasp in
-    combs = tuple((a, _element_of(ref)) for a, ref in zip(arms, step.from_, strict=True))
+    combs = tuple((a, cg.element_of(ref)) for a, ref in zip(arms, step.from_, strict=True))
     b.add(
         f"{label}: approach and grasp",
         [_cartesian(a, cg.line(above[a], geo.grasp[a])) for a in arms],
@@ -829,7 +829,7 @@ def _emit_place(
         after=[GripperEvent(c_arm, OPEN)],
         closed_chain=pair,
         keep_distance=pair,
-        near=[(c_arm, _element_of(step.guide))],  # the fingers either side of the guide
+        near=[(c_arm, cg.element_of(step.guide))],  # the fingers either side of the guide
         annotations=[Anchor(name, _point(geo.slot), step.guide)],
         facts={
             "guide": step.guide,
@@ -843,7 +843,7 @@ def _emit_place(
     b.add(
         f"{label}: retract",
         [_cartesian(c_arm, geo.retract)],
-        near=[(c_arm, _element_of(step.guide))],
+        near=[(c_arm, cg.element_of(step.guide))],
         facts={"pull_distance": geo.pull_distance},
     )
     s = b.state.hold(f_arm, name, geo.s_other)
@@ -1214,8 +1214,8 @@ def _under(ctx: PlanningContext, slot: Vec, up: Vec) -> tuple[str, ...]:
 def _beside(state: CableState, guide: str) -> tuple[str, ...]:
     """The elements a hand works between at ``guide``: its own and the one the cable leaves
     before the pivot (the last routed guide, or the connector guide)."""
-    before = (_element_of(state.guides[-1]),) if state.guides else ()
-    return (_element_of(guide), *before)
+    before = (cg.element_of(state.guides[-1]),) if state.guides else ()
+    return (cg.element_of(guide), *before)
 
 
 def _swept_elevation(world: World, guide: str, b: _Basics, theta: float, side: float) -> float:
@@ -1345,7 +1345,7 @@ def _check_room(
     room = cg.room_between(world, first, then, up)
     need = 2.0 * (hand.half_length + cg.CLEARANCE)
     if room is not None and room < need - 1e-9:
-        a, b = _element_of(first), _element_of(then)
+        a, b = cg.element_of(first), cg.element_of(then)
         raise _error(
             f"{where}: the cable runs {_mm(room)} mm from {a} to {b} (footprint to "
             f"footprint); a hand works between them, its fingers {_mm(2.0 * hand.half_length)} "
@@ -1386,7 +1386,7 @@ def _emit_guide(
             before=[GripperEvent(o_arm, OPEN)],
             # its pivot's guides; the routing hand stands where it inserted
             near=[
-                *((o_arm, e) for e in sorted({*map(_element_of, state.guides[-2:]), *gp.beside})),
+                *((o_arm, e) for e in sorted({*map(cg.element_of, state.guides[-2:]), *gp.beside})),
                 *((r_arm, e) for e in gp.beside),
             ],
         )
@@ -1477,11 +1477,6 @@ class _Blocked(InputError):
         e = cls(Problem(message))
         e.distance = distance
         return e
-
-
-def _element_of(ref: str) -> str:
-    """``platform.element`` of a keypoint reference (the scene's object)."""
-    return ".".join(ref.split(".")[:2])
 
 
 def _error(message: str) -> InputError:

@@ -390,7 +390,7 @@ def room_between(world: World, a: str, b: str, up: Vec) -> float | None:
     above) lies between their elements' footprints: from where it leaves ``a``'s to where it
     enters ``b``'s (0 when they overlap on it); None when either has no geometry."""
     out = {f.name: f for f in footprints(world, "", up)}
-    fa, fb = out.get(_element(a)), out.get(_element(b))
+    fa, fb = out.get(element_of(a)), out.get(element_of(b))
     if fa is None or fb is None:
         return None
     e1, e2 = _plane(up)
@@ -434,7 +434,8 @@ def _clip(outline: Vec, p: Vec, q: Vec, e1: Vec, e2: Vec) -> tuple[float, float]
     return t0, t1
 
 
-def _element(ref: str) -> str:
+def element_of(ref: str) -> str:
+    """``platform.element`` of a keypoint reference (the scene's object)."""
     return ".".join(ref.split(".")[:2])
 
 
