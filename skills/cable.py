@@ -31,6 +31,7 @@ from types import MappingProxyType
 from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 import numpy as np
+from numpy.typing import NDArray
 from pydantic import Field
 
 from cellengine import geometry as g
@@ -176,17 +177,69 @@ class PlaceConnector(Skill):
         _require_hold(state, c_arm, self.cable, where, "the connector end (plan PickCable first)")
         _require_hold(state, f_arm, self.cable, where, "the cable (plan PickCable first)")
         first: InputError | None = None
-        for order, along_tool in itertools.product(PLACE_ORDERS, (False, True)):
-            geo = _place_geometry(world, state, self, c_arm, f_arm, where, order, along_tool)
-            try:
-                _check_reach(ctx, c_arm, geo.reach(c_arm), where)
-                _check_reach(ctx, f_arm, geo.reach(f_arm), where)
-            except InputError as e:
-                first = first or e
-                continue
-            yield _emit_place(self, state, geo, c_arm, f_arm)
+        for hold, order in _place_carries(ctx, state, self, c_arm, f_arm, where):
+            for along_tool in (False, True):
+                geo = _place_geometry(
+                    world, state, self, c_arm, f_arm, where, order, along_tool, hold
+                )
+                try:
+                    _check_reach(ctx, c_arm, geo.reach(c_arm), where)
+                    _check_reach(ctx, f_arm, geo.reach(f_arm), where)
+                except InputError as e:
+                    first = first or e
+                    continue
+                yield _emit_place(self, state, geo, c_arm, f_arm)
         if first is not None:
             raise first
+
+
+def _place_carries(
+    ctx: PlanningContext,
+    state: CableState,
+    step: PlaceConnector,
+    c_arm: str,
+    f_arm: str,
+    where: str,
+) -> list[tuple[tuple[float, float], str]]:
+    """The ways to carry the pair to the guide and insert the connector: how the other hand
+    holds the cable meanwhile (cg.PLACE_HOLDS) and the order of the carry (PLACE_ORDERS).
+    Left out: a way along which the other hand's tool comes within the cell's clearance of
+    the cell, or no pair of the arms' IK branches stays free and the clearance apart (at
+    poses along it, _pair_room). The published hold first (no regrasp: the shortest), then
+    the most room between the arms. None left: an error that blames the arms (the other arm
+    might place it)."""
+    kept: list[tuple[int, float, int, tuple[float, float], str]] = []
+    clear = False  # some way keeps the other hand's tool clear of the cell
+    for k, (hold, order) in enumerate(itertools.product(cg.PLACE_HOLDS, PLACE_ORDERS)):
+        geo = _place_geometry(ctx.world, state, step, c_arm, f_arm, where, order, hold=hold)
+        poses = [pair for _, paths in geo.carry for pair in _samples(paths)]
+        poses += _samples(geo.insert)
+        if ctx.probe.nearest(f_arm, [T_f for _, T_f in poses], GRASP, (), ctx.clearance):
+            continue
+        clear = True
+        room = _pair_room(ctx, c_arm, f_arm, poses, ctx.clearance)
+        if room >= ctx.clearance:
+            published = hold == cg.PLACE_HOLDS[0]
+            kept.append((0, 0.0, k, hold, order) if published else (1, -room, k, hold, order))
+    if not kept:
+        what = (
+            "the arms cannot keep the cell's clearance from each other"
+            if clear
+            else "its tool comes within the cell's clearance of the cell"
+        )
+        error = _error(
+            f"{where}: however the other arm ({f_arm}) holds the cable, {what} carrying the "
+            f"connector to the guide (the cell's clearance is {_mm(ctx.clearance)} mm)"
+        )
+        error.blames = "arms"  # the other arm might place it: PickCable decides which
+        raise error
+    return [(hold, order) for *_, hold, order in sorted(kept)]
+
+
+def _samples(paths: tuple[Poses, Poses], n: int = 4) -> list[tuple[Mat, Mat]]:
+    """``n`` + 1 pose pairs evenly along two paths of the same length."""
+    last = len(paths[0]) - 1
+    return [(paths[0][i], paths[1][i]) for i in sorted({round(last * j / n) for j in range(n + 1)})]
 
 
 class RouteCable(Skill):
@@ -701,10 +754,12 @@ def _place_geometry(
     where: str,
     order: str = "align first",
     along_tool: bool = False,
+    hold: tuple[float, float] = (0.0, 0.0),
 ) -> _PlaceGeometry:
     """The poses of placing the connector: the pair carried to over the slot in ``order``
     (PLACE_ORDERS), then inserted; the connector hand retracting straight up, or back along
-    its tool axis (``along_tool``)."""
+    its tool axis (``along_tool``). ``hold``: how the other hand holds the cable meanwhile,
+    (roll about the cable, m farther along it) than as published (cg.PLACE_HOLDS)."""
     cable = world.cable(step.cable)
     conn_len = cable.connector.length if cable.connector is not None else 0.0
     up = cg.platform_up(world, step.guide)
@@ -715,11 +770,12 @@ def _place_geometry(
     if "length" not in dims:
         raise _error(f"{where}: guide '{step.guide}' has no length dimension (along the cable)")
     hand_f = _hand(world, f_arm)
-    spacing = _connector_spacing(world, step.guide, conn_len, hand_f)
+    roll, farther = hold
+    spacing = _connector_spacing(world, step.guide, conn_len, hand_f) + farther
     T_c0, T_f0 = state.tcp[c_arm], state.tcp[f_arm]
     # Carrying, the other hand holds the cable `spacing` ahead of the connector's centre,
     # both hands leaning apart: that relative pose does not depend on where the pair is.
-    T_c_f = _pair_pose(spacing, up, state.lean)
+    T_c_f = _pair_pose(spacing, up, state.lean, roll)
     T_f_want = T_c0 @ T_c_f
     adjust = None
     if not _same_pose(T_f0, T_f_want):
@@ -774,12 +830,15 @@ def _carry(
     )
 
 
-def _pair_pose(spacing: float, up: Vec, lean: float) -> Mat:
-    """T_connector-hand_other-hand when both hold the cable ``spacing`` apart, leaning apart."""
+def _pair_pose(spacing: float, up: Vec, lean: float, roll: float = 0.0) -> Mat:
+    """T_connector-hand_other-hand when both hold the cable ``spacing`` apart, leaning apart,
+    the other hand turned by ``roll`` about the cable."""
     x = cg.horizontal(_any_normal(up), up)
     origin = np.zeros(3)
     T_c = cg.tcp_frame(origin, x, up, -x, lean)
-    return g.inverse(T_c) @ cg.tcp_frame(origin + spacing * x, x, up, x, lean)
+    T_f = cg.tcp_frame(origin + spacing * x, x, up, x, lean)
+    T_f[:3, :3] = g.axis_angle_to_matrix(x, roll) @ T_f[:3, :3]
+    return g.inverse(T_c) @ T_f
 
 
 def _any_normal(up: Vec) -> Vec:
@@ -1597,6 +1656,54 @@ def _check_both_free(
             )
 
 
+def _pair_room(
+    ctx: PlanningContext, a: str, b: str, poses: Sequence[tuple[Mat, Mat]], keep: float
+) -> float:
+    """How far apart (m) the two arms can stay while their tools pass ``poses`` (T_cell_tcp
+    of ``a``, of ``b``): the most, over the pairs of IK branches that are free of collisions
+    at every pose and keep ``keep`` between the arms, of their least distance there; -inf
+    when no pair does. (A continuous motion keeps its branches; an arm solved numerically
+    has none, and then any pair of solutions per pose counts, an optimistic bound.)"""
+    alive: NDArray[np.bool_] | None = None
+    least = np.full(64, math.inf)
+    for T_a, T_b in poses:
+        q_a, q_b = ctx.iks[a].by_branch(T_a), ctx.iks[b].by_branch(T_b)
+        if q_a is None or q_b is None:
+            return _any_pair_room(ctx, a, b, poses)
+        Q = _solution_pairs(ctx, a, q_a, b, q_b)
+        ok: NDArray[np.bool_] = np.asarray(~np.isnan(Q).any(axis=1))
+        if alive is not None:
+            ok &= alive
+        ok[ok] = ~ctx.checker.check_batch(Q[ok])
+        for i in np.flatnonzero(ok):
+            least[i] = min(least[i], ctx.checker.distance(Q[i], between=(a, b))[0])
+        alive = ok & (least >= keep)
+        if not alive.any():
+            return -math.inf
+    return float(least[alive].max()) if alive is not None else -math.inf
+
+
+def _any_pair_room(ctx: PlanningContext, a: str, b: str, poses: Sequence[tuple[Mat, Mat]]) -> float:
+    """The least over ``poses`` of the farthest apart any pair of solutions free of
+    collisions there is (m); -inf when a pose has none."""
+    room = math.inf
+    for T_a, T_b in poses:
+        Q = _solution_pairs(ctx, a, ctx.iks[a].solve_all(T_a), b, ctx.iks[b].solve_all(T_b))
+        free = np.flatnonzero(~ctx.checker.check_batch(Q))
+        best = max((ctx.checker.distance(Q[i], between=(a, b))[0] for i in free), default=-math.inf)
+        room = min(room, best)
+    return room
+
+
+def _solution_pairs(ctx: PlanningContext, a: str, sols_a: Vec, b: str, sols_b: Vec) -> Vec:
+    """Every pair of ``a``'s and ``b``'s joint solutions, as the cell's configurations (the
+    other joints at home)."""
+    Q = np.repeat(ctx.home[None, :], len(sols_a) * len(sols_b), axis=0)
+    Q[:, ctx.cell.slices[a]] = np.repeat(sols_a, len(sols_b), axis=0)
+    Q[:, ctx.cell.slices[b]] = np.tile(sols_b, (len(sols_a), 1))
+    return Q
+
+
 def _pair_blocked(ctx: PlanningContext, poses: Mapping[str, Mat], keep: float = 0.0) -> str | None:
     """None when some pair of the two arms' inverse kinematics solutions at ``poses``
     (T_cell_tcp per arm) is free of collisions, and keeps ``keep`` (m) between the arms;
@@ -1606,9 +1713,7 @@ def _pair_blocked(ctx: PlanningContext, poses: Mapping[str, Mat], keep: float = 
     sols_a, sols_b = ctx.iks[a].solve_all(T_a), ctx.iks[b].solve_all(T_b)
     if len(sols_a) == 0 or len(sols_b) == 0:
         return ""
-    Q = np.repeat(ctx.home[None, :], len(sols_a) * len(sols_b), axis=0)
-    Q[:, ctx.cell.slices[a]] = np.repeat(sols_a, len(sols_b), axis=0)
-    Q[:, ctx.cell.slices[b]] = np.tile(sols_b, (len(sols_a), 1))
+    Q = _solution_pairs(ctx, a, sols_a, b, sols_b)
     free = np.flatnonzero(~ctx.checker.check_batch(Q))
     if len(free) == 0:
         return str(ctx.checker.check(Q[0]))

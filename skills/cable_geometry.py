@@ -103,6 +103,13 @@ PIVOT_LEAN = math.radians(30.0)
 # The other values a RouteCable way may take, after the defaults above (guide_ways): the
 # sliding angle in steps up to THETA_MAX, and other tips of the two hands.
 THETA_STEP = math.radians(5.0)
+# PlaceConnector's other hand, holding the cable behind the connector while the pair is
+# carried: (roll about the cable, m farther along it) than as published. Where the guide's
+# cable runs back towards the connector arm's base, the other hand stands under that arm's
+# forearm; turned about the cable its wrist moves aside (cable.py ranks them by room).
+PLACE_HOLDS = tuple(
+    (math.radians(roll), farther) for farther in (0.0, 0.040) for roll in (0, 30, -30, 45, -45)
+)
 LEANS = (LEAN, math.radians(25.0), math.radians(5.0))
 PIVOT_LEANS = (PIVOT_LEAN, math.radians(20.0), math.radians(40.0))
 STAND_BACKS = (STAND_BACK, 0.050, 0.150)

@@ -17,6 +17,7 @@ Deterministic: candidates are tried in the order the family offers them.
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -139,15 +140,19 @@ def _jump(chosen: list[_Choice], failed: int, blames: str) -> int | None:
         was = chosen[k].taken.decides.get(blames)
         if was is None:
             continue
+        passed: list[Candidate] = []  # deciding it the same: still there for the plain search
         while True:
             try:
                 taken = next(chosen[k].options)
             except (StopIteration, InputError):
+                chosen[k].options = itertools.chain(passed, chosen[k].options)
                 return None
             if taken.decides.get(blames) != was:
                 del chosen[k + 1 :]
                 chosen[k].taken = taken
+                chosen[k].options = itertools.chain(passed, chosen[k].options)
                 return k
+            passed.append(taken)
     return None
 
 

@@ -110,6 +110,21 @@ class ArmIK:
                 found.append(w)
         return np.array(found) if found else np.zeros((0, self.n))
 
+    def by_branch(self, T_cell_tcp: ArrayLike) -> Vec | None:
+        """Closed form: the solution of each of the eight branches (8, n), each angle the
+        representative nearest home within limits, NaN rows where a branch does not reach
+        the pose within limits: row k of two nearby poses is one continuous motion (away
+        from singularities). None for an arm solved numerically (it has no branches)."""
+        if self.closed_form is None:
+            return None
+        q_all, valid = self.closed_form.ik_all(self.base_flange(T_cell_tcp), float(self.home[5]))
+        out = np.full((8, self.n), np.nan)
+        for k in np.flatnonzero(valid):
+            w = wrap_near(q_all[k], self.home, self.lower, self.upper)
+            if w is not None:
+                out[k] = w
+        return out
+
     # ------------------------------------------------------------------ many poses
 
     def solve_batch(

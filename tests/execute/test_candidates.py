@@ -143,3 +143,29 @@ def test_a_blame_no_choice_decided_backtracks_as_usual() -> None:
     way = Candidate((hop(0, ALSO),))
     compile_candidates(c, choice(stuck, way))
     assert labels(c) == [f"to {ALSO}"]
+
+
+def test_the_candidates_a_blame_passes_are_tried_when_none_decides_otherwise() -> None:
+    """Choice 1 fails blaming the arms after choice 0's first candidate; no candidate of choice
+    0 decides the arms otherwise. The search goes on as without the blame: the candidates the
+    blame passed over are still tried, in their order, and the second one compiles."""
+    c = compiler()
+    same = {"arms": "right holds the connector"}
+    stuck = Candidate((hop(0, NEAR),), then=lambda: blamed(1, "arms"), decides=same)
+    way = Candidate((hop(0, ALSO),), decides=same)
+    later = Candidate((hop(0, FAR),), decides=same)
+    assert compile_candidates(c, choice(stuck, way, later)) == [way]
+    assert labels(c) == [f"to {ALSO}"]
+
+
+def test_the_candidates_a_blame_passes_come_after_the_one_it_jumped_to() -> None:
+    """The blame jumps over ``again`` to ``other``, which fails too: ``again`` is tried next."""
+    c = compiler()
+    same = {"arms": "right holds the connector"}
+    stuck = Candidate((hop(0, NEAR),), then=lambda: blamed(1, "arms"), decides=same)
+    again = Candidate((hop(0, ALSO),), decides=same)
+    other = Candidate(
+        (hop(0, FAR),), then=lambda: failing(1), decides={"arms": "left holds the connector"}
+    )
+    assert compile_candidates(c, choice(stuck, again, other)) == [again]
+    assert labels(c) == [f"to {ALSO}"]

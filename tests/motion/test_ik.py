@@ -121,6 +121,26 @@ def test_branches_of_many_poses(cable_cell: CellModel) -> None:
         np.testing.assert_allclose(np.sin(s[b]), np.sin(q), atol=1e-9)
 
 
+def test_by_branch_puts_each_branch_in_its_row(cable_cell: CellModel) -> None:
+    """Row k is branch k's solution (nearest home within limits), NaN where a branch does not
+    reach the pose; along a short move each row changes a little (one continuous motion)."""
+    arm = cable_cell.arms["left"]
+    ik = arm_ik(arm)
+    T = g.transform(g.rot_x(math.pi) @ g.rot_z(0.3), [0.4, 0.3, 0.25])
+    rows = ik.by_branch(T)
+    assert rows is not None and rows.shape == (8, 6)
+    reached = ~np.isnan(rows).any(axis=1)
+    assert reached.sum() == len(ik.solve_all(T))
+    for k in np.flatnonzero(reached):
+        assert ik.branch(rows[k]) == k
+        assert max(residual(arm, rows[k], T)) <= 1e-9
+    moved = ik.by_branch(g.transform(T[:3, :3], T[:3, 3] + [0.002, 0.0, 0.0]))
+    assert moved is not None
+    assert np.nanmax(np.abs(moved - rows)) < 0.05  # rad, for 2 mm
+    assert ik.by_branch(g.pose([2.0, 0.35, 0.3])) is not None
+    assert np.isnan(ik.by_branch(g.pose([2.0, 0.35, 0.3]))).all()
+
+
 def test_arm_ik_is_built_once_per_arm(cable_cell: CellModel) -> None:
     left, right = cable_cell.arms["left"], cable_cell.arms["right"]
     assert arm_ik(left) is arm_ik(left)
@@ -151,6 +171,10 @@ def test_numerical_for_an_arm_without_dh(gantry: Arm) -> None:
         assert dp <= 1e-5 and dr <= 1e-5
         all_ = ik.solve_all(T)
         assert all_.shape == (1, 4)
+
+
+def test_a_numerical_arm_has_no_branches(gantry: Arm) -> None:
+    assert arm_ik(gantry).by_branch(gantry.fk(np.zeros(gantry.nq))) is None
 
 
 def test_numerical_out_of_reach(gantry: Arm) -> None:

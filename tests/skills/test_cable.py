@@ -25,6 +25,7 @@ from cellengine.errors import InputError
 from cellengine.info.load import load_plan
 from cellengine.motion import interpolate as ip
 from cellengine.program import Segment
+from cellengine.skills import cable as C
 from cellengine.skills import cable_geometry as cg
 from cellengine.skills.cable import PickCable, PlaceConnector, RouteCable, plan_cable_steps
 from cellengine.skills.cable_state import CableState
@@ -770,3 +771,72 @@ def test_the_lift_rises_over_a_taller_element_in_the_swept_sector() -> None:
         reach = float(np.linalg.norm(v - (v @ b.up) * b.up))
         height = float(b.ap @ b.up) + float(v @ b.up) * 0.05 / reach  # on the cable, 50 mm out
         assert height >= top + cg.Z_OFFSET - 1e-9
+
+
+# ------------------------------------------------------------------ how the other hand holds
+
+
+def _placing(name: str = "plan_straight") -> tuple[PlanningContext, CableState, PlaceConnector]:
+    """The reference plan's context, the state after its first PickCable way, its
+    PlaceConnector step (right places, left holds the cable)."""
+    world, steps = _world(name)
+    ctx = context(world)
+    _, state = next(C.step_ways(ctx, steps, 0, CableState.at_home(ctx)))
+    step = steps[1]
+    assert isinstance(step, PlaceConnector)
+    return ctx, replace(state, step=1), step
+
+
+def test_placing_keeps_the_published_hold_first_then_the_most_room() -> None:
+    """The published hold's carries come first, in PLACE_ORDERS' order (no regrasp: the
+    reference plans do not get slower); the other holds follow by the room the arms keep
+    along the carry and the insert, each at least the cell's clearance."""
+    ctx, state, step = _placing()
+    carries = C._place_carries(ctx, state, step, "right", "left", "w")
+    published = [order for hold, order in carries if hold == cg.PLACE_HOLDS[0]]
+    assert published == list(C.PLACE_ORDERS)
+    assert carries[: len(published)] == [(cg.PLACE_HOLDS[0], o) for o in published]
+    rooms = []
+    for hold, order in carries[len(published) :]:
+        geo = C._place_geometry(ctx.world, state, step, "right", "left", "w", order, hold=hold)
+        poses = [pair for _, paths in geo.carry for pair in C._samples(paths)]
+        poses += C._samples(geo.insert)
+        rooms.append(C._pair_room(ctx, "right", "left", poses, ctx.clearance))
+    assert len(rooms) > 0
+    assert min(rooms) >= ctx.clearance
+    assert rooms == sorted(rooms, reverse=True)
+
+
+def test_a_hold_turned_about_the_cable_still_closes_across_it() -> None:
+    """Held 30 deg about the cable and 40 mm farther along it, the other hand's fingertips are
+    51 + 40 mm from the connector hand's on the guide's axis, its jaw still across the cable,
+    its frame turned 30 deg about the cable from the published hold's."""
+    ctx, state, step = _placing()
+    hold = (math.radians(30.0), 0.040)
+    geo = C._place_geometry(ctx.world, state, step, "right", "left", "w", hold=hold)
+    published = C._place_geometry(ctx.world, state, step, "right", "left", "w")
+    T_c, T_f = geo.insert[0][-1], geo.insert[1][-1]
+    assert np.linalg.norm(T_f[:3, 3] - T_c[:3, 3]) == pytest.approx(91.0 * MM, abs=1e-9)
+    along = (T_f[:3, 3] - T_c[:3, 3]) / np.linalg.norm(T_f[:3, 3] - T_c[:3, 3])
+    assert along @ geo.axis == pytest.approx(1.0, abs=1e-9)
+    assert abs(T_f[:3, 1] @ geo.axis) <= 1e-9  # the jaw closes across the cable
+    turned = g.axis_angle_to_matrix(geo.axis, math.radians(30.0)) @ published.insert[1][-1][:3, :3]
+    np.testing.assert_allclose(T_f[:3, :3], turned, atol=1e-9)
+    assert geo.pull_distance == pytest.approx(published.pull_distance + 0.040, abs=1e-9)
+
+
+def test_no_hold_keeping_the_clearance_blames_the_arms() -> None:
+    """With a clearance no hold keeps (300 mm: not even from the cell), PlaceConnector is
+    refused, naming the other arm, and the error blames the arms: another pick might give
+    the other arm the connector. (test_cable_search has the arms too close to each other.)"""
+    ctx, state, step = _placing()
+    wide = replace(ctx, clearance=0.300)
+    with pytest.raises(InputError) as err:
+        next(step.ways(wide, state))
+    assert err.value.blames == "arms"
+    (problem,) = err.value.problems
+    assert problem.message == (
+        "steps[1] PlaceConnector routing.connector: however the other arm (left) holds the "
+        "cable, its tool comes within the cell's clearance of the cell carrying the "
+        "connector to the guide (the cell's clearance is 300.0 mm)"
+    )

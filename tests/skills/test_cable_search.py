@@ -25,8 +25,10 @@ import pytest
 from cellengine import pipeline
 from cellengine.cli import main
 from cellengine.errors import InputError
+from cellengine.execute.candidates import MAX_TRIES
 from cellengine.family import Candidate, SkillFamily
 from cellengine.skill import Skill
+from cellengine.skills import cable_geometry as cg
 from tests.conftest import CELLS
 
 # The routing platform's X3D: a Transform per element, its translation in the plate's own
@@ -155,30 +157,44 @@ def tip(candidate: Candidate, arm: str) -> float:
 
 
 def test_placing_the_connector_sends_the_search_back_to_another_pick(
-    tmp_path: Path, watch: Watch, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path,
+    watch: Watch,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """The connector guide at (760, -250) mm in the cell, far out in front of the right arm,
-    and guide1 at (700, -120) mm; one RouteCable guide. PickCable's first two ways (both hands
-    tipped 15 deg; the far hand as published, then turned half a turn) leave the left hand,
-    which holds the cable ahead of the connector while the right one places it, where it
-    cannot reach the placing poses: PlaceConnector cannot be planned from them and the search
-    goes back to PickCable's third way (tipped 25 deg), from which everything compiles."""
+    and guide1 at (700, -120) mm; one RouteCable guide; the other hand holding the cable as
+    published only while the connector is placed (a farther hold reaches from every pick).
+    PickCable's first two ways (both hands tipped 15 deg; the far hand as published, then
+    turned half a turn) leave the left hand, which holds the cable ahead of the connector
+    while the right one places it, where no pair of the arms' IK branches keeps them 10 mm
+    apart: PlaceConnector cannot be planned from them and the search goes back to
+    PickCable's third way (tipped 25 deg), from which everything compiles. (The error blames
+    the arms: the search first looks for a pick with the left arm on the connector end; there
+    is none, and it goes on with the picks it passed.)"""
+    monkeypatch.setattr(cg, "PLACE_HOLDS", cg.PLACE_HOLDS[:1])
     cell = board(tmp_path, {CONNECTOR: (480.0, -40.0), GUIDE1: (420.0, 90.0)})
     path = cell / "plan_one_guide.yaml"
     path.write_text(ONE_GUIDE)
     out = tmp_path / "out"
     assert plan(path, out) == 0, capsys.readouterr().err
-    # choices: PickCable, PlaceConnector, guide1, release
-    assert [watch.at(d) for d in range(4)] == [[0, 1, 2], [0], [0], [0]]
+    # choices: PickCable, PlaceConnector, guide1, release. Every pick is drawn when the first
+    # refusal blames the arms (all six give the right arm the connector end); then the
+    # second, then the third is tried.
+    assert [watch.at(d) for d in range(4)] == [[0, 1, 2, 3, 4, 5], [0], [0], [0]]
+    picks = [c for p, _, c in watch.taken if p == ()]
+    assert {c.decides["arms"] for c in picks} == {"right holds the connector"}
     assert [where for where, _ in watch.refused] == [(0,), (1,)]  # PlaceConnector after each
     for _, why in watch.refused:
-        assert why.startswith(
-            "steps[1] PlaceConnector routing.connector: out of reach of arm 'left': the "
+        assert why == (
+            "steps[1] PlaceConnector routing.connector: however the other arm (left) holds the "
+            "cable, the arms cannot keep the cell's clearance from each other carrying the "
+            "connector to the guide (the cell's clearance is 10.0 mm)"
         )
-    picks = [c for p, _, c in watch.taken if p == ()]
-    assert [round(math.degrees(tip(c, "left")), 9) for c in picks] == [15.0, 15.0, 25.0]
-    assert [round(math.degrees(tip(c, "right")), 9) for c in picks] == [15.0, 15.0, 25.0]
-    # what was compiled is the second pick and what followed it
+    tips = [15.0, 15.0, 25.0, 25.0, 5.0, 5.0]
+    assert [round(math.degrees(tip(c, "left")), 9) for c in picks] == tips
+    assert [round(math.degrees(tip(c, "right")), 9) for c in picks] == tips
+    # what was compiled is the third pick and what followed it
     kept = [s.label for p, _, c in watch.taken if p != () or c is picks[2] for s in c.segments]
     report = json.loads((out / "report.json").read_text())
     assert [s["label"] for s in report["segments"]] == kept
@@ -214,10 +230,10 @@ def test_a_cable_too_short_for_the_route_is_refused_at_the_step(
         "approach point, R_cable 68.0 mm slid past it, 1.4 mm pulled to tension, 9.0 mm for "
         "the fingers to hold) but the cable is 110.0 mm long\n"
     )
-    # guide1 had no way: the search went back to PlaceConnector's every way (3 orders x 2
-    # retracts), then to PickCable's next, until the search's budget (MAX_TRIES) ran out
-    assert watch.at(0) == [0, 1, 2]
-    assert watch.at(1) == [*range(6), *range(6), *range(6)]
+    # guide1 had no way: the search went back to PlaceConnector's ways (10 holds x 3 orders x
+    # 2 retracts) one by one until the search's budget (MAX_TRIES) ran out
+    assert watch.at(0) == [0]
+    assert watch.at(1) == [*range(MAX_TRIES + 2)]
     assert watch.at(2) == []
 
 
@@ -237,6 +253,7 @@ def test_a_guide_out_of_reach_of_both_arms_is_refused_at_the_step(
     # connector to the left arm cross the arms over the combs and are not offered
     assert watch.at(0) == list(range(6))
     assert watch.at(2) == []
-    # guide1 refused after each pick, routed by the left arm
+    # guide1 refused after each way tried (PlaceConnector's, after the first pick; no pick
+    # gives the left arm the connector end), routed by the left arm, until the budget ran out
     arms = [re.findall(r"out of reach of arm '(\w+)'", why) for _, why in watch.refused]
-    assert arms == [["left"]] * 6
+    assert arms == [["left"]] * (MAX_TRIES + 1)
