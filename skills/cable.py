@@ -378,6 +378,7 @@ class RouteCable(Skill):
                 raise
             _check_length(world, self.cable, _hand(world, r_arm), gp)
             _check_clear(ctx, gp, r_arm, o_arm)
+            _check_self(ctx, gp, r_arm)
             _check_pivot_free(ctx, gp, r_arm, o_arm)
         except InputError as e:
             return e
@@ -1785,6 +1786,42 @@ def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) ->
             raise _Blocked.of(
                 pair.distance - ctx.clearance, _blocked(gp, pair, what, ctx.clearance, fix)
             )
+
+
+def _check_self(ctx: PlanningContext, gp: GuidePlan, r_arm: str) -> None:
+    """Some IK branch of the routing arm follows the way's paths, from the approach to the
+    insert (it does not change branch between them: no transit), without its tool or links
+    coming within the checker's clearance of its own links: near its base, the tool turned to
+    a guide can meet the shoulder on every branch. None does: an error that blames the arms
+    (the other arm might route this guide)."""
+    from cellengine.motion.collision import DEFAULT_CLEARANCE  # what the compiler refuses
+
+    paths = (gp.approach, gp.slide, gp.pull_path, gp.lift, gp.swing, gp.insert)
+    poses = [T for path in paths for T in [*path[::3], path[-1]]]
+    ik, alive = ctx.iks[r_arm], np.ones(8, dtype=bool)
+    q = np.array(ctx.home, dtype=float)
+    nearest: tuple[float, tuple[str, str]] = (math.inf, ("", ""))
+    for T in poses:
+        rows = ik.by_branch(T)
+        if rows is None:
+            return  # solved numerically: the compiler finds out
+        for k in np.flatnonzero(alive):
+            if np.isnan(rows[k]).any():
+                alive[k] = False
+                continue
+            q[ctx.cell.slices[r_arm]] = rows[k]
+            d, pair = ctx.checker.distance(q, between=(r_arm, r_arm))
+            if d < DEFAULT_CLEARANCE:
+                alive[k] = False
+                nearest = min(nearest, (d, pair))
+        if not alive.any():
+            error = _error(
+                f"{gp.where}: the routing arm ({r_arm}) cannot follow this guide's paths on any "
+                f"of its IK branches without hitting itself ({', '.join(nearest[1])}; the guide "
+                f"is {_mm(_base_distance(ctx, r_arm, gp.guide))} mm from its base)"
+            )
+            error.blames = "arms"  # the other arm might route it: PickCable decides which
+            raise error
 
 
 def _env_near(

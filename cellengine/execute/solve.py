@@ -21,6 +21,7 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 import numpy as np
 
 from cellengine.arrays import Poses, Vec
+from cellengine.execute.following import followable
 from cellengine.execute.refused import NoMoreChoices, Refused
 from cellengine.execute.retime import fastest, thinned
 from cellengine.execute.winding import rewound
@@ -95,7 +96,11 @@ def transit(
         rewound(cell, arm, _ik_goals(cell, arm, goals[arm], q), ahead.get(arm), q[cell.slices[arm]])
         for arm in arms
     ]
-    tiers = _goal_configurations(cell, arms, per_arm, q)
+    follows = [
+        followable(cell, checker, arm, sols, ahead.get(arm), q)
+        for arm, sols in zip(arms, per_arm, strict=True)
+    ]
+    tiers = _goal_configurations(cell, arms, per_arm, q, follows)
     free = [[g for g in tier if not checker.in_collision(g)] for tier in tiers]
     if not any(free):
         contact = checker.check(tiers[0][0])
@@ -207,27 +212,34 @@ def _ik_goals(cell: CellModel, arm: str, T_cell_tcp: Poses, q: Vec) -> Vec:
 
 
 def _goal_configurations(
-    cell: CellModel, arms: Sequence[str], per_arm: Sequence[Vec], q: Vec
+    cell: CellModel,
+    arms: Sequence[str],
+    per_arm: Sequence[Vec],
+    q: Vec,
+    follows: Sequence[Sequence[bool]] | None = None,
 ) -> list[list[Vec]]:
     """Every combination of the arms' IK solutions as a cell configuration, in tiers by how
-    many arms leave their current IK branch (shoulder, elbow and wrist as they are): none
-    first. Within a tier, nearest ``q`` first (joint-space distance; ties keep the solvers'
-    order: deterministic).
+    many arms cannot follow their paths ahead from it (``follows``, per arm and solution:
+    :mod:`~cellengine.execute.following`), then by how many leave their current IK branch
+    (shoulder, elbow and wrist as they are): none first. Within a tier, nearest ``q`` first
+    (joint-space distance; ties keep the solvers' order: deterministic).
 
     The branch first because a Cartesian path never changes branch: an arm that a transit
     flips to the nearest solution in joint space (a shoulder flip can be nearer than staying)
     may find the next Cartesian moves out of that branch's reach, where the branch it came
     from, the one the plan was made from, reaches them."""
     keep = [_same_branch(cell, arm, sols, q) for arm, sols in zip(arms, per_arm, strict=True)]
+    follows = follows or [[True] * len(sols) for sols in per_arm]
     out = []
     for combo in itertools.product(*(range(len(sols)) for sols in per_arm)):
         g = q.copy()
         for arm, sols, k in zip(arms, per_arm, combo, strict=True):
             g[cell.slices[arm]] = sols[k]
+        stuck = sum(not follows[i][k] for i, k in enumerate(combo))
         flips = sum(not keep[i][k] for i, k in enumerate(combo))
-        out.append((flips, float(np.linalg.norm(g - q)), g))
+        out.append(((stuck, flips), float(np.linalg.norm(g - q)), g))
     out.sort(key=lambda item: item[:2])
-    return [[g for f, _, g in out if f == flips] for flips in sorted({f for f, _, _ in out})]
+    return [[g for t, _, g in out if t == tier] for tier in sorted({t for t, _, _ in out})]
 
 
 def _same_branch(cell: CellModel, arm: str, sols: Vec, q: Vec) -> list[bool]:

@@ -1,0 +1,50 @@
+"""Which of a transit's goal configurations can follow the arm's Cartesian paths after it.
+
+A Cartesian path never changes IK branch, and the cable skills keep an arm on Cartesian paths
+from one transit to its next through many segments (RouteCable slides the routing hand from
+guide to guide). Near the arm's base, a tool turned to a guide can meet the arm's own shoulder
+on one branch and not on another, guides after the transit that chose it. Before a transit
+commits to a goal, each goal's branch is followed over the arm's poses up to its next transit
+(every ``STRIDE``-th, as :mod:`~cellengine.execute.winding` samples them): a branch that
+leaves the arm's reach or brings the arm within the checker's clearance of itself there
+cannot run them. Only the arm's own links and tool are measured: where the other arm and the
+cell will be is the compiler's to find out.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from cellengine.arrays import Poses, Vec
+from cellengine.motion.collision import DEFAULT_CLEARANCE, CollisionChecker
+from cellengine.motion.ik import arm_ik
+from cellengine.motion.robot import CellModel
+
+STRIDE = 4  # poses: as winding.STRIDE, 8 deg or 20 mm between samples at most
+
+
+def followable(
+    cell: CellModel, checker: CollisionChecker, arm: str, sols: Vec, poses: Poses | None, q: Vec
+) -> list[bool]:
+    """For each of ``sols`` (k, n): whether its IK branch follows ``poses`` (the arm's poses
+    up to its next transit) within reach and clear of itself, the other joints as in ``q``.
+    All True for an arm without branches (solved numerically) or without poses ahead."""
+    ik = arm_ik(cell.arms[arm])
+    if poses is None or len(sols) == 0 or ik.closed_form is None:
+        return [True] * len(sols)
+    wanted = {ik.branch(sol) for sol in sols}
+    alive = set(wanted)
+    here = np.array(q, dtype=float)
+    for T in [*poses[::STRIDE], poses[-1]]:
+        rows = ik.by_branch(T)
+        assert rows is not None
+        for k in sorted(alive):
+            if np.isnan(rows[k]).any():
+                alive.discard(k)
+                continue
+            here[cell.slices[arm]] = rows[k]
+            if checker.distance(here, between=(arm, arm))[0] < DEFAULT_CLEARANCE:
+                alive.discard(k)
+        if not alive:
+            break
+    return [ik.branch(sol) in alive for sol in sols]
