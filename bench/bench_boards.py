@@ -115,6 +115,10 @@ def run_one(plan: str, board: str, strategy: str) -> Outcome:
         dt = time.perf_counter() - t0
         msg = str(e).split("\n")[0]
         return Outcome(board, strategy, False, classify(msg), msg, dt, None)
+    except Exception as e:  # an engine bug: counted and kept, the other boards still run
+        dt = time.perf_counter() - t0
+        msg = f"{type(e).__name__}: {e}".split("\n")[0]
+        return Outcome(board, strategy, False, f"crash: {type(e).__name__}", msg, dt, None)
     dt = time.perf_counter() - t0
     result = check_compiled(compiled)
     d = None if result.min_arm_distance is None else round(result.min_arm_distance * 1000, 1)

@@ -8,7 +8,9 @@ restored to where that choice's segments began) and compiling goes on with the n
 candidates. A family that cannot plan a choice at all (its generator raises) sends the search
 to the choice before. An error that blames something a choice decided (``InputError.blames``,
 ``Candidate.decides``) sends it straight back to the latest choice that decided it, to its
-next candidate that decides it otherwise: the choices between could not change it.
+next candidate that decides it otherwise: the choices between could not change it. A
+candidate whose segments begin as the failed one's did, up to the one that failed, is passed
+over (no transit among them: compiled from the same place, they fail the same way).
 ``MAX_TRIES`` candidates taken in all; then the first error is raised: with one candidate
 per choice, exactly the error of compiling the first candidates.
 
@@ -21,6 +23,8 @@ import itertools
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
+
+import numpy as np
 
 from cellengine.errors import InputError
 from cellengine.execute.search import add_all
@@ -53,7 +57,11 @@ def compile_candidates(
     pending: Iterator[Candidate] | None = first
     first_error: InputError | None = None
     for _ in range(MAX_TRIES + 1):
-        current = [len(chosen) - 1]  # the choice of the segment being compiled
+        # the choice of the segment being compiled; the choice, and the place in it, of the
+        # furthest segment compiled (where the error the compiler gives arose)
+        current = [len(chosen) - 1, -1, -1]
+        ran: tuple[object, ...] | None = None  # what the failed candidate compiled, if it may
+        # be skipped in others
         try:
             _grow(chosen, pending)
             _compile_from(compiler, chosen, start, marks, before_each, current)
@@ -63,9 +71,12 @@ def compile_candidates(
             failed, blames = len(chosen), e.error.blames if e.error is not None else None
         except InputError as e:
             first_error = first_error or e
-            failed, blames = current[0], e.blames
+            # the choice of the furthest segment compiled: going back to earlier transits
+            # (search.add_all) ends with the error of the attempt that got furthest
+            failed, blames = (current[1] if current[1] >= 0 else current[0]), e.blames
+            ran = _prefix(chosen[failed].taken.segments, current[2])
         k = _jump(chosen, failed, blames) if blames is not None else None
-        k = k if k is not None else _next_candidate(chosen, failed)
+        k = k if k is not None else _next_candidate(chosen, failed, ran)
         if k is None:
             break
         for j in [j for j in marks if j > k]:
@@ -108,22 +119,30 @@ def _compile_from(
     current: list[int],
 ) -> None:
     """Compile the segments of choices ``start`` on, marking where each choice begins;
-    ``current[0]``: the choice whose segment is being compiled (the one a failure blames:
+    ``current``: the choice whose segment is being compiled, then the choice of the furthest
+    segment compiled and its place in that choice's segments (a failure blames that choice:
     the guides of one RouteCable are choices of one step)."""
     segments: list[Segment] = []
     begins: dict[int, int] = {}  # id of a choice's first segment -> the choice
-    owner: dict[int, int] = {}  # id of any segment -> its choice
+    owner: dict[int, tuple[int, int, int]] = {}  # id of a segment -> its place in all of
+    # them, its choice, its place in the choice
     for k in range(start, len(chosen)):
         if chosen[k].taken.segments:
             begins[id(chosen[k].taken.segments[0])] = k
-        owner.update((id(s), k) for s in chosen[k].taken.segments)
+        owner.update(
+            (id(s), (len(segments) + j, k, j)) for j, s in enumerate(chosen[k].taken.segments)
+        )
         segments += chosen[k].taken.segments
+    furthest = -1
 
     def before(segment: Segment) -> None:
+        nonlocal furthest
         k = begins.get(id(segment))
         if k is not None:
             marks[k] = compiler.mark()
-        current[0] = owner[id(segment)]
+        at, current[0], j = owner[id(segment)]
+        if at > furthest:
+            furthest, current[1], current[2] = at, current[0], j
         if before_each is not None:
             before_each(segment)
 
@@ -156,14 +175,22 @@ def _jump(chosen: list[_Choice], failed: int, blames: str) -> int | None:
     return None
 
 
-def _next_candidate(chosen: list[_Choice], failed: int) -> int | None:
+def _next_candidate(
+    chosen: list[_Choice], failed: int, ran: tuple[object, ...] | None = None
+) -> int | None:
     """Take the next candidate at choice ``failed`` or, when it has none, at the choices
-    before it; the choices after it are dropped. The choice changed, or None."""
+    before it; the choices after it are dropped. At ``failed``, a candidate whose segments
+    begin as ``ran`` (those the failed candidate compiled, up to the failing one) is passed
+    over: compiled from the same place, they fail the same way. The choice changed, or
+    None."""
     k = min(failed, len(chosen) - 1)
     del chosen[k + 1 :]
     while k >= 0:
         try:
-            chosen[k].taken = next(chosen[k].options)
+            taken = next(chosen[k].options)
+            while ran is not None and k == failed and _prefix(taken.segments, len(ran) - 1) == ran:
+                taken = next(chosen[k].options)
+            chosen[k].taken = taken
             return k
         except StopIteration:
             pass
@@ -172,3 +199,27 @@ def _next_candidate(chosen: list[_Choice], failed: int) -> int | None:
         del chosen[k:]
         k -= 1
     return None
+
+
+def _prefix(segments: tuple[Segment, ...], last: int) -> tuple[object, ...] | None:
+    """What ``segments[: last + 1]`` ask of the compiler, comparable with ==; None when there
+    is no such segment or one of them has a transit (a transit looks ahead at the segments
+    after it: the same transit before other segments may be compiled otherwise)."""
+    if last < 0 or last >= len(segments):
+        return None
+    head = segments[: last + 1]
+    if any(p.kind == "transit" for s in head for p in s.paths):
+        return None
+    return tuple(
+        (
+            s.label,
+            tuple((p.arm, p.kind, np.asarray(p.poses).tobytes()) for p in s.paths),
+            s.before,
+            s.after,
+            s.closed_chain,
+            s.keep_distance,
+            s.contacts,
+            s.near,
+        )
+        for s in head
+    )

@@ -12,13 +12,15 @@ one.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from typing import TypeVar
 
 import numpy as np
 
 from cellengine.arrays import Vec
+from cellengine.execute.refused import Refused
 from cellengine.motion.robot import Limits
-from cellengine.motion.timing import speed_profile, time_parameterize
+from cellengine.motion.timing import PathOutOfRange, speed_profile, time_parameterize
 from cellengine.motion.trajectory import Trajectory
 
 JERK_PER_ACCELERATION = 50.0  # 1/s: jerk limit = 50 x acceleration limit, per joint
@@ -30,6 +32,7 @@ SAME_ROW = 1e-9
 # pieces that short make the timing's jerk and between-sample bounds (and so the durations)
 # worse for nothing: the rows around them pin the same curve.
 THIN_ROW = 0.5
+T = TypeVar("T")
 
 
 def jerk_limits(limits: Limits) -> Vec:
@@ -77,7 +80,11 @@ def timed(rows: Vec, limits: Limits, names: Sequence[str]) -> Trajectory:
     R = thinned(rows)
     if len(R) < 2:
         return still(R[0], names)
-    return time_parameterize(R, limits, jerk=jerk_limits(limits), joint_names=tuple(names))
+    return _in_range(
+        lambda W: time_parameterize(W, limits, jerk=jerk_limits(limits), joint_names=tuple(names)),
+        R,
+        rows,
+    )
 
 
 def fastest(rows: Vec, limits: Limits) -> float:
@@ -88,7 +95,21 @@ def fastest(rows: Vec, limits: Limits) -> float:
     R = thinned(rows)
     if len(R) < 2:
         return 0.0
-    return speed_profile(R, limits).duration
+    return _in_range(lambda W: speed_profile(W, limits).duration, R, rows)
+
+
+def _in_range(time: Callable[[Vec], T], R: Vec, rows: Vec) -> T:
+    """``time(R)``; where the spline through the thinned rows ``R`` bulges past a joint's
+    range (a path running along a limit), ``time`` of every distinct row; Refused when that
+    bulges past it too."""
+    try:
+        return time(R)
+    except PathOutOfRange:
+        pass
+    try:
+        return time(distinct(rows))
+    except PathOutOfRange as e:
+        raise Refused(f"the path runs along a joint's limit: {e}") from None
 
 
 def still(q: Vec, names: Sequence[str], t: float = 0.0) -> Trajectory:

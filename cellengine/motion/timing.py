@@ -181,6 +181,10 @@ def _problem(
     )
 
 
+class PathOutOfRange(ValueError):
+    """The spline through the waypoints bulges past a joint's range between two of them."""
+
+
 def _check_path_in_range(path: SplinePath, lim: _Resolved) -> None:
     """A cubic spline can bulge past the waypoints: refuse a path that leaves a joint's
     range rather than time it (each piece's extremes, exactly)."""
@@ -189,7 +193,7 @@ def _check_path_in_range(path: SplinePath, lim: _Resolved) -> None:
     if np.any(outside):
         k, j = np.argwhere(outside)[0]
         value = low[k, j] if low[k, j] < lim.lower[j] else high[k, j]
-        raise ValueError(
+        raise PathOutOfRange(
             f"the spline through the waypoints leaves joint {j}'s range "
             f"[{lim.lower[j]:.6g}, {lim.upper[j]:.6g}] between waypoints {k} and {k + 1} "
             f"(reaching {value:.6g}); add waypoints there"

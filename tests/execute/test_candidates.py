@@ -13,7 +13,7 @@ from cellengine.execute import Compiler
 from cellengine.execute.candidates import compile_candidates
 from cellengine.family import Candidate
 from cellengine.program import ArmPath, Segment
-from tests.execute.scenes import cable_cell, home, pose
+from tests.execute.scenes import cable_cell, home, line, pose
 
 NEAR = (0.40, 0.15, 0.20)  # the left arm reaches it
 ALSO = (0.35, 0.20, 0.25)
@@ -169,3 +169,29 @@ def test_the_candidates_a_blame_passes_come_after_the_one_it_jumped_to() -> None
     )
     assert compile_candidates(c, choice(stuck, again, other)) == [again]
     assert labels(c) == [f"to {ALSO}"]
+
+
+def slide(step: int, a: tuple[float, float, float], b: tuple[float, float, float]) -> Segment:
+    return Segment(step, f"along to {b}", (ArmPath("left", "cartesian", line(a, b)),))
+
+
+def test_a_candidate_beginning_as_the_one_that_failed_is_passed_over() -> None:
+    """Choice 1's first way fails in its first segment, a Cartesian line out of reach; its
+    second way begins with the same line (then goes on): compiled from the same place it would
+    fail the same way, and is not compiled. The third way compiles."""
+    out = (0.40, 0.15, 1.40)  # 1.2 m straight up from NEAR: out of reach
+    failed = Candidate((slide(1, NEAR, out),))
+    same = Candidate((slide(1, NEAR, out), slide(1, out, NEAR)))
+    other = Candidate((slide(1, NEAR, ALSO),))
+
+    def compiled(*ways: Candidate) -> list[str]:
+        seen: list[str] = []
+        start = Candidate((hop(0, NEAR),), then=lambda: choice(*ways))
+        taken = compile_candidates(compiler(), choice(start), lambda s: seen.append(s.label))
+        assert taken == [start, other]
+        return seen
+
+    # the failing line is compiled (the compiler going back to the transit before it, too) as
+    # often with ``same`` among the ways as without it
+    assert compiled(failed, same, other) == compiled(failed, other)
+    assert compiled(failed, other)[-1] == f"along to {ALSO}"
