@@ -1663,14 +1663,14 @@ def _pair_room(
     """How far apart (m) the two arms can stay while their tools pass ``poses`` (T_cell_tcp
     of ``a``, of ``b``): the most, over the pairs of IK branches that are free of collisions
     at every pose and keep ``keep`` between the arms, of their least distance there; -inf
-    when no pair does. (A continuous motion keeps its branches; an arm solved numerically
-    has none, and then any pair of solutions per pose counts, an optimistic bound.)"""
+    when no pair does; inf for an arm solved numerically (it has no branches). A continuous
+    motion keeps its branches."""
     alive: NDArray[np.bool_] | None = None
     least = np.full(64, math.inf)
     for T_a, T_b in poses:
         q_a, q_b = ctx.iks[a].by_branch(T_a), ctx.iks[b].by_branch(T_b)
         if q_a is None or q_b is None:
-            return _any_pair_room(ctx, a, b, poses)
+            return math.inf  # an arm solved numerically has no branches: the compiler finds out
         Q = _solution_pairs(ctx, a, q_a, b, q_b)
         ok: NDArray[np.bool_] = np.asarray(~np.isnan(Q).any(axis=1))
         if alive is not None:
@@ -1682,18 +1682,6 @@ def _pair_room(
         if not alive.any():
             return -math.inf
     return float(least[alive].max()) if alive is not None else -math.inf
-
-
-def _any_pair_room(ctx: PlanningContext, a: str, b: str, poses: Sequence[tuple[Mat, Mat]]) -> float:
-    """The least over ``poses`` of the farthest apart any pair of solutions free of
-    collisions there is (m); -inf when a pose has none."""
-    room = math.inf
-    for T_a, T_b in poses:
-        Q = _solution_pairs(ctx, a, ctx.iks[a].solve_all(T_a), b, ctx.iks[b].solve_all(T_b))
-        free = np.flatnonzero(~ctx.checker.check_batch(Q))
-        best = max((ctx.checker.distance(Q[i], between=(a, b))[0] for i in free), default=-math.inf)
-        room = min(room, best)
-    return room
 
 
 def _solution_pairs(ctx: PlanningContext, a: str, sols_a: Vec, b: str, sols_b: Vec) -> Vec:
@@ -1794,34 +1782,19 @@ def _check_self(ctx: PlanningContext, gp: GuidePlan, r_arm: str) -> None:
     coming within the checker's clearance of its own links: near its base, the tool turned to
     a guide can meet the shoulder on every branch. None does: an error that blames the arms
     (the other arm might route this guide)."""
-    from cellengine.motion.collision import DEFAULT_CLEARANCE  # what the compiler refuses
+    from cellengine.execute.following import surviving  # the motion stack: planning only
 
     paths = (gp.approach, gp.slide, gp.pull_path, gp.lift, gp.swing, gp.insert)
-    poses = [T for path in paths for T in [*path[::3], path[-1]]]
-    ik, alive = ctx.iks[r_arm], np.ones(8, dtype=bool)
-    q = np.array(ctx.home, dtype=float)
-    nearest: tuple[float, tuple[str, str]] = (math.inf, ("", ""))
-    for T in poses:
-        rows = ik.by_branch(T)
-        if rows is None:
-            return  # solved numerically: the compiler finds out
-        for k in np.flatnonzero(alive):
-            if np.isnan(rows[k]).any():
-                alive[k] = False
-                continue
-            q[ctx.cell.slices[r_arm]] = rows[k]
-            d, pair = ctx.checker.distance(q, between=(r_arm, r_arm))
-            if d < DEFAULT_CLEARANCE:
-                alive[k] = False
-                nearest = min(nearest, (d, pair))
-        if not alive.any():
-            error = _error(
-                f"{gp.where}: the routing arm ({r_arm}) cannot follow this guide's paths on any "
-                f"of its IK branches without hitting itself ({', '.join(nearest[1])}; the guide "
-                f"is {_mm(_base_distance(ctx, r_arm, gp.guide))} mm from its base)"
-            )
-            error.blames = "arms"  # the other arm might route it: PickCable decides which
-            raise error
+    poses = np.concatenate(paths)
+    alive, nearest = surviving(ctx.cell, ctx.checker, r_arm, poses, ctx.home)
+    if not alive:
+        error = _error(
+            f"{gp.where}: the routing arm ({r_arm}) cannot follow this guide's paths on any "
+            f"of its IK branches without hitting itself ({', '.join(nearest[1])}; the guide "
+            f"is {_mm(_base_distance(ctx, r_arm, gp.guide))} mm from its base)"
+        )
+        error.blames = "arms"  # the other arm might route it: PickCable decides which
+        raise error
 
 
 def _env_near(

@@ -13,12 +13,16 @@ cell will be is the compiler's to find out.
 
 from __future__ import annotations
 
+import math
+from collections.abc import Collection
+
 import numpy as np
 
 from cellengine.arrays import Poses, Vec
 from cellengine.motion.collision import DEFAULT_CLEARANCE, CollisionChecker
 from cellengine.motion.ik import arm_ik
 from cellengine.motion.robot import CellModel
+from cellengine.motion.scene import Pair
 
 STRIDE = 4  # poses: as winding.STRIDE, 8 deg or 20 mm between samples at most
 
@@ -32,19 +36,38 @@ def followable(
     ik = arm_ik(cell.arms[arm])
     if poses is None or len(sols) == 0 or ik.closed_form is None:
         return [True] * len(sols)
-    wanted = {ik.branch(sol) for sol in sols}
-    alive = set(wanted)
+    alive, _ = surviving(cell, checker, arm, poses, q, {ik.branch(sol) for sol in sols})
+    return [ik.branch(sol) in alive for sol in sols]
+
+
+def surviving(
+    cell: CellModel,
+    checker: CollisionChecker,
+    arm: str,
+    poses: Poses,
+    q: Vec,
+    branches: Collection[int] = range(8),
+) -> tuple[set[int], tuple[float, Pair]]:
+    """Which of ``branches`` follow ``poses`` (every STRIDE-th and the last) within reach and
+    the checker's clearance of the arm itself, the other joints as in ``q``; and the closest
+    the arm came to itself on a branch that did not (inf when none came too close). Every
+    branch survives for an arm solved numerically (it has none)."""
+    ik = arm_ik(cell.arms[arm])
+    alive, nearest = set(branches), (math.inf, ("", ""))
     here = np.array(q, dtype=float)
     for T in [*poses[::STRIDE], poses[-1]]:
         rows = ik.by_branch(T)
-        assert rows is not None
+        if rows is None:
+            return alive, nearest
         for k in sorted(alive):
             if np.isnan(rows[k]).any():
                 alive.discard(k)
                 continue
             here[cell.slices[arm]] = rows[k]
-            if checker.distance(here, between=(arm, arm))[0] < DEFAULT_CLEARANCE:
+            d, pair = checker.distance(here, between=(arm, arm))
+            if d < DEFAULT_CLEARANCE:
                 alive.discard(k)
+                nearest = min(nearest, (d, pair))
         if not alive:
             break
-    return [ik.branch(sol) in alive for sol in sols]
+    return alive, nearest
