@@ -26,7 +26,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Callable, Collection, Iterable, Iterator, Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Annotated, Any, Literal
 
@@ -296,14 +296,13 @@ class RouteCable(Skill):
         # Where the other hand stands back to is not part of what is checked here: ways that
         # differ only in it are checked once.
         checked: dict[GuideWay, GuidePlan | InputError] = {}
-        pivots: dict[tuple[float, float, bool], InputError | None] = {}
-        for way in guide_ways(world, state, guide, r_arm, self._clear_from(ctx, state, k)):
+        screen = _Screen()
+        ways = list(guide_ways(world, state, guide, r_arm, self._clear_from(ctx, state, k)))
+        self._check_any_length(ctx, state, k, ways, r_arm, o_arm)
+        for way in ways:
             key = replace(way, stand_back=cg.STAND_BACK)
-            p_key = (way.gap, way.pivot_lean, way.towards_base)
-            if p_key not in pivots:
-                pivots[p_key] = _pivot_blocked(ctx, state, guide, r_arm, o_arm, way)
             if key not in checked:
-                checked[key] = pivots[p_key] or self._checked(ctx, state, guide, way, r_arm, o_arm)
+                checked[key] = self._checked(ctx, state, guide, way, r_arm, o_arm, screen)
             gp = checked[key]
             if isinstance(gp, InputError):
                 score = gp.distance if isinstance(gp, _Blocked) else -math.inf
@@ -320,6 +319,33 @@ class RouteCable(Skill):
             _check_room(world, where, _hand(world, o_arm), before, guide)
             _check_room(world, where, _hand(world, r_arm), guide, after)
             raise closest[1] if closest is not None else _error(f"{where}: no way to route it")
+
+    def _check_any_length(
+        self,
+        ctx: PlanningContext,
+        state: CableState,
+        k: int,
+        ways: Sequence[GuideWay],
+        r_arm: str,
+        o_arm: str,
+    ) -> None:
+        """The first way's error when the cable is too short for every way (the stop and
+        the insert's end set how much it needs) and the first way is within reach, before
+        any is built."""
+        world, guide = ctx.world, self.guides[k]
+        last = np.asarray(state.route[-1], dtype=float)
+        need = math.inf
+        for gap, after in {(w.gap, w.gap_after) for w in ways}:
+            b = _basics(world, state, guide, r_arm, gap, after)
+            need = min(need, float(np.linalg.norm(b.ap - last)) + b.r_cable + b.pull)
+        hand = _hand(world, r_arm)
+        if ways and state.route_length() + need + hand.end_margin > world.cable(self.cable).length:
+            gp = _guide_plan(world, state, self.cable, guide, r_arm, o_arm, ways[0])
+            try:
+                _check_reach(ctx, r_arm, gp.reach_routing(), gp.where)
+            except InputError:
+                return  # out of reach says more: the ways are screened for it first
+            _check_length(world, self.cable, hand, gp)
 
     def _clear_from(
         self, ctx: PlanningContext, state: CableState, k: int
@@ -361,28 +387,86 @@ class RouteCable(Skill):
         way: GuideWay,
         r_arm: str,
         o_arm: str,
+        screen: _Screen,
     ) -> GuidePlan | InputError:
         """The plan of ``way`` if it passes the checks (reach, cable length, clearances),
-        else why not."""
+        else why not. Each check is made once for the ways that share what it depends on
+        (``screen``): the routing hand's approach, what the routing hand does, the other
+        hand's descent."""
         world = ctx.world
+        r_key = replace(way, pivot_lean=cg.PIVOT_LEAN)
+        p_key = (way.gap, way.pivot_lean, way.towards_base)
+        a_key = (way.gap, way.lean, way.towards_base)
+        if a_key not in screen.approaches:
+            screen.approaches[a_key] = _approach_blocked(ctx, state, guide, (r_arm, o_arm), way)
+        known = screen.approaches[a_key] or screen.routed.get(r_key) or screen.pivots.get(p_key)
+        if known is not None:
+            return known
+        routed, pivots = screen.routed, screen.pivots
         try:
             gp = _guide_plan(world, state, self.cable, guide, r_arm, o_arm, way)
             k = self.guides.index(guide)
             after = (cg.element_of(self.guides[k + 1]),) if k + 1 < len(self.guides) else ()
             gp = replace(gp, beside=(*gp.beside, *after, *_under(ctx, gp.slot, gp.up)))
+            if r_key not in routed:
+                routed[r_key] = _routing_hand_blocked(ctx, world, self.cable, gp, r_arm)
+            if p_key not in pivots:
+                pivots[p_key] = _pivot_blocked(ctx, state, guide, r_arm, o_arm, way)
+            if routed[r_key] is not None or pivots[p_key] is not None:
+                return routed[r_key] or pivots[p_key]  # type: ignore[return-value]
             try:
-                _check_reach(ctx, r_arm, gp.reach_routing(), gp.where)
                 _check_reach(ctx, o_arm, gp.reach_other(), gp.where)
             except InputError as e:
-                e.blames = "arms"  # the other arm might reach: PickCable decides which
+                e.blames = "arms"  # the routing arm might reach: PickCable decides which
                 raise
-            _check_length(world, self.cable, _hand(world, r_arm), gp)
-            _check_clear(ctx, gp, r_arm, o_arm)
-            _check_self(ctx, gp, r_arm)
+            _check_hands(ctx, gp, r_arm, o_arm)
             _check_pivot_free(ctx, gp, r_arm, o_arm)
         except InputError as e:
             return e
         return gp
+
+
+@dataclass
+class _Screen:
+    """What RouteCable.guide_plans found of one guide's ways so far, by what it depends on."""
+
+    approaches: dict[tuple[float, float, bool], InputError | None] = field(default_factory=dict)
+    routed: dict[GuideWay, InputError | None] = field(default_factory=dict)
+    pivots: dict[tuple[float, float, bool], InputError | None] = field(default_factory=dict)
+
+
+def _approach_blocked(
+    ctx: PlanningContext, state: CableState, guide: str, arms: tuple[str, str], way: GuideWay
+) -> InputError | None:
+    """Why the routing arm (``arms[0]``) cannot reach the approach pose of ``way`` (it
+    depends only on the stop and the hand's tip), or None."""
+    r_arm = arms[0]
+    gp = _guide_plan(ctx.world, state, state.cable or "", guide, r_arm, arms[1], way)
+    try:
+        _check_reach(ctx, r_arm, gp.reach_routing()[:1], gp.where)
+    except InputError as e:
+        e.blames = "arms"  # the other arm might reach: PickCable decides which
+        return e
+    return None
+
+
+def _routing_hand_blocked(
+    ctx: PlanningContext, world: World, cable: str, gp: GuidePlan, r_arm: str
+) -> InputError | None:
+    """Why the routing hand alone cannot do ``gp`` (the cable's length, its reach, its
+    clearances, its own links), or None."""
+    try:
+        try:
+            _check_reach(ctx, r_arm, gp.reach_routing()[1:], gp.where)
+        except InputError as e:
+            e.blames = "arms"  # the other arm might reach: PickCable decides which
+            raise
+        _check_length(world, cable, _hand(world, r_arm), gp)
+        _check_clear(ctx, gp, r_arm)
+        _check_self(ctx, gp, r_arm)
+    except InputError as e:
+        return e
+    return None
 
 
 CableSkill = PickCable | PlaceConnector | RouteCable
@@ -938,6 +1022,7 @@ class GuidePlan:
     r_cable: float
     theta_min: float
     theta: float
+    slide_turn: float  # the share of theta the hand turns as it slides
     pull: float  # pulled to tension after the other hand grasps
     elevation: float  # of the lift, seen from the pivot
     reorient: Poses | None
@@ -1011,6 +1096,7 @@ class GuideWay:
     gap_after: float | None = None
     turn_first: bool = False  # the routing hand turns to the sliding angle, then slides
     towards_base: bool = True  # the hands tip towards their bases too, not only along the cable
+    slide_turn: float = 1.0  # the share of theta the routing hand turns as it slides
 
 
 @dataclass(frozen=True)
@@ -1075,6 +1161,9 @@ def _basics(
     )
 
 
+THETA_TOL = math.radians(0.5)  # angles closer than this are one
+
+
 def guide_ways(
     world: World,
     state: CableState,
@@ -1101,8 +1190,8 @@ def guide_ways(
             f"atan((W_gripper + W_guide) / (2 A)) = atan(({_mm(b0.hand.width)} + "
             f"{_mm(b0.dims.width)}) / (2 * {_mm(cg.APPROACH_GAP)})) = "
             f"{math.degrees(b0.theta_min):.1f} deg, plus {math.degrees(cg.THETA_MARGIN):.0f} "
-            f"deg margin, but beyond {math.degrees(cg.THETA_MAX):.0f} deg the slide hardly "
-            "moves along the guide"
+            f"deg margin, but beyond {math.degrees(cg.THETA_MAX):.0f} deg the slide would go "
+            "back along the cable"
         )
     ranked: list[tuple[float, int, GuideWay]] = []
     first_blocked: list[str] = []
@@ -1110,11 +1199,13 @@ def guide_ways(
     for gap in (*cg.APPROACH_GAPS, *_centred_gap(world, guide, b0, after=False)):
         b = _basics(world, state, guide, r_arm, gap)
         afters = (None, *centred_after)
-        afters += tuple(a for a in cg.APPROACH_GAPS if a < gap)
+        afters += tuple(a for a in (*cg.APPROACH_GAPS, *cg.INSERT_PASTS) if a != gap)
         start = b.theta_min + cg.THETA_MARGIN
         n = int((cg.THETA_MAX - start) / cg.THETA_STEP + 1e-9) + 1 if start <= cg.THETA_MAX else 0
         angles: list[tuple[float, tuple[float, bool] | None]]
         angles = [(start + k * cg.THETA_STEP, None) for k in range(n)]
+        if n and start + (n - 1) * cg.THETA_STEP < cg.THETA_MAX - THETA_TOL:
+            angles.append((cg.THETA_MAX, None))  # the steepest slide: the steps miss it
         for side, first in itertools.product((1.0, -1.0), (False, True)):
             least = None if clear_from is None or n == 0 else clear_from(b, side, first)
             if least is not None and least > start:
@@ -1127,14 +1218,20 @@ def guide_ways(
                 if only is not None and side != only[0]:
                     continue
                 firsts = (False, True) if only is None else (only[1],)
-                for lean, pivot, back, after, first, base in itertools.product(
-                    cg.LEANS, cg.PIVOT_LEANS, cg.STAND_BACKS, afters, firsts, (True, False)
+                for lean, pivot, back, after, first, base, share in itertools.product(
+                    cg.LEANS,
+                    cg.PIVOT_LEANS,
+                    cg.STAND_BACKS,
+                    afters,
+                    firsts,
+                    (True, False),
+                    cg.SLIDE_TURNS,
                 ):
                     cost = abs(theta - theta0) + 0.05 * rank + abs(back - cg.STAND_BACK)
                     cost += 0.5 * (abs(lean - cg.LEAN) + abs(pivot - cg.PIVOT_LEAN))
                     cost += (0.0 if after is None else abs(after - gap)) + 0.01 * first
-                    cost += 0.0 if base else 0.3
-                    way = GuideWay(theta, side, lean, pivot, back, gap, after, first, base)
+                    cost += (0.0 if base else 0.3) + 0.2 * (1.0 - share)
+                    way = GuideWay(theta, side, lean, pivot, back, gap, after, first, base, share)
                     ranked.append((cost, len(ranked), way))
     if not ranked:
         raise _error(
@@ -1206,9 +1303,11 @@ def _guide_plan(
         reorient = cg.turn_in_place(T_r0, T_ap)
         T_r0 = reorient[-1]
     approach = cg.line(T_r0, T_ap)
-    # Sliding, the hand turns about the vertical to hold the cable along the slide; the swing
-    # over the slot turns it back, so it inserts in the approach orientation.
-    T_slid = g.transform(g.axis_angle_to_matrix(up, side * theta) @ T_ap[:3, :3], ap + r_cable * d)
+    # Sliding, the hand turns about the vertical to hold the cable along the slide (or by a
+    # share of it, see cg.SLIDE_TURNS); the swing over the slot turns it back, so it inserts
+    # in the approach orientation.
+    turned = g.axis_angle_to_matrix(up, side * theta * way.slide_turn)
+    T_slid = g.transform(turned @ T_ap[:3, :3], ap + r_cable * d)
     slide = cg.line(T_ap, T_slid)
     if way.turn_first:
         # turned first, the hand is as wide across the slide as the published sliding angle
@@ -1228,7 +1327,7 @@ def _guide_plan(
     lift = cg.arc(pull_path[-1], ap, np.cross(d, up), elevation, turn=False)
     # Swing about the vertical through the pivot until the cable is over the slot, turning
     # the hand with it (a turn about the vertical keeps its z down).
-    swing = cg.arc(lift[-1], ap, up, -side * theta, turn=True)
+    swing = cg.arc(lift[-1], ap, up, -side * theta, turn=way.slide_turn)
     # Insert: down on the circle until the cable lies along the axis through the slot.
     insert = cg.arc(swing[-1], ap, np.cross(axis, up), -elevation, turn=False)
     laid = state.route_length() + float(np.linalg.norm(ap - last))
@@ -1247,6 +1346,7 @@ def _guide_plan(
         r_cable=r_cable,
         theta_min=b.theta_min,
         theta=theta,
+        slide_turn=way.slide_turn,
         pull=pull_r,
         elevation=elevation,
         reorient=reorient,
@@ -1291,25 +1391,15 @@ def _swept_elevation(world: World, guide: str, b: _Basics, theta: float, side: f
         rise = f.top - level
         if rise <= 0.0:
             continue
-        for p in _outline_points(f.outline):
-            v = p - ap
-            v = v - float(v @ up) * up
-            r = float(np.linalg.norm(v))
-            if r < 1e-6 or r > b.reach + b.hand.width / 2.0:
-                continue
-            phi = math.atan2(side * float(v @ left), float(v @ axis))
-            spread = math.atan2(b.hand.width / 2.0 + cg.CLEARANCE, r)
-            if -spread <= phi <= theta + spread:
-                out = max(out, math.atan2(rise + cg.Z_OFFSET, r))
-    return out
-
-
-def _outline_points(outline: Vec, step: float = 0.005) -> list[Vec]:
-    """The outline's corners and points along its edges every ``step`` (m)."""
-    out: list[Vec] = []
-    for a, c in zip(outline, np.roll(outline, -1, axis=0), strict=True):
-        n = max(1, math.ceil(float(np.linalg.norm(c - a)) / step))
-        out += [a + (c - a) * (i / n) for i in range(n)]
+        v = f.points - ap
+        v = v - np.outer(v @ up, up)
+        r = np.linalg.norm(v, axis=1)
+        phi = np.arctan2(side * (v @ left), v @ axis)
+        spread = np.arctan2(b.hand.width / 2.0 + cg.CLEARANCE, r)
+        inside = (r >= 1e-6) & (r <= b.reach + b.hand.width / 2.0)
+        inside &= (-spread <= phi) & (phi <= theta + spread)
+        if inside.any():
+            out = max(out, float(np.arctan2(rise + cg.Z_OFFSET, r[inside].min())))
     return out
 
 
@@ -1479,6 +1569,7 @@ def _emit_guide(
             "X_offset": gp.x_offset,
             "Z_offset": cg.Z_OFFSET,
             "side": gp.side,
+            "slide_turn": gp.slide_turn,
         },
     )
     b.add(
@@ -1731,14 +1822,38 @@ def _check_pivot_free(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: st
                 f"{math.degrees(gp.theta):.1f} deg, stopping {_mm(gp.a)} mm before the guide)"
                 + (f" ({why})" if why else "")
             )
+    _check_pair_along(ctx, gp, r_arm, o_arm)
 
 
-def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) -> None:
+def _check_pair_along(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) -> None:
+    """From the other arm coming down to the pivot to the insert (both arms on Cartesian
+    paths, so each keeps its IK branch), some pair of branches keeps the cell's clearance
+    between the arms at poses along the way (every STRIDE-th): near the pivot the routing
+    arm's wrist passes over the other arm's forearm on some boards and under it on others.
+    Else the way is refused, by how much it falls short."""
+    from cellengine.execute.following import STRIDE  # the motion stack: planning only
+
+    down = cg.line(gp.other_above, gp.pivot)
+    held = np.concatenate((gp.pull_path, gp.lift, gp.swing, gp.insert))
+    poses = [(gp.slide[-1], T) for T in (*down[::STRIDE], down[-1])]
+    poses += [(T, gp.pivot) for T in (*held[::STRIDE], held[-1])]
+    room = _pair_room(ctx, r_arm, o_arm, poses, 0.0)
+    if room < ctx.clearance:
+        at_best = "collide" if room == -math.inf else f"pass {_mm(room)} mm apart at best"
+        raise _Blocked.of(
+            room - ctx.clearance,
+            f"{gp.where}: however the two arms are posed, they {at_best} while the other arm "
+            f"holds the pivot and the routing arm ({r_arm}) lays the cable in (sliding at "
+            f"theta = {math.degrees(gp.theta):.1f} deg, stopping {_mm(gp.a)} mm before the "
+            f"guide); the cell's clearance is {_mm(ctx.clearance)} mm",
+        )
+
+
+def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str) -> None:
     """The routing hand's tool keeps the cell's clearance from everything but the guide it
-    works at, and cg.CLEARANCE from that guide, and the two hands the clearance from each
-    other, along the way's Cartesian paths (every other pose:
-    the compiler checks them all, with the arms), so a way that cannot is not handed to the
-    compiler. (The hand turning with the slide swings its fingers towards the guide by more
+    works at, and cg.CLEARANCE from that guide, along the way's Cartesian paths (every other
+    pose: the compiler checks them all, with the arms), so a way that cannot is not handed to
+    the compiler. (The hand turning with the slide swings its fingers towards the guide by more
     than the published sliding angle allows for.)"""
     paths = (
         (r_arm, "sliding", SLIDE, gp.slide),
@@ -1753,7 +1868,11 @@ def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) ->
             near, limit, own = found
             fix = _env_fix(ctx, near, own)
             raise _Blocked.of(near.distance - limit, _blocked(gp, near, what, limit, fix))
-    # the two hands, the other one holding the pivot while the routing hand works
+
+
+def _check_hands(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) -> None:
+    """The two hands keep the cell's clearance from each other while the other one comes
+    down to the pivot and holds it, the routing hand working."""
     descend = cg.line(gp.other_above, gp.pivot)
     hands = (
         (r_arm, "ending its slide", SLIDE, [gp.slide[-1]], o_arm, gp.pivot, OPEN),

@@ -56,8 +56,10 @@ mm farther past the guide, onto the next one on a dense board.)
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -79,7 +81,7 @@ APPROACH_HEIGHT = 0.060  # a hand comes down onto a grasp or an insert from this
 RETRACT_HEIGHT = 0.100  # and leaves upwards this far (a comb's slot is 18 mm deep)
 STAND_BACK = 0.100  # the pivot hand, released, then backs off this far along the route
 THETA_MARGIN = math.radians(5.0)  # the sliding angle is this much over its published minimum
-THETA_MAX = math.radians(80.0)  # beyond this the slide hardly moves along the guide
+THETA_MAX = math.radians(90.0)  # straight across the guide: beyond, it would slide back
 # PickCable: the sliding hand first goes this far down on its circle about the other hand
 # (enough for the cable to hang back through its fingers), by at most SLIDE_DOWN_ANGLE: a fixed
 # angle would drop it 225 mm between the REMODEL sample's combs, 450 mm apart.
@@ -116,6 +118,14 @@ STAND_BACKS = (STAND_BACK, 0.050, 0.150)
 # A, the routing hand's stop before a guide, smaller where guides stand close together (the
 # slide then starts nearer the guide, and must be steeper: theta > atan((W + W_g) / 2A))
 APPROACH_GAPS = (APPROACH_GAP, 0.015, 0.010)
+# how far past a guide's far face the routing hand may end its insert besides those: farther
+# out, the slide's radius is longer and the hands stand farther apart while it slides
+INSERT_PASTS = (0.040,)
+# How much of the sliding angle the routing hand turns as it slides (the swing turns it back):
+# all of it holds the cable straight through the fingers, as published; less keeps the
+# fingers' across extent out of a short gap between two guides (the cable then bends at the
+# fingers, as it does at the other hand)
+SLIDE_TURNS = (1.0, 0.5, 0.0)
 # Pull that puts the cable in tension, per metre between the hands: the sag of a loosely held
 # span. The paper makes it "a function of the distance between grippers and the cable
 # properties"; objects.yaml gives no stiffness, so only the distance is used.
@@ -225,7 +235,7 @@ def pair_line(T_leader0: Mat, T_leader1: Mat, T_leader_follower: Mat) -> tuple[P
     return leader, leader @ T_leader_follower
 
 
-def arc(T0: Mat, centre: ArrayLike, axis: ArrayLike, angle: float, *, turn: bool) -> Poses:
+def arc(T0: Mat, centre: ArrayLike, axis: ArrayLike, angle: float, *, turn: bool | float) -> Poses:
     """The TCP on a circle about the axis through ``centre``: its distance to ``centre``
     stays constant (the cable length between the hands, when the other hand is there)."""
     return ip.arc_about(T0, centre, axis, angle, turn=turn)
@@ -365,10 +375,25 @@ class Footprint:
     outline: Vec
     top: float  # highest point, along up
 
+    @cached_property
+    def points(self) -> Vec:
+        """The outline's corners and points along its edges every 5 mm (k, 3)."""
+        out: list[Vec] = []
+        for a, c in zip(self.outline, np.roll(self.outline, -1, axis=0), strict=True):
+            n = max(1, math.ceil(float(np.linalg.norm(c - a)) / 0.005))
+            out += [a + (c - a) * (i / n) for i in range(n)]
+        return np.array(out)
+
     def distance(self, a: Vec, b: Vec, up: Vec) -> float:
         """Horizontal distance from the segment ``a``-``b`` to the outline (0 when they
         overlap)."""
         return outline_distance(self.outline, a, b, up)
+
+
+# the footprints of the worlds seen last: (id(world), exclude, up) -> (a weak reference to
+# the world, its footprints); a skill's ways ask for the same ones thousands of times
+_FOOTPRINTS: dict[tuple[int, str, bytes], tuple[weakref.ref[World], tuple[Footprint, ...]]] = {}
+_FOOTPRINTS_KEPT = 64
 
 
 def footprints(world: World, exclude: str, up: Vec) -> list[Footprint]:
@@ -376,6 +401,18 @@ def footprints(world: World, exclude: str, up: Vec) -> list[Footprint]:
     is on.
     Its bounds come from its mesh, else its collision boxes, else its length, width and
     height (the native models' origin is the centre of the footprint on the plate)."""
+    key = (id(world), exclude, np.asarray(up, dtype=float).tobytes())
+    seen = _FOOTPRINTS.get(key)
+    if seen is not None and seen[0]() is world:  # the id of a world gone may be reused
+        return list(seen[1])
+    out = _footprints(world, exclude, up)
+    if len(_FOOTPRINTS) >= _FOOTPRINTS_KEPT:
+        _FOOTPRINTS.clear()
+    _FOOTPRINTS[key] = (weakref.ref(world), tuple(out))
+    return out
+
+
+def _footprints(world: World, exclude: str, up: Vec) -> list[Footprint]:
     skip = world.resolve(exclude)[1] if exclude else None
     out: list[Footprint] = []
     for pname, platform in world.platforms.items():

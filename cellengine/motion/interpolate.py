@@ -171,14 +171,15 @@ def arc_about(
     axis: ArrayLike,
     angle: float,
     *,
-    turn: bool = True,
+    turn: bool | float = True,
     max_translation: float = MAX_TRANSLATION,
     max_rotation: float = MAX_ROTATION,
 ) -> Poses:
     """The TCP turned by ``angle`` (rad, any size, right-handed) about the axis through
     ``centre`` along ``axis``; the radius is the start's distance from that axis (0: the TCP
     turns in place). With ``turn`` the orientation turns with the arc (the TCP moves as if
-    fixed to a wheel on the axis: the slerp about that axis), else it stays as at the start."""
+    fixed to a wheel on the axis: the slerp about that axis), else it stays as at the start;
+    a number turns it by that fraction of ``angle`` as it goes."""
     T0 = _pose(T_start, "T_start")
     k = np.asarray(axis, dtype=float).reshape(3)
     norm = float(np.linalg.norm(k))
@@ -188,11 +189,13 @@ def arc_about(
     c = np.asarray(centre, dtype=float).reshape(3)
     r_vec = T0[:3, 3] - c
     radius = float(np.linalg.norm(r_vec - k * float(k @ r_vec)))
-    n = steps(radius * abs(angle), abs(angle) if turn else 0.0, max_translation, max_rotation)
+    share = float(turn)
+    n = steps(radius * abs(angle), abs(angle * share), max_translation, max_rotation)
     t = np.arange(n + 1) / n
     R = g.exp3_batch((t * angle)[:, None] * k)  # (n + 1, 3, 3) about the axis
     positions = c + R @ r_vec
-    orientations = R @ T0[:3, :3] if turn else np.broadcast_to(T0[:3, :3], R.shape)
+    R_turn = R if share == 1.0 else g.exp3_batch((t * angle * share)[:, None] * k)
+    orientations = R_turn @ T0[:3, :3]
     out = _poses(orientations, positions)
     out[0] = T0
     return out

@@ -158,6 +158,20 @@ def test_arc_about_an_axis_quarter_turn() -> None:
     )
 
 
+def test_arc_about_an_axis_turning_by_a_share_of_the_angle() -> None:
+    """turn=0.5 on a quarter turn: the same circle, the orientation turned by an eighth of a
+    turn at the end, in step with the arc."""
+    T0 = g.pose([0.7, 0.0, 0.3], [math.pi, 0.0, 0.0])
+    W = itp.arc_about(T0, [0.5, 0.0, 0.0], [0, 0, 1], math.pi / 2, turn=0.5, max_translation=0.001)
+    full = itp.arc_about(T0, [0.5, 0.0, 0.0], [0, 0, 1], math.pi / 2, max_translation=0.001)
+    np.testing.assert_allclose(W[:, :3, 3], full[:, :3, 3], atol=1e-9)
+    np.testing.assert_allclose(W[-1][:3, :3], g.rot_z(math.pi / 4) @ T0[:3, :3], atol=1e-9)
+    n = len(W) - 1  # 315 steps: at step k, k / n of the eighth turn
+    np.testing.assert_allclose(
+        W[100][:3, :3], g.rot_z(math.pi / 4 * 100 / n) @ T0[:3, :3], atol=1e-9
+    )
+
+
 def test_arc_about_the_tcp_itself_turns_in_place_beyond_a_half_turn() -> None:
     T0 = g.pose([0.3, 0.2, 0.1])
     W = itp.arc_about(T0, T0[:3, 3], [0, 0, 1], 1.5 * math.pi, max_rotation=math.radians(5))

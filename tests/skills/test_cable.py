@@ -342,9 +342,11 @@ def test_r_cable_and_theta_for_the_reference_guide() -> None:
       theta_min = atan((W_gripper + W_guide) / (2 A)) = atan(44 / 50) = atan(0.88) = 41.3478 deg
       theta     = theta_min + 5 deg margin = 46.3478 deg, as published; but the hand turns
                   with the slide and its trailing finger would pass within 5 mm of the guide
-                  (RouteCable screens it), so the least angle that keeps 5 mm, found by
-                  bisection between 46.3478 and 80 deg to 0.26 deg (7 halvings): 46.3478 +
-                  33.6522 * 19 / 128 = 51.3430 deg
+                  (RouteCable screens it). The least angle that keeps 5 mm, found by
+                  bisection between 46.3478 and 90 deg to 0.34 deg (7 halvings), is 46.3478
+                  + 43.6522 * 15 / 128 = 51.4633 deg; the first step of 5 deg over the
+                  published angle, 51.3478 deg, keeps 5 mm too and is nearer the published
+                  angle: it is taken
     """
     p = planned("plan_straight")
     slide_index = labels(p).index("RouteCable routing.guide1: slide R_cable")
@@ -353,13 +355,14 @@ def test_r_cable_and_theta_for_the_reference_guide() -> None:
     assert facts["R_insert"] == pytest.approx(68.0 * MM, abs=1e-9)
     assert facts["R_cable"] == pytest.approx(68.0 * MM, abs=1e-9)
     assert math.degrees(facts["theta_min"]) == pytest.approx(41.3478, abs=1e-4)
-    assert math.degrees(facts["theta"]) == pytest.approx(51.3430, abs=1e-4)
+    assert math.degrees(facts["theta"]) == pytest.approx(51.3478, abs=1e-4)
+    assert facts["slide_turn"] == 1.0  # turning with the slide, as published
     assert facts["X_offset"] == pytest.approx(29 * MM) and facts["A"] == pytest.approx(25 * MM)
     # The slide itself: R_cable long, at theta to the guide's axis (+y here).
     P = poses_during(p, slide_index, "left")[:, :3, 3]
     step = P[-1] - P[0]
     assert np.linalg.norm(step) == pytest.approx(68.0 * MM, abs=1e-7)
-    assert math.degrees(g.angle_between(step, [0.0, 1.0, 0.0])) == pytest.approx(51.3430, abs=1e-4)
+    assert math.degrees(g.angle_between(step, [0.0, 1.0, 0.0])) == pytest.approx(51.3478, abs=1e-4)
     # It starts X_offset before the near face: slot y -60 mm, minus L / 2 + X_offset = 34 mm.
     assert P[0] * 1000 == pytest.approx([430.0, -94.0, 65.0], abs=1e-3)
     # Lift and insert are on the circle of R_cable + the pull (2 %) about the other hand.
@@ -476,14 +479,14 @@ def test_a_guide_out_of_reach_fails_naming_the_guide_and_the_arm() -> None:
 
 
 def test_a_guide_no_sliding_angle_clears_fails_naming_the_guide() -> None:
-    """guide1 200 mm wide: theta_min = atan((20 + 200) / 50) = atan(4.4) = 77.2 deg, plus
-    the 5 deg margin is past the 80 deg limit."""
+    """guide1 600 mm wide: theta_min = atan((20 + 600) / 50) = atan(12.4) = 85.4 deg, plus
+    the 5 deg margin is past 90 deg, straight across the guide."""
     world, steps = _world()
-    world = _with_element(world, "routing.guide1", width=0.2)
+    world = _with_element(world, "routing.guide1", width=0.6)
     assert _fails(world, steps) == (
         "steps[2] RouteCable routing.guide1: no sliding angle clears the guide: theta must "
-        "exceed atan((W_gripper + W_guide) / (2 A)) = atan((20.0 + 200.0) / (2 * 25.0)) = 77.2 "
-        "deg, plus 5 deg margin, but beyond 80 deg the slide hardly moves along the guide"
+        "exceed atan((W_gripper + W_guide) / (2 A)) = atan((20.0 + 600.0) / (2 * 25.0)) = 85.4 "
+        "deg, plus 5 deg margin, but beyond 90 deg the slide would go back along the cable"
     )
 
 
@@ -503,12 +506,12 @@ def test_a_slide_blocked_at_the_published_angle_takes_a_steeper_one() -> None:
     assert slides[0].facts["R_insert"] == pytest.approx((10.0 + 29.0 + 14.0) * MM, abs=1e-9)
     # the others as on the reference board: the least angle at which the turning hand keeps
     # 5 mm from its guide, about 5 deg over the published angle (46.3 deg)
-    assert [round(math.degrees(s.facts["theta"]), 1) for s in slides[1:]] == [51.6, 51.9]
+    assert [round(math.degrees(s.facts["theta"]), 1) for s in slides[1:]] == [51.5, 52.1]
 
 
 def test_a_slide_blocked_at_every_angle_fails_naming_what_blocks_it() -> None:
     """guide2 and guide4 45 mm either side of guide1's approach point: every slide from it,
-    at every angle up to 80 deg, runs into one of them."""
+    at every angle up to 90 deg, runs into one of them."""
     world, steps = _world()
     world = _with_element(world, "routing.guide2", xyz=[0.475, -0.075, 0.01])
     world = _with_element(world, "routing.guide4", xyz=[0.385, -0.075, 0.01])
@@ -516,19 +519,42 @@ def test_a_slide_blocked_at_every_angle_fails_naming_what_blocks_it() -> None:
         "steps[2] RouteCable routing.guide1: no sliding angle clears the guide: sliding at "
         "theta = 46.3 deg is blocked on the left by routing.guide4 (its footprint and the "
         "sliding hand's overlap by 4.8 mm) and on the right by routing.guide2 (its footprint "
-        "and the sliding hand's overlap by 4.6 mm), and so is every angle up to 80 deg with the "
+        "and the sliding hand's overlap by 4.6 mm), and so is every angle up to 90 deg with the "
         "hand stopping 10.0-25.0 mm before the guide: move the guides that block it farther "
         "from the slide, or use narrower fingers"
     )
 
 
+def test_a_guide_36_mm_after_another_is_slid_steeper_turning_half_the_angle() -> None:
+    """guide2 36 mm after guide1 (26 mm face to face): the routing hand stops between them.
+    Turning all the way with a steep slide swings its fingers' width along the cable, into
+    guide1 (or guide2); the way found stops 10 mm before guide2 and slides at 85.6 deg,
+    turning by half of it (cg.SLIDE_TURNS); the swing turns it back by the same, so it
+    inserts as it approached."""
+    world, steps = _world()
+    world = _with_element(world, "routing.guide2", xyz=[0.43, -0.024, 0.01])
+    segments, _ = plan_cable_steps(context(world), steps)
+    (slide,) = [s for s in segments if s.label == "RouteCable routing.guide2: slide R_cable"]
+    facts = slide.facts
+    assert math.degrees(facts["theta"]) > 80.0 and facts["slide_turn"] == 0.5
+    assert facts["A"] == pytest.approx(10.0 * MM, abs=1e-9)
+    (path,) = slide.paths
+    turned = g.rotation_angle(path.poses[0], path.poses[-1])
+    assert turned == pytest.approx(facts["theta"] / 2.0, abs=1e-6)
+    (insert,) = [s for s in segments if s.label == "RouteCable routing.guide2: insert"]
+    (inserted,) = insert.paths
+    assert g.rotation_angle(path.poses[0], inserted.poses[-1]) == pytest.approx(0.0, abs=1e-6)
+
+
 def test_a_guide_too_close_after_another_fails_saying_how_much_room_the_hand_needs() -> None:
-    """guide2 moved to 25 mm after guide1 (slot to slot; 15 mm face to face): the routing
-    hand inserting into guide1 would end between them, its 8 mm fingers 5 mm from each."""
+    """guide2 moved to 25 mm after guide1 (slot to slot; 15 mm face to face). The routing
+    hand inserts into guide1 ending 40 mm past it (cg.INSERT_PASTS), beyond guide2; but at
+    guide2 the other hand would grasp the cable between them, its 8 mm fingers 5 mm from
+    each."""
     world, steps = _world()
     world = _with_element(world, "routing.guide2", xyz=[0.43, -0.035, 0.01])
     assert _fails(world, steps) == (
-        "steps[2] RouteCable routing.guide1: the cable runs 15.0 mm from routing.guide1 to "
+        "steps[2] RouteCable routing.guide2: the cable runs 15.0 mm from routing.guide1 to "
         "routing.guide2 (footprint to footprint); a hand works between them, its fingers 8.0 "
         "mm thick along it keeping 5.0 mm from each: 18.0 mm. Move routing.guide2 at least 3.0 mm "
         "farther from routing.guide1, or use thinner fingers"
