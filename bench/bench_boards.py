@@ -120,7 +120,11 @@ def run_one(plan: str, board: str, strategy: str) -> Outcome:
         msg = f"{type(e).__name__}: {e}".split("\n")[0]
         return Outcome(board, strategy, False, f"crash: {type(e).__name__}", msg, dt, None)
     dt = time.perf_counter() - t0
-    result = check_compiled(compiled)
+    try:
+        result = check_compiled(compiled)
+    except ValueError as e:  # the program itself is broken (a trajectory that jumps)
+        msg = f"{type(e).__name__}: {e}".split("\n")[0]
+        return Outcome(board, strategy, False, "check: broken program", msg, dt, None)
     d = None if result.min_arm_distance is None else round(result.min_arm_distance * 1000, 1)
     if result.ok:
         return Outcome(board, strategy, True, "", "", dt, d)

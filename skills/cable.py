@@ -350,7 +350,7 @@ class RouteCable(Skill):
     def _clear_from(
         self, ctx: PlanningContext, state: CableState, k: int
     ) -> Callable[[_Basics, float, bool], float | None]:
-        """The least sliding angle (to 0.5 deg, by bisection) at which the routing hand's
+        """The least sliding angle (to BISECT_TOL, by bisection) at which the routing hand's
         tool, sliding with the default tips, keeps cg.CLEARANCE from guide ``k``, for a stop,
         side and turning first or not; None when not even THETA_MAX does. (The published
         minimum assumes a hand W_gripper wide that does not turn; the steps of THETA_STEP
@@ -372,7 +372,7 @@ class RouteCable(Skill):
                 return lo
             if not clear(b, side, first, hi):
                 return None
-            while hi - lo > math.radians(0.5):
+            while hi - lo > BISECT_TOL:
                 mid = (lo + hi) / 2.0
                 lo, hi = (lo, mid) if clear(b, side, first, mid) else (mid, hi)
             return hi
@@ -1162,6 +1162,7 @@ def _basics(
 
 
 THETA_TOL = math.radians(0.5)  # angles closer than this are one
+BISECT_TOL = math.radians(0.2)  # the least clear sliding angle, to this
 
 
 def guide_ways(
@@ -1230,6 +1231,8 @@ def guide_ways(
                     cost = abs(theta - theta0) + 0.05 * rank + abs(back - cg.STAND_BACK)
                     cost += 0.5 * (abs(lean - cg.LEAN) + abs(pivot - cg.PIVOT_LEAN))
                     cost += (0.0 if after is None else abs(after - gap)) + 0.01 * first
+                    # ending farther past swings farther: only when nearer does not work
+                    cost += 0.5 if after is not None and after > gap else 0.0
                     cost += (0.0 if base else 0.3) + 0.2 * (1.0 - share)
                     way = GuideWay(theta, side, lean, pivot, back, gap, after, first, base, share)
                     ranked.append((cost, len(ranked), way))

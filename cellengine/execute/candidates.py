@@ -137,10 +137,14 @@ def _compile_from(
 
     def before(segment: Segment) -> None:
         nonlocal furthest
+        at, current[0], j = owner[id(segment)]
+        # add_all came back to this segment: the marks of the choices after it were taken on
+        # an attempt it gave up (the compiler can only be restored to a mark behind it)
+        for stale in [m for m in marks if m > current[0]]:
+            del marks[stale]
         k = begins.get(id(segment))
         if k is not None:
             marks[k] = compiler.mark()
-        at, current[0], j = owner[id(segment)]
         if at > furthest:
             furthest, current[1], current[2] = at, current[0], j
         if before_each is not None:

@@ -138,6 +138,10 @@ class Compiler:
         )
 
     def restore(self, mark: Mark) -> None:
+        if mark.segments > len(self.segments) or mark.events > len(self.events):
+            # a mark taken on an attempt given up: restoring it would join segments that do
+            # not meet
+            raise ValueError("restore: the mark is ahead of what is compiled")
         self.q, self.t = mark.q, mark.t
         del self.segments[mark.segments :]
         del self.events[mark.events :]

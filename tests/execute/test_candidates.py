@@ -4,7 +4,7 @@ nothing that runs, and the first error when nothing does."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 import pytest
 
@@ -195,3 +195,45 @@ def test_a_candidate_beginning_as_the_one_that_failed_is_passed_over() -> None:
     # often with ``same`` among the ways as without it
     assert compiled(failed, same, other) == compiled(failed, other)
     assert compiled(failed, other)[-1] == f"along to {ALSO}"
+
+
+class _Scripted:
+    """A compiler whose segments fail as scripted (by label), marked and restored as the real
+    one is: a mark is how many segments are compiled."""
+
+    def __init__(self, fails: Callable[[str, int, dict[str, int]], bool]) -> None:
+        self.done: list[str] = []
+        self.fails = fails
+        self.last: dict[str, int] = {}  # the choice each label was last compiled with
+
+    def mark(self) -> int:
+        return len(self.done)
+
+    def restore(self, mark: int) -> None:
+        assert mark <= len(self.done), "restored to a mark ahead of what is compiled"
+        del self.done[mark:]
+
+    def add(self, segment: Segment, rest: object, choice: int) -> None:
+        if self.fails(segment.label, choice, self.last):
+            raise InputError(Problem(f"{segment.label} fails"))
+        self.last[segment.label] = choice
+        self.done.append(segment.label)
+
+
+def test_a_choice_is_restored_to_where_it_began_on_the_attempt_kept() -> None:
+    """Choice 0 is a transit, then a line; choice 1's first way fails. The compiler goes back
+    to the transit and takes its other goals, from which the line fails: choice 1 was begun
+    only on the first attempt. Its second way is compiled after choice 0 compiled again, not
+    after what the attempts left (the transit alone: the line would be missing)."""
+    a0 = Segment(0, "a0", (ArmPath("left", "transit", pose(NEAR)[None]),))
+    a1 = slide(0, NEAR, ALSO)
+    b_fails = Segment(1, "b fails", (ArmPath("left", "cartesian", line(ALSO, NEAR)),))
+    b_runs = Segment(1, "b runs", (ArmPath("left", "cartesian", line(ALSO, NEAR)),))
+
+    def fails(label: str, choice: int, last: dict[str, int]) -> bool:
+        return label == "b fails" or (label == a1.label and last.get("a0", 0) > 0)
+
+    c = _Scripted(fails)
+    first = Candidate((a0, a1), then=lambda: choice(Candidate((b_fails,)), Candidate((b_runs,))))
+    compile_candidates(c, choice(first))  # type: ignore[arg-type]
+    assert c.done == ["a0", a1.label, "b runs"]
