@@ -296,7 +296,7 @@ class RouteCable(Skill):
         # Where the other hand stands back to is not part of what is checked here: ways that
         # differ only in it are checked once.
         checked: dict[GuideWay, GuidePlan | InputError] = {}
-        screen = _Screen()
+        screen = _Screen(tuple(cg.footprints(world, guide, cg.platform_up(world, guide))))
         ways = list(guide_ways(world, state, guide, r_arm, self._clear_from(ctx, state, k)))
         self._check_any_length(ctx, state, k, ways, r_arm, o_arm)
         for way in ways:
@@ -359,10 +359,11 @@ class RouteCable(Skill):
         guide = self.guides[k]
         r_arm, o_arm = self.arms(ctx, state)
         own = {cg.element_of(guide)}
+        prints = cg.footprints(ctx.world, guide, cg.platform_up(ctx.world, guide))
 
         def clear(b: _Basics, side: float, first: bool, theta: float) -> bool:
             way = GuideWay(theta, side, gap=b.gap, turn_first=first)
-            gp = _guide_plan(ctx.world, state, self.cable, guide, r_arm, o_arm, way)
+            gp = _guide_plan(ctx.world, state, self.cable, guide, r_arm, o_arm, way, prints)
             poses = [*gp.slide[::2], gp.slide[-1]]
             return ctx.probe.nearest(r_arm, poses, SLIDE, (), cg.CLEARANCE, own) is None
 
@@ -398,13 +399,15 @@ class RouteCable(Skill):
         p_key = (way.gap, way.pivot_lean, way.towards_base)
         a_key = (way.gap, way.lean, way.towards_base)
         if a_key not in screen.approaches:
-            screen.approaches[a_key] = _approach_blocked(ctx, state, guide, (r_arm, o_arm), way)
+            screen.approaches[a_key] = _approach_blocked(
+                ctx, state, guide, (r_arm, o_arm), way, screen.prints
+            )
         known = screen.approaches[a_key] or screen.routed.get(r_key) or screen.pivots.get(p_key)
         if known is not None:
             return known
         routed, pivots = screen.routed, screen.pivots
         try:
-            gp = _guide_plan(world, state, self.cable, guide, r_arm, o_arm, way)
+            gp = _guide_plan(world, state, self.cable, guide, r_arm, o_arm, way, screen.prints)
             k = self.guides.index(guide)
             after = (cg.element_of(self.guides[k + 1]),) if k + 1 < len(self.guides) else ()
             gp = replace(gp, beside=(*gp.beside, *after, *_under(ctx, gp.slot, gp.up)))
@@ -430,18 +433,24 @@ class RouteCable(Skill):
 class _Screen:
     """What RouteCable.guide_plans found of one guide's ways so far, by what it depends on."""
 
+    prints: tuple[cg.Footprint, ...]  # the other elements' (cg.footprints of the guide)
     approaches: dict[tuple[float, float, bool], InputError | None] = field(default_factory=dict)
     routed: dict[GuideWay, InputError | None] = field(default_factory=dict)
     pivots: dict[tuple[float, float, bool], InputError | None] = field(default_factory=dict)
 
 
 def _approach_blocked(
-    ctx: PlanningContext, state: CableState, guide: str, arms: tuple[str, str], way: GuideWay
+    ctx: PlanningContext,
+    state: CableState,
+    guide: str,
+    arms: tuple[str, str],
+    way: GuideWay,
+    prints: Sequence[cg.Footprint],
 ) -> InputError | None:
     """Why the routing arm (``arms[0]``) cannot reach the approach pose of ``way`` (it
     depends only on the stop and the hand's tip), or None."""
     r_arm = arms[0]
-    gp = _guide_plan(ctx.world, state, state.cable or "", guide, r_arm, arms[1], way)
+    gp = _guide_plan(ctx.world, state, state.cable or "", guide, r_arm, arms[1], way, prints)
     try:
         _check_reach(ctx, r_arm, gp.reach_routing()[:1], gp.where)
     except InputError as e:
@@ -1184,6 +1193,7 @@ def guide_ways(
     angle is offered too, the steps missing it by up to THETA_STEP. An error naming what
     blocks when no angle clears the guide."""
     b0 = _basics(world, state, guide, r_arm)
+    prints = cg.footprints(world, guide, b0.up)
     theta0 = b0.theta_min + cg.THETA_MARGIN
     if theta0 > cg.THETA_MAX:
         raise _error(
@@ -1212,7 +1222,7 @@ def guide_ways(
             if least is not None and least > start:
                 angles.append((least, (side, first)))
         for theta, only in angles:
-            clear, blocked = _slide_sides(world, guide, b, theta, _beside(state, guide))
+            clear, blocked = _slide_sides(prints, b, theta, _beside(state, guide))
             if not first_blocked:
                 first_blocked = blocked
             for rank, side in enumerate(clear):
@@ -1282,7 +1292,10 @@ def _guide_plan(
     r_arm: str,
     o_arm: str,
     way: GuideWay,
+    prints: Sequence[cg.Footprint] | None = None,
 ) -> GuidePlan:
+    """The plan of ``way``; ``prints``: the other elements' footprints (cg.footprints of the
+    guide), when the caller has them."""
     b = _basics(world, state, guide, r_arm, way.gap, way.gap_after)
     up, slot, axis, ap, theta, side = b.up, b.slot, b.axis, b.ap, way.theta, way.side
     x_off = b.x_offset
@@ -1326,7 +1339,8 @@ def _guide_plan(
     # Higher when a taller element stands in the sector the swing sweeps.
     dims = b.dims
     elevation = math.atan2(b.rise + cg.Z_OFFSET, dims.length + x_off)
-    elevation = max(elevation, _swept_elevation(world, guide, b, theta, side))
+    prints = cg.footprints(world, guide, up) if prints is None else prints
+    elevation = max(elevation, _swept_elevation(prints, b, theta, side))
     lift = cg.arc(pull_path[-1], ap, np.cross(d, up), elevation, turn=False)
     # Swing about the vertical through the pivot until the cable is over the slot, turning
     # the hand with it (a turn about the vertical keeps its z down).
@@ -1381,7 +1395,9 @@ def _beside(state: CableState, guide: str) -> tuple[str, ...]:
     return (cg.element_of(guide), *before)
 
 
-def _swept_elevation(world: World, guide: str, b: _Basics, theta: float, side: float) -> float:
+def _swept_elevation(
+    prints: Sequence[cg.Footprint], b: _Basics, theta: float, side: float
+) -> float:
     """The least elevation (seen from the pivot) at which the cable and the routing hand,
     swinging from the slide's direction back to the guide's axis, pass Z_offset over every
     other element standing within the sector they sweep (out to the hand's reach and its
@@ -1390,7 +1406,7 @@ def _swept_elevation(world: World, guide: str, b: _Basics, theta: float, side: f
     left = np.cross(up, axis)
     level = float(b.slot @ up)
     out = 0.0
-    for f in cg.footprints(world, guide, up):
+    for f in prints:
         rise = f.top - level
         if rise <= 0.0:
             continue
@@ -1437,23 +1453,22 @@ def _pivot_blocked(
 
 
 def _slide_sides(
-    world: World, guide: str, b: _Basics, theta: float, beside: Collection[str] = ()
+    prints: Sequence[cg.Footprint], b: _Basics, theta: float, beside: Collection[str] = ()
 ) -> tuple[list[float], list[str]]:
     """The sides the slide at ``theta`` may take, farthest from every other element that
     stands up to the hand's height first (a base plate does not count; +1, left of the axis,
     on a tie), and for each blocked side what blocks it: within the hand's and the element's
     radii plus CLEARANCE. The elements the hand starts ``beside`` (the guide before, which
     the slide starts next to) are left to the tool probe, which measures the hand itself:
-    a round hand would stand in them."""
+    a round hand would stand in them. ``prints``: the footprints of the elements but the
+    guide's (cg.footprints)."""
     up, axis, ap, hand = b.up, b.axis, b.ap, b.hand
     left = np.cross(up, axis)
     # the hand turns with the slide (its x along it): half its extent across the motion,
     # the collision checks' stand-in being square
     hand_radius = max(hand.width, 2.0 * hand.half_length) / 2.0
     height = float(ap @ up) - cg.CLEARANCE
-    elements = [
-        f for f in cg.footprints(world, guide, up) if f.top > height and f.name not in beside
-    ]
+    elements = [f for f in prints if f.top > height and f.name not in beside]
     clear: list[tuple[float, float]] = []
     blocked: list[str] = []
     for side in (1.0, -1.0):

@@ -56,7 +56,6 @@ mm farther past the guide, onto the next one on a dense board.)
 from __future__ import annotations
 
 import math
-import weakref
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
@@ -390,29 +389,11 @@ class Footprint:
         return outline_distance(self.outline, a, b, up)
 
 
-# the footprints of the worlds seen last: (id(world), exclude, up) -> (a weak reference to
-# the world, its footprints); a skill's ways ask for the same ones thousands of times
-_FOOTPRINTS: dict[tuple[int, str, bytes], tuple[weakref.ref[World], tuple[Footprint, ...]]] = {}
-_FOOTPRINTS_KEPT = 64
-
-
 def footprints(world: World, exclude: str, up: Vec) -> list[Footprint]:
     """Every platform element with geometry but the one ``exclude`` (a reference; "": none)
     is on.
     Its bounds come from its mesh, else its collision boxes, else its length, width and
     height (the native models' origin is the centre of the footprint on the plate)."""
-    key = (id(world), exclude, np.asarray(up, dtype=float).tobytes())
-    seen = _FOOTPRINTS.get(key)
-    if seen is not None and seen[0]() is world:  # the id of a world gone may be reused
-        return list(seen[1])
-    out = _footprints(world, exclude, up)
-    if len(_FOOTPRINTS) >= _FOOTPRINTS_KEPT:
-        _FOOTPRINTS.clear()
-    _FOOTPRINTS[key] = (weakref.ref(world), tuple(out))
-    return out
-
-
-def _footprints(world: World, exclude: str, up: Vec) -> list[Footprint]:
     skip = world.resolve(exclude)[1] if exclude else None
     out: list[Footprint] = []
     for pname, platform in world.platforms.items():
