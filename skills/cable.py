@@ -398,16 +398,17 @@ class RouteCable(Skill):
         r_key = replace(way, pivot_lean=cg.PIVOT_LEAN)
         p_key = (way.gap, way.pivot_lean, way.towards_base)
         a_key = (way.gap, way.lean, way.towards_base)
-        if a_key not in screen.approaches:
-            screen.approaches[a_key] = _approach_blocked(
-                ctx, state, guide, (r_arm, o_arm), way, screen.prints
-            )
-        known = screen.approaches[a_key] or screen.routed.get(r_key) or screen.pivots.get(p_key)
+        approaches, routed, pivots = screen.approaches, screen.routed, screen.pivots
+        known = approaches.get(a_key) or routed.get(r_key) or pivots.get(p_key)
         if known is not None:
             return known
-        routed, pivots = screen.routed, screen.pivots
         try:
             gp = _guide_plan(world, state, self.cable, guide, r_arm, o_arm, way, screen.prints)
+            if a_key not in approaches:
+                approaches[a_key] = _approach_blocked(ctx, gp, r_arm)
+            reached = approaches[a_key]
+            if reached is not None:
+                return reached
             k = self.guides.index(guide)
             after = (cg.element_of(self.guides[k + 1]),) if k + 1 < len(self.guides) else ()
             gp = replace(gp, beside=(*gp.beside, *after, *_under(ctx, gp.slot, gp.up)))
@@ -415,8 +416,9 @@ class RouteCable(Skill):
                 routed[r_key] = _routing_hand_blocked(ctx, world, self.cable, gp, r_arm)
             if p_key not in pivots:
                 pivots[p_key] = _pivot_blocked(ctx, state, guide, r_arm, o_arm, way)
-            if routed[r_key] is not None or pivots[p_key] is not None:
-                return routed[r_key] or pivots[p_key]  # type: ignore[return-value]
+            blocked = routed[r_key] or pivots[p_key]
+            if blocked is not None:
+                return blocked
             try:
                 _check_reach(ctx, o_arm, gp.reach_other(), gp.where)
             except InputError as e:
@@ -439,18 +441,9 @@ class _Screen:
     pivots: dict[tuple[float, float, bool], InputError | None] = field(default_factory=dict)
 
 
-def _approach_blocked(
-    ctx: PlanningContext,
-    state: CableState,
-    guide: str,
-    arms: tuple[str, str],
-    way: GuideWay,
-    prints: Sequence[cg.Footprint],
-) -> InputError | None:
-    """Why the routing arm (``arms[0]``) cannot reach the approach pose of ``way`` (it
-    depends only on the stop and the hand's tip), or None."""
-    r_arm = arms[0]
-    gp = _guide_plan(ctx.world, state, state.cable or "", guide, r_arm, arms[1], way, prints)
+def _approach_blocked(ctx: PlanningContext, gp: GuidePlan, r_arm: str) -> InputError | None:
+    """Why the routing arm cannot reach the approach pose of ``gp`` (it depends only on the
+    stop and the hand's tip), or None."""
     try:
         _check_reach(ctx, r_arm, gp.reach_routing()[:1], gp.where)
     except InputError as e:

@@ -237,3 +237,13 @@ def test_a_choice_is_restored_to_where_it_began_on_the_attempt_kept() -> None:
     first = Candidate((a0, a1), then=lambda: choice(Candidate((b_fails,)), Candidate((b_runs,))))
     compile_candidates(c, choice(first))  # type: ignore[arg-type]
     assert c.done == ["a0", a1.label, "b runs"]
+
+
+def test_the_compiler_refuses_a_mark_ahead_of_what_it_compiled() -> None:
+    c = compiler()
+    start = c.mark()
+    c.add(hop(0, NEAR), (), 0)
+    ahead = c.mark()
+    c.restore(start)
+    with pytest.raises(ValueError, match="the mark is ahead of what is compiled"):
+        c.restore(ahead)

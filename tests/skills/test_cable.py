@@ -864,3 +864,30 @@ def test_no_hold_keeping_the_clearance_blames_the_arms() -> None:
         "cable, its tool comes within the cell's clearance of the cell carrying the "
         "connector to the guide (the cell's clearance is 300.0 mm)"
     )
+
+
+def test_the_arms_pair_is_screened_from_the_pivot_grasp_to_the_insert() -> None:
+    """plan_straight's guide1, its first way: some pair of the arms' IK branches keeps them
+    10 mm apart from the other arm's descent to the insert (the way is offered). Asked to keep
+    half a metre, no pair can: the way is refused by how far short its best pair falls."""
+    world, steps = _world()
+    ctx = context(world)
+    state = CableState.at_home(ctx)
+    for i in range(2):
+        _, state = next(C.step_ways(ctx, steps, i, state))
+    state = replace(state, step=2)
+    route = steps[2]
+    assert isinstance(route, RouteCable)
+    gp = next(route.guide_plans(ctx, state, 0))
+    C._check_pair_along(ctx, gp, "left", "right")
+    with pytest.raises(InputError) as err:
+        C._check_pair_along(replace(ctx, clearance=0.5), gp, "left", "right")
+    blocked = err.value
+    assert isinstance(blocked, C._Blocked)
+    assert blocked.distance == pytest.approx(0.0375 - 0.5, abs=0.06e-3)  # the best pair, less
+    assert blocked.problems[0].message == (
+        "steps[2] RouteCable routing.guide1: however the two arms are posed, they pass 37.5 mm "
+        "apart at best while the other arm holds the pivot and the routing arm (left) lays the "
+        "cable in (sliding at theta = 51.3 deg, stopping 25.0 mm before the guide); the cell's "
+        "clearance is 500.0 mm"
+    )
