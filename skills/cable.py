@@ -1433,7 +1433,11 @@ def _pivot_blocked(
     tip_o = g.unit(-b.axis + base * _towards_base(ctx.world, o_arm, b.slot, b.up))
     T_pivot = _pivot(state, b, o_arm, tip_o, way)
     poses = cg.line(cg.lifted(T_pivot, b.up, cg.APPROACH_HEIGHT), T_pivot)
-    found = _env_near(ctx, o_arm, poses, OPEN, (*_beside(state, guide), *_under(ctx, b.slot, b.up)))
+    beside = (*_beside(state, guide), *_under(ctx, b.slot, b.up))
+    # closed on the cable, a leaning hand's fingers reach back over the guide before
+    found = _env_near(ctx, o_arm, poses, OPEN, beside) or _env_near(
+        ctx, o_arm, [T_pivot], GRASP, beside
+    )
     if found is None:
         return None
     near, limit, own = found
@@ -1551,13 +1555,14 @@ def _emit_guide(
                 *((r_arm, e) for e in gp.beside),
             ],
         )
-    if gp.reorient is not None:
+    near = [(r_arm, e) for e in gp.beside]  # the hands work between these (GuidePlan)
+    if gp.reorient is not None:  # turning in place where it inserted, by that guide
         b.add(
             f"{label}: face the guide",
             [_cartesian(r_arm, gp.reorient)],
             before=b.mode_event(r_arm, SLIDE, cable),
+            near=near,
         )
-    near = [(r_arm, e) for e in gp.beside]  # the hands work between these (GuidePlan)
     b.add(
         f"{label}: approach sliding",
         [_cartesian(r_arm, gp.approach)],
@@ -1866,18 +1871,27 @@ def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str) -> None:
     pose: the compiler checks them all, with the arms), so a way that cannot is not handed to
     the compiler. (The hand turning with the slide swings its fingers towards the guide by more
     than the published sliding angle allows for.)"""
+    from cellengine.motion.collision import DEFAULT_CLEARANCE  # the motion stack: planning only
+
+    # Leaving the guide it inserted at, the hand turns and moves off beside it: held, as
+    # the compiler holds it (_emit_guide's near), clear of it by the checker's clearance.
+    leave = DEFAULT_CLEARANCE, 1
+    turn = () if gp.reorient is None else ((r_arm, "facing the guide", SLIDE, gp.reorient, leave),)
+    work = cg.CLEARANCE, 2
     paths = (
-        (r_arm, "sliding", SLIDE, gp.slide),
-        (r_arm, "pulling", GRASP, gp.pull_path),
-        (r_arm, "lifting", GRASP, gp.lift),
-        (r_arm, "swinging over the slot", GRASP, gp.swing),
-        (r_arm, "inserting", GRASP, gp.insert),
+        *turn,
+        (r_arm, "approaching", SLIDE, gp.approach, leave),
+        (r_arm, "sliding", SLIDE, gp.slide, work),
+        (r_arm, "pulling", GRASP, gp.pull_path, work),
+        (r_arm, "lifting", GRASP, gp.lift, work),
+        (r_arm, "swinging over the slot", GRASP, gp.swing, work),
+        (r_arm, "inserting", GRASP, gp.insert, work),
     )  # the other hand's descent to the pivot: _pivot_blocked, before the way is built
-    for arm, what, mode, poses in paths:
-        found = _env_near(ctx, arm, poses, mode, gp.beside)
+    for arm, what, mode, poses, (own_limit, stride) in paths:
+        found = _env_near(ctx, arm, poses, mode, gp.beside, own_limit, stride)
         if found is not None:
             near, limit, own = found
-            fix = _env_fix(ctx, near, own)
+            fix = _env_fix(ctx, near, own, limit)
             raise _Blocked.of(near.distance - limit, _blocked(gp, near, what, limit, fix))
 
 
@@ -1928,27 +1942,33 @@ def _check_self(ctx: PlanningContext, gp: GuidePlan, r_arm: str) -> None:
 
 
 def _env_near(
-    ctx: PlanningContext, arm: str, poses: Poses, mode: str, beside: Collection[str]
+    ctx: PlanningContext,
+    arm: str,
+    poses: Poses,
+    mode: str,
+    beside: Collection[str],
+    own_limit: float = cg.CLEARANCE,
+    stride: int = 2,
 ) -> tuple[Nearest, float, bool] | None:
-    """The first object ``arm``'s tool comes too near along ``poses`` (every other pose and
-    the last), the distance it had to keep and whether it is one of the elements it works
-    ``beside``: the cell's clearance from everything else, cg.CLEARANCE from those; None
-    when it keeps both."""
-    sampled = [*poses[::2], poses[-1]]
+    """The first object ``arm``'s tool comes too near along ``poses`` (every ``stride``-th
+    pose and the last), the distance it had to keep and whether it is one of the elements it
+    works ``beside``: the cell's clearance from everything else, ``own_limit`` from those;
+    None when it keeps both."""
+    sampled = [*poses[::stride], poses[-1]]
     own = set(beside)
-    for skip, limit, only in ((own, ctx.clearance, None), ((), cg.CLEARANCE, own)):
+    for skip, limit, only in ((own, ctx.clearance, None), ((), own_limit, own)):
         near = ctx.probe.nearest(arm, sampled, mode, skip, limit, only)
         if near is not None:
             return near, limit, only is not None
     return None
 
 
-def _env_fix(ctx: PlanningContext, near: Nearest, own: bool) -> str:
-    """What would clear ``near`` (found by :func:`_env_near`)."""
+def _env_fix(ctx: PlanningContext, near: Nearest, own: bool, limit: float = cg.CLEARANCE) -> str:
+    """What would clear ``near`` (found by :func:`_env_near` with ``limit``)."""
     if own:
         return (
-            f"a hand keeps {_mm(cg.CLEARANCE)} mm from the guides it works between: "
-            f"{near.other} would have to stand {_mm(cg.CLEARANCE - near.distance)} mm farther "
+            f"a hand keeps {_mm(limit)} mm from the guides it works between: "
+            f"{near.other} would have to stand {_mm(limit - near.distance)} mm farther "
             "from the hand's path (more room between the guides), or the fingers be narrower"
         )
     return (
