@@ -1436,7 +1436,7 @@ def _pivot_blocked(
     beside = (*_beside(state, guide), *_under(ctx, b.slot, b.up))
     # closed on the cable, a leaning hand's fingers reach back over the guide before
     found = _env_near(ctx, o_arm, poses, OPEN, beside) or _env_near(
-        ctx, o_arm, [T_pivot], GRASP, beside
+        ctx, o_arm, T_pivot[None], GRASP, beside
     )
     if found is None:
         return None
