@@ -1443,7 +1443,7 @@ def _pivot_blocked(
     near, limit, own = found
     return _Blocked.of(
         near.distance - limit,
-        f"{b.where}: {near.tool} would pass {_mm(near.distance)} mm from {near.other} "
+        f"{b.where}: {near.tool} {_passes(near, limit)} "
         f"grasping at the pivot (stopping {_mm(b.gap)} mm before the guide); "
         + _env_fix(ctx, near, own),
     )
@@ -1652,6 +1652,11 @@ def _error(message: str) -> InputError:
 
 def _mm(x: float) -> str:
     return f"{x * 1000.0:.1f}"
+
+
+def _short(x: float) -> str:
+    """A shortfall in mm: to 0.01 mm where it rounds to 0.0 (it is not nothing)."""
+    return _mm(x) if _mm(x) != "0.0" else f"{x * 1000.0:.2f}"
 
 
 def _two_arms(world: World, where: str) -> tuple[str, str]:
@@ -1912,7 +1917,7 @@ def _check_hands(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) ->
         if pair is not None and pair.distance < ctx.clearance:
             fix = (
                 f"the cell's clearance is {_mm(ctx.clearance)} mm: the hands would need "
-                f"{_mm(ctx.clearance - pair.distance)} mm more between them (a longer span of "
+                f"{_short(ctx.clearance - pair.distance)} mm more between them (a longer span of "
                 "cable between guides) or narrower tools"
             )
             raise _Blocked.of(
@@ -1968,22 +1973,29 @@ def _env_fix(ctx: PlanningContext, near: Nearest, own: bool, limit: float = cg.C
     if own:
         return (
             f"a hand keeps {_mm(limit)} mm from the guides it works between: "
-            f"{near.other} would have to stand {_mm(limit - near.distance)} mm farther "
+            f"{near.other} would have to stand {_short(limit - near.distance)} mm farther "
             "from the hand's path (more room between the guides), or the fingers be narrower"
         )
     return (
         f"the cell's clearance is {_mm(ctx.clearance)} mm: {near.other} would have to stand "
-        f"{_mm(ctx.clearance - near.distance)} mm farther from the hand's path, or the "
+        f"{_short(ctx.clearance - near.distance)} mm farther from the hand's path, or the "
         "fingers be narrower"
     )
 
 
+def _passes(near: Nearest, limit: float) -> str:
+    """'would pass D mm from OTHER' (to 0.01 mm where D rounds to the ``limit`` it is
+    under), or 'would run D mm into OTHER' where they overlap."""
+    if near.distance < 0.0:
+        return f"would run {_short(-near.distance)} mm into {near.other}"
+    d = _mm(near.distance) if _mm(near.distance) != _mm(limit) else f"{near.distance * 1e3:.2f}"
+    return f"would pass {d} mm from {near.other}"
+
+
 def _blocked(gp: GuidePlan, near: Nearest, what: str, limit: float, fix: str) -> str:
     side = "left" if gp.side > 0 else "right"
-    # a distance that rounds to the limit it is under is shown to 0.01 mm
-    d = _mm(near.distance) if _mm(near.distance) != _mm(limit) else f"{near.distance * 1e3:.2f}"
     return (
-        f"{gp.where}: {near.tool} would pass {d} mm from {near.other} {what} "
+        f"{gp.where}: {near.tool} {_passes(near, limit)} {what} "
         f"(sliding at theta = {math.degrees(gp.theta):.1f} deg on the {side}, stopping "
         f"{_mm(gp.a)} mm before the guide); {fix}"
     )

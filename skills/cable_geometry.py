@@ -112,7 +112,9 @@ PLACE_HOLDS = tuple(
     (math.radians(roll), farther) for farther in (0.0, 0.040) for roll in (0, 30, -30, 45, -45)
 )
 LEANS = (LEAN, math.radians(25.0), math.radians(5.0))
-PIVOT_LEANS = (PIVOT_LEAN, math.radians(20.0), math.radians(40.0))
+# between guides a short span apart, a leaning pivot hand's closed fingers reach back over
+# the guide before: upright ones stay between the two
+PIVOT_LEANS = (PIVOT_LEAN, math.radians(20.0), math.radians(40.0), math.radians(10.0), 0.0)
 STAND_BACKS = (STAND_BACK, 0.050, 0.150)
 # A, the routing hand's stop before a guide, smaller where guides stand close together (the
 # slide then starts nearer the guide, and must be steeper: theta > atan((W + W_g) / 2A))

@@ -558,6 +558,39 @@ def test_a_guide_too_close_after_another_fails_saying_how_much_room_the_hand_nee
     )
 
 
+def test_the_pivot_hand_closed_on_the_cable_keeps_clear_of_the_guide_before() -> None:
+    """guide2 40 mm after guide1; the other hand grasps 15 mm before guide2. Leaning 30 deg
+    (cg.PIVOT_LEAN), its fingers come down to the pivot clear of guide1 but, closed on the
+    cable, reach back to 2.6 mm from it: that way is refused before it is built. Upright
+    (10 deg, among cg.PIVOT_LEANS) they keep 5 mm."""
+    world, steps = _world()
+    world = _with_element(world, "routing.guide2", xyz=[0.43, -0.02, 0.01])
+    ctx = context(world)
+    state = CableState.at_home(ctx)
+    for i in range(2):
+        _, state = next(C.step_ways(ctx, steps, i, state))  # type: ignore[arg-type]
+    route = steps[2]
+    assert isinstance(route, RouteCable)
+    state = replace(state, step=2)
+    r_arm, o_arm = route.arms(ctx, state)
+    state = next(route.guide_plans(ctx, state, 0)).after(state, r_arm, o_arm, route.cable)
+
+    def blocked(lean_deg: float) -> InputError | None:
+        way = C.GuideWay(1.0, 1.0, gap=15.0 * MM, pivot_lean=math.radians(lean_deg))
+        return C._pivot_blocked(ctx, state, "routing.guide2", r_arm, o_arm, way)
+
+    error = blocked(30.0)
+    assert error is not None and error.problems[0].message == (
+        "steps[2] RouteCable routing.guide2: right/tool/finger_right would pass 2.6 mm from "
+        "routing.guide1 grasping at the pivot (stopping 15.0 mm before the guide); a hand "
+        "keeps 5.0 mm from the guides it works between: routing.guide1 would have to stand "
+        "2.4 mm farther from the hand's path (more room between the guides), or the fingers "
+        "be narrower"
+    )
+    assert blocked(10.0) is None
+    assert math.radians(10.0) in cg.PIVOT_LEANS
+
+
 def test_a_guide_40_mm_after_another_is_routed_between_them() -> None:
     """guide2 40 mm after guide1 (30 mm face to face): the pivot hand grasps, and the
     routing hand inserts, between them, 5 mm from both."""
