@@ -436,9 +436,9 @@ class _Screen:
     """What RouteCable.guide_plans found of one guide's ways so far, by what it depends on."""
 
     prints: tuple[cg.Footprint, ...]  # the other elements' (cg.footprints of the guide)
-    approaches: dict[tuple[float, float, bool], InputError | None] = field(default_factory=dict)
+    approaches: dict[tuple[float, float, float], InputError | None] = field(default_factory=dict)
     routed: dict[GuideWay, InputError | None] = field(default_factory=dict)
-    pivots: dict[tuple[float, float, bool], InputError | None] = field(default_factory=dict)
+    pivots: dict[tuple[float, float, float], InputError | None] = field(default_factory=dict)
 
 
 def _approach_blocked(ctx: PlanningContext, gp: GuidePlan, r_arm: str) -> InputError | None:
@@ -1097,7 +1097,10 @@ class GuideWay:
     # the routing hand's front ends this far past the guide's far face (None: A, as published)
     gap_after: float | None = None
     turn_first: bool = False  # the routing hand turns to the sliding angle, then slides
-    towards_base: bool = True  # the hands tip towards their bases too, not only along the cable
+    # the hands tip along the cable and towards their bases (1), not (0) or away from them
+    # (-1: near its base, an arm reaches a hand tipped towards it only with its wrist folded
+    # back over the base)
+    towards_base: float = 1.0
     slide_turn: float = 1.0  # the share of theta the routing hand turns as it slides
 
 
@@ -1179,12 +1182,12 @@ def guide_ways(
     tips, first; then every angle up to THETA_MAX in THETA_STEP steps on each side whose
     slide clears the other elements, each stop before the guide (APPROACH_GAPS, and centred
     in the room there), insert end (as far past as the stop, centred in the room after the
-    guide, or nearer), the other tips (LEANS, PIVOT_LEANS, only along the cable), turning
-    before sliding and the stand-backs, ranked by how much longer the motion gets (a steeper
-    slide swings farther). ``clear_from(basics, side, turn_first)``, when given, is the
-    least angle at which the slide keeps its hand clear of the guide (None: none does); that
-    angle is offered too, the steps missing it by up to THETA_STEP. An error naming what
-    blocks when no angle clears the guide."""
+    guide, or nearer), the other tips (LEANS, PIVOT_LEANS, only along the cable or away from
+    the bases), turning before sliding and the stand-backs, ranked by how much longer the
+    motion gets (a steeper slide swings farther). ``clear_from(basics, side, turn_first)``,
+    when given, is the least angle at which the slide keeps its hand clear of the guide (None:
+    none does); that angle is offered too, the steps missing it by up to THETA_STEP. An error
+    naming what blocks when no angle clears the guide."""
     b0 = _basics(world, state, guide, r_arm)
     prints = cg.footprints(world, guide, b0.up)
     theta0 = b0.theta_min + cg.THETA_MARGIN
@@ -1228,7 +1231,7 @@ def guide_ways(
                     cg.STAND_BACKS,
                     afters,
                     firsts,
-                    (True, False),
+                    (1.0, 0.0, -1.0),
                     cg.SLIDE_TURNS,
                 ):
                     cost = abs(theta - theta0) + 0.05 * rank + abs(back - cg.STAND_BACK)
@@ -1236,7 +1239,7 @@ def guide_ways(
                     cost += (0.0 if after is None else abs(after - gap)) + 0.01 * first
                     # ending farther past swings farther: only when nearer does not work
                     cost += 0.5 if after is not None and after > gap else 0.0
-                    cost += (0.0 if base else 0.3) + 0.2 * (1.0 - share)
+                    cost += 0.3 * (1.0 - base) + 0.2 * (1.0 - share)
                     way = GuideWay(theta, side, lean, pivot, back, gap, after, first, base, share)
                     ranked.append((cost, len(ranked), way))
     if not ranked:
@@ -1296,7 +1299,7 @@ def _guide_plan(
     # The routing hand tips forward and towards its base, the other hand back and towards
     # its base (the other hand by more): see cg.LEAN and cg.PIVOT_LEAN.
     # (or only along the cable: tipped sideways, open fingers dip towards the plate)
-    base = 1.0 if way.towards_base else 0.0
+    base = way.towards_base
     tip_r = g.unit(axis + base * _towards_base(world, r_arm, slot, up))
     tip_o = g.unit(-axis + base * _towards_base(world, o_arm, slot, up))
     T_r0 = state.tcp[r_arm]
@@ -1429,7 +1432,7 @@ def _pivot_blocked(
     (what depends only on A, the pivot's tip and its direction: checked before the rest of
     the way is built), or None."""
     b = _basics(ctx.world, state, guide, r_arm, way.gap, way.gap_after)
-    base = 1.0 if way.towards_base else 0.0
+    base = way.towards_base
     tip_o = g.unit(-b.axis + base * _towards_base(ctx.world, o_arm, b.slot, b.up))
     T_pivot = _pivot(state, b, o_arm, tip_o, way)
     poses = cg.line(cg.lifted(T_pivot, b.up, cg.APPROACH_HEIGHT), T_pivot)

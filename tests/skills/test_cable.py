@@ -785,7 +785,7 @@ def test_route_cable_way_parameters_shape_the_motion() -> None:
     plan = planned("plan_straight")
     state = replace(plan.home, route=((0.43, -0.19, 0.065),))
     world = plan.world
-    way = GuideWay(theta=math.radians(60.0), side=1.0, turn_first=True, towards_base=False)
+    way = GuideWay(theta=math.radians(60.0), side=1.0, turn_first=True, towards_base=0.0)
     gp = _guide_plan(world, state, "cable1", "routing.guide1", "left", "right", way)
     P = gp.slide[:, :3, 3]
     moving = np.linalg.norm(P - P[0], axis=1) > 1e-9
