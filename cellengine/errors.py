@@ -74,10 +74,6 @@ class InputError(CellError):
     <cellengine.family.Candidate.decides>`, e.g. which arm does what), or None."""
 
     blames: str | None = None
-    # the arm whose IK branch, taken at its last transit, cannot follow a Cartesian path after
-    # it (it hits itself or a joint limit): that transit, planned again with the paths that
-    # now follow it, may take another (a search then goes back to it first)
-    branch_of: str | None = None
 
 
 class StepError(InputError):
@@ -96,7 +92,6 @@ class StepError(InputError):
             return error
         wrapped = cls(error.problems, step)
         wrapped.blames = getattr(error, "blames", None)
-        wrapped.branch_of = getattr(error, "branch_of", None)
         return wrapped
 
     def located(self, file: str | Path, line: int | None, col: int | None) -> InputError:

@@ -10,10 +10,7 @@ to the choice before. An error that blames something a choice decided (``InputEr
 ``Candidate.decides``) sends it straight back to the latest choice that decided it, to its
 next candidate that decides it otherwise: the choices between could not change it. A
 candidate whose segments begin as the failed one's did, up to the one that failed, is passed
-over (no transit among them: compiled from the same place, they fail the same way). A
-path an arm cannot follow on the IK branch its latest transit took, when that transit was
-compiled before the candidates now taken, first sends the search back to compile again from
-that transit (it looks ahead at the paths after it) with the same candidates.
+over (no transit among them: compiled from the same place, they fail the same way).
 ``MAX_TRIES`` candidates taken in all; then the first error is raised: with one candidate
 per choice, exactly the error of compiling the first candidates.
 
@@ -78,13 +75,6 @@ def compile_candidates(
             # (search.add_all) ends with the error of the attempt that got furthest
             failed, blames = (current[1] if current[1] >= 0 else current[0]), e.blames
             ran = _prefix(chosen[failed].taken.segments, current[2])
-            back = _transit_choice(chosen, failed, current[2], e.branch_of)
-            if back is not None and back < start and back in marks:
-                # that transit chose its branch looking at other candidates' paths: planned
-                # again before the ones taken now, it may choose another
-                start, pending = back, None
-                compiler.restore(marks[back])
-                continue
         k = _jump(chosen, failed, blames) if blames is not None else None
         k = k if k is not None else _next_candidate(chosen, failed, ran)
         if k is None:
@@ -162,19 +152,6 @@ def _compile_from(
 
     current[0] = start
     add_all(compiler, segments, before)
-
-
-def _transit_choice(chosen: list[_Choice], failed: int, place: int, arm: str | None) -> int | None:
-    """The choice whose segments hold ``arm``'s latest transit before the segment at
-    ``place`` in choice ``failed``; None without an arm or such a transit."""
-    if arm is None:
-        return None
-    for k in range(min(failed, len(chosen) - 1), -1, -1):
-        segments = chosen[k].taken.segments
-        segments = segments[: max(place, 0)] if k == failed else segments
-        if any(p.kind == "transit" and p.arm == arm for s in segments for p in s.paths):
-            return k
-    return None
 
 
 def _jump(chosen: list[_Choice], failed: int, blames: str) -> int | None:

@@ -14,12 +14,7 @@ from cellengine.program import Segment
 
 
 class Refused(Exception):
-    """A segment that cannot be compiled; the message says why, without the step.
-    ``branch_of``: as :attr:`InputError.branch_of <cellengine.errors.InputError.branch_of>`."""
-
-    def __init__(self, message: str, branch_of: str | None = None) -> None:
-        super().__init__(message)
-        self.branch_of = branch_of
+    """A segment that cannot be compiled; the message says why, without the step."""
 
 
 class NoMoreChoices(Refused):
@@ -41,6 +36,4 @@ def in_plan_terms(segment: Segment, why: Refused) -> StepError:
     """The error a user sees: the step and segment, then why; carrying the step's index, so
     whoever has the plan puts it at the step's line."""
     cls = ChoicesExhausted if isinstance(why, NoMoreChoices) else StepError
-    error = cls(Problem(f"{step_name(segment)}: {why}"), segment.step)
-    error.branch_of = why.branch_of
-    return error
+    return cls(Problem(f"{step_name(segment)}: {why}"), segment.step)

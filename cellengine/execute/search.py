@@ -6,11 +6,9 @@ takes decides what comes after: the next Cartesian path of the same arm is looke
 goal is chosen (solve.transit), but a later move of the *other* arm can run into this arm's
 elbow or wrist as well. When a segment fails, the compiler goes back to the latest transit
 before it (within ``LOOKBACK`` segments), takes that transit's next goal configuration, and
-compiles on from there; a transit out of choices sends it further back. A Cartesian path that
-the arm cannot follow on its IK branch sends it back to that arm's latest transit, which took
-the branch, however far back. ``BUDGET`` retries in all; then the error of the attempt that got
-furthest is raised (the first of those, on a tie): it names the step and segment where the plan
-really gets stuck.
+compiles on from there; a transit out of choices sends it further back. ``BUDGET`` retries in
+all; then the error of the attempt that got furthest is raised (the first of those, on a tie):
+it names the step and segment where the plan really gets stuck.
 
 Deterministic: the choices are tried in one fixed order.
 """
@@ -58,7 +56,7 @@ def add_all(
             if not exhausted and (best is None or i > best[0]):
                 best = (i, e)
             failed = e
-        back = _transit_before(segments, i, include=not exhausted, arm=failed.branch_of)
+        back = _transit_before(segments, i, include=not exhausted)
         if back is None or retries >= BUDGET:
             raise best[1] if best is not None else failed
         retries += 1
@@ -69,17 +67,10 @@ def add_all(
         i = back
 
 
-def _transit_before(
-    segments: Sequence[Segment], i: int, *, include: bool, arm: str | None = None
-) -> int | None:
+def _transit_before(segments: Sequence[Segment], i: int, *, include: bool) -> int | None:
     """The latest segment at or before i (before i when not ``include``), within LOOKBACK,
-    that has a transit; for a failure of ``arm``'s IK branch (InputError.branch_of), that
-    arm's latest transit however far back, if there is one (it took the branch)."""
+    that has a transit."""
     last = i if include else i - 1
-    if arm is not None:
-        for k in range(last, -1, -1):
-            if any(p.kind == "transit" and p.arm == arm for p in segments[k].paths):
-                return k
     for k in range(last, max(-1, i - LOOKBACK - 1), -1):
         if any(p.kind == "transit" for p in segments[k].paths):
             return k

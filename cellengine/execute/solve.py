@@ -28,7 +28,6 @@ from cellengine.execute.winding import rewound
 from cellengine.motion.cartesian import (
     ArmInCell,
     CartesianResult,
-    Stop,
     cartesian_path,
     closed_chain_path,
     dual_cartesian_path,
@@ -317,24 +316,10 @@ def closed_chain(
 
 
 def _refuse_short(result: CartesianResult, what: str) -> None:
-    stop = result.stop
-    if stop is not None:
+    if result.stop is not None:
         raise Refused(
-            f"{what} stops at {100.0 * result.fraction:.0f} % of its length: {stop.message}",
-            _branch_of(stop),
+            f"{what} stops at {100.0 * result.fraction:.0f} % of its length: {result.stop.message}"
         )
-
-
-def _branch_of(stop: Stop) -> str | None:
-    """The arm whose IK branch the path cannot be followed on: it reaches a joint limit, jumps
-    or leaves its reach, or hits itself (another branch might not); None when it is stopped
-    by something else (the other arm, the cell)."""
-    if stop.kind != "collision":
-        return stop.arm
-    if stop.pair is None:
-        return None
-    owners = {name.split("/")[0] for name in stop.pair}
-    return owners.pop() if len(owners) == 1 and "/" in stop.pair[0] else None
 
 
 def _names(arms: Sequence[str]) -> str:

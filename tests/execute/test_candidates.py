@@ -247,32 +247,3 @@ def test_the_compiler_refuses_a_mark_ahead_of_what_it_compiled() -> None:
     c.restore(start)
     with pytest.raises(ValueError, match="the mark is ahead of what is compiled"):
         c.restore(ahead)
-
-
-def test_a_path_off_the_branch_a_transit_took_compiles_that_transit_again() -> None:
-    """Choice 0 is the left arm's transit, then a line; choice 1's first way fails, its
-    second cannot be followed on the IK branch the transit took looking at the first
-    (InputError.branch_of). The search compiles again from the transit, which now looks at
-    the second way, with the same candidates: nothing else is tried."""
-    a0 = Segment(0, "a0", (ArmPath("left", "transit", pose(NEAR)[None]),))
-    a1 = slide(0, NEAR, ALSO)
-    b1 = Segment(1, "b1", (ArmPath("left", "cartesian", line(ALSO, NEAR)),))
-    b2 = Segment(1, "b2", (ArmPath("left", "cartesian", line(ALSO, NEAR)),))
-    looked: list[list[str]] = []  # what each compile of a0 looked ahead at
-
-    class Branches(_Scripted):
-        def add(self, segment: Segment, rest: object, choice: int) -> None:
-            if segment.label == "a0":
-                looked.append([s.label for s in rest])  # type: ignore[attr-defined]
-            if segment.label == "b2" and "b2" not in looked[-1]:
-                e = InputError(Problem("b2 is off the left arm's branch"))
-                e.branch_of = "left"
-                raise e
-            super().add(segment, rest, choice)
-
-    c = Branches(lambda label, choice, last: label == "b1")
-    first = Candidate((a0, a1), then=lambda: choice(Candidate((b1,)), Candidate((b2,))))
-    taken = compile_candidates(c, choice(first))  # type: ignore[arg-type]
-    assert c.done == ["a0", a1.label, "b2"]
-    assert looked[0] == [a1.label, "b1"] and looked[-1] == [a1.label, "b2"]
-    assert [t.segments for t in taken] == [(a0, a1), (b2,)]

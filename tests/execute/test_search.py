@@ -12,7 +12,7 @@ from cellengine.errors import InputError
 from cellengine.execute import solve
 from cellengine.execute.preview import PREVIEW_SEGMENTS, preview, upcoming
 from cellengine.execute.refused import ChoicesExhausted, NoMoreChoices
-from cellengine.execute.search import BUDGET, LOOKBACK, add_all
+from cellengine.execute.search import BUDGET, add_all
 from cellengine.motion.ik import arm_ik
 from cellengine.program import ArmPath, Segment
 from tests.execute.scenes import LEFT_READY, cable_cell, home, line, pose
@@ -83,29 +83,6 @@ def test_without_a_transit_before_the_error_is_raised_at_once() -> None:
     with pytest.raises(InputError, match="s1 fails"):
         add_all(fake, plan)  # type: ignore[arg-type]
     assert fake.tried == [(0, 0), (1, 0)]
-
-
-def test_a_path_off_an_arms_branch_goes_back_to_that_arms_transit_however_far() -> None:
-    """The left arm's transit, then more segments than LOOKBACK, a right arm's transit, and a
-    left path that fails on the branch the left transit took (InputError.branch_of): the
-    compiler goes back to the left arm's transit, not to the right arm's nearer one."""
-    right = Segment(0, "s1", (ArmPath("right", "transit", np.eye(4)[None]),))
-    plan = [seg(0, "t"), *(seg(i, "c") for i in range(2, 2 + LOOKBACK)), right, seg(99, "c")]
-
-    @dataclass
-    class OffBranch(Fake):
-        def add(self, segment: Segment, following: object, choice: int) -> None:
-            if segment.label == "s99" and (0, 1) not in self.added:
-                self.tried.append((99, choice))
-                e = InputError.at("s99 is off the left arm's branch", None)
-                e.branch_of = "left"
-                raise e
-            super().add(segment, following, choice)
-
-    fake = OffBranch(fails_at=-1, needs=(0, 0))
-    add_all(fake, plan)  # type: ignore[arg-type]
-    assert fake.added[0] == (0, 1) and fake.added[-1] == (99, 0)
-    assert fake.tried.count((99, 0)) == 2  # failed once, then ran after the left transit
 
 
 def test_upcoming_stops_at_the_next_transit() -> None:
