@@ -1876,9 +1876,11 @@ def _check_pair_along(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: st
 def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str) -> None:
     """The routing hand's tool keeps the cell's clearance from everything but the guide it
     works at, and cg.CLEARANCE from that guide, along the way's Cartesian paths (every other
-    pose: the compiler checks them all, with the arms), so a way that cannot is not handed to
-    the compiler. (The hand turning with the slide swings its fingers towards the guide by more
-    than the published sliding angle allows for.)"""
+    pose: the compiler checks them all, with the arms; leaving the guide before, every pose
+    and the checker's clearance from the guides it works between, as the compiler holds
+    it), so a way that cannot is not handed to the compiler. (The hand turning with the
+    slide swings its fingers towards the guide by more than the published sliding angle
+    allows for.)"""
     from cellengine.motion.collision import DEFAULT_CLEARANCE  # the motion stack: planning only
 
     # Leaving the guide it inserted at, the hand turns and moves off beside it: held, as
