@@ -563,17 +563,9 @@ def test_the_pivot_hand_closed_on_the_cable_keeps_clear_of_the_guide_before() ->
     (cg.PIVOT_LEAN), its fingers come down to the pivot clear of guide1 but, closed on the
     cable, reach back to 2.6 mm from it: that way is refused before it is built. Upright
     (10 deg, among cg.PIVOT_LEANS) they keep 5 mm."""
-    world, steps = _world()
+    world, _ = _world()
     world = _with_element(world, "routing.guide2", xyz=[0.43, -0.02, 0.01])
-    ctx = context(world)
-    state = CableState.at_home(ctx)
-    for i in range(2):
-        _, state = next(C.step_ways(ctx, steps, i, state))  # type: ignore[arg-type]
-    route = steps[2]
-    assert isinstance(route, RouteCable)
-    state = replace(state, step=2)
-    r_arm, o_arm = route.arms(ctx, state)
-    state = next(route.guide_plans(ctx, state, 0)).after(state, r_arm, o_arm, route.cable)
+    ctx, state, _, r_arm, o_arm = _after_guide1(world)
 
     def blocked(lean_deg: float) -> InputError | None:
         way = C.GuideWay(1.0, 1.0, gap=15.0 * MM, pivot_lean=math.radians(lean_deg))
@@ -589,6 +581,63 @@ def test_the_pivot_hand_closed_on_the_cable_keeps_clear_of_the_guide_before() ->
     )
     assert blocked(10.0) is None
     assert math.radians(10.0) in cg.PIVOT_LEANS
+
+
+def _after_guide1(world: World) -> tuple[PlanningContext, CableState, RouteCable, str, str]:
+    """The planning context and the state after routing guide1 (each step's first way), the
+    RouteCable step and its routing and other arms."""
+    ctx = context(world)
+    state = CableState.at_home(ctx)
+    steps = _world()[1]
+    for i in range(2):
+        _, state = next(C.step_ways(ctx, steps, i, state))  # type: ignore[arg-type]
+    route = steps[2]
+    assert isinstance(route, RouteCable)
+    state = replace(state, step=2)
+    r_arm, o_arm = route.arms(ctx, state)
+    state = next(route.guide_plans(ctx, state, 0)).after(state, r_arm, o_arm, route.cable)
+    return ctx, state, route, r_arm, o_arm
+
+
+def test_the_routing_hand_leaving_the_guide_before_is_screened() -> None:
+    """guide2 moved so the route turns at guide1: approaching guide2 in a straight line from
+    where it inserted into guide1, the routing hand cuts the corner through guide1's post.
+    The compiler would stop that path; the screen refuses the way, saying by how much."""
+    world, _ = _world()
+    world = _with_element(world, "routing.guide2", xyz=[0.49, -0.05, 0.01])
+    world = _with_element(world, "routing.guide4", xyz=[0.37, -0.05, 0.01])
+    ctx, state, route, r_arm, o_arm = _after_guide1(world)
+    way = C.GuideWay(math.radians(51.4633), -1.0, gap=25.0 * MM)
+    gp = C._guide_plan(world, state, route.cable, "routing.guide2", r_arm, o_arm, way)
+    with pytest.raises(InputError) as err:
+        C._check_clear(ctx, gp, r_arm)
+    assert err.value.problems[0].message == (
+        "steps[2] RouteCable routing.guide2: left/tool/finger_right would run 2.1 mm into "
+        "routing.guide1 approaching (sliding at theta = 51.5 deg on the right, stopping 25.0 "
+        "mm before the guide); a hand keeps 1.0 mm from the guides it works between: "
+        "routing.guide1 would have to stand 3.1 mm farther from the hand's path (more room "
+        "between the guides), or the fingers be narrower"
+    )
+
+
+def test_the_hands_may_tip_away_from_their_bases() -> None:
+    """GuideWay.towards_base: tipped away from its base (-1), the routing hand's flange over
+    guide2's approach point stands farther from the arm's base than tipped only along the
+    cable (0), and that farther than tipped towards it (1): near its base an arm reaches the
+    first without folding over the base."""
+    world, _ = _world()
+    ctx, state, route, r_arm, o_arm = _after_guide1(world)
+    base = ctx.cell.arms[r_arm].T_cell_base[:2, 3]
+
+    def flange_from_base(towards: float) -> float:
+        way = C.GuideWay(math.radians(60.0), 1.0, towards_base=towards)
+        gp = C._guide_plan(world, state, route.cable, "routing.guide2", r_arm, o_arm, way)
+        T = gp.approach[-1]
+        flange = T[:3, 3] - 0.2 * T[:3, 2]  # the TCP 200 mm along the tool's z
+        return float(np.linalg.norm(flange[:2] - base))
+
+    assert flange_from_base(-1.0) > flange_from_base(0.0) + 1e-3 > flange_from_base(1.0) + 2e-3
+    assert -1.0 in {w.towards_base for w in C.guide_ways(world, state, "routing.guide2", r_arm)}
 
 
 def test_a_guide_40_mm_after_another_is_routed_between_them() -> None:
