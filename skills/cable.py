@@ -13,7 +13,11 @@ nearer the connector guide does (or, without a look-ahead, the arm already holdi
 connector end). PickCable gives that arm the connector end. The other arm routes: after the
 connector is placed it holds the cable in its sliding jaws and carries it guide to guide; the
 connector arm becomes the "other arm", which grasps the cable before each guide so the two
-hands can swing it, taut, into the slot.
+hands can swing it, taut, into the slot. When the route heads towards the connector arm's
+side (the combs may force the connector end on the arm farther from the connector guide),
+PlaceConnector first offers to hand the cable over once the connector is seated: the
+connector arm then routes and the other one pivots, so the arms do not reach across each
+other for the whole route.
 
 Feasibility comes first: each skill computes all its poses and checks them (cable length,
 reach of every key pose by inverse kinematics, a sliding angle that clears the guide) before
@@ -59,6 +63,7 @@ CENTRING_STEP = 0.001  # m: how finely the room after a guide is measured for a 
 # PlaceConnector carries the pair to over the connector guide: turned to the guide where it
 # is first (as published), turned while carried, or turned over the guide
 PLACE_ORDERS = ("align first", "together", "approach first")
+HAND_OVER_AWAY = 0.150  # m: the hand handing the cable over moves this far out of the way
 
 
 class PickCable(Skill):
@@ -79,13 +84,19 @@ class PickCable(Skill):
         return next(self.ways(ctx, state))
 
     def ways(
-        self, ctx: PlanningContext, state: CableState, either_arm: bool = False
+        self,
+        ctx: PlanningContext,
+        state: CableState,
+        either_arm: bool = False,
+        then: tuple[str, str] | None = None,
     ) -> Iterator[tuple[list[Segment], CableState]]:
         """The ways to pick the cable, best first, each with the state after it: the arm
         the look-ahead chose takes the connector end (``either_arm``: the PlaceConnector
         that follows lets either arm place it, so then the other arm too), with each tip of
         the hands (cg.LEANS, the default first), the far hand grasping as published, then
-        turned half a turn; the first way's error when none reaches."""
+        turned half a turn; the first way's error when none reaches. ``then``: where the
+        connector arm, and the routing arm, work after the pick (the connector guide, the
+        route's last guide): with either arm, the arms not crossing there either first."""
         world = ctx.world
         where = f"steps[{state.step}] PickCable {self.cable}"
         arms = _two_arms(world, where)
@@ -96,8 +107,14 @@ class PickCable(Skill):
         c_arms: tuple[str, ...] = (chosen,)
         if either_arm:  # the arms not crossing first: the shorter reach from the bases
             pairs = [(chosen, _other(arms, chosen)), (_other(arms, chosen), chosen)]
+            c_at, f_at = (
+                ((conn_ref,), (free_ref,))
+                if then is None
+                else ((conn_ref, then[0]), (free_ref, then[1]))
+            )
             reach = [
-                _base_distance(ctx, a, conn_ref) + _base_distance(ctx, b, free_ref)
+                sum(_base_distance(ctx, a, r) for r in c_at)
+                + sum(_base_distance(ctx, b, r) for r in f_at)
                 for a, b in pairs
             ]
             c_arms = tuple(
@@ -164,12 +181,16 @@ class PlaceConnector(Skill):
         return next(self.ways(ctx, state))
 
     def ways(
-        self, ctx: PlanningContext, state: CableState
+        self, ctx: PlanningContext, state: CableState, route_end: str | None = None
     ) -> Iterator[tuple[list[Segment], CableState]]:
         """The ways to place the connector, best first: the pair turned to the guide where
         it is, then carried over the slot (as published); or turned while carried; or carried
         first and turned over the slot; each with the connector hand retracting straight up,
-        then along its tipped tool axis. The first way's error when none reaches."""
+        then along its tipped tool axis. Each way leaves the other arm to route, as
+        published, or hands the cable over to the connector arm (_hand_over): first the
+        roles that keep each arm on its side, the connector guide for the arm that stays by
+        it and ``route_end`` (the route's last guide) for the routing arm. The first way's
+        error when none reaches."""
         world = ctx.world
         where = f"steps[{state.step}] PlaceConnector {self.guide}"
         c_arm = self.connector_arm(world, state.connector_arm, state.step)
@@ -177,20 +198,27 @@ class PlaceConnector(Skill):
         _require_hold(state, c_arm, self.cable, where, "the connector end (plan PickCable first)")
         _require_hold(state, f_arm, self.cable, where, "the cable (plan PickCable first)")
         first: InputError | None = None
-        for hold, order in _place_carries(ctx, state, self, c_arm, f_arm, where):
-            for along_tool in (False, True):
-                geo = _place_geometry(
-                    world, state, self, c_arm, f_arm, where, order, along_tool, hold
-                )
-                try:
-                    _check_reach(ctx, c_arm, geo.reach(c_arm), where)
-                    _check_reach(ctx, f_arm, geo.reach(f_arm), where)
-                except InputError as e:
-                    first = first or e
-                    continue
-                yield _emit_place(self, state, geo, c_arm, f_arm)
-        if first is not None:
-            raise first
+        found = False
+        swap_first = route_end is not None and _crossed(ctx, c_arm, f_arm, self.guide, route_end)
+        carries = _place_carries(ctx, state, self, c_arm, f_arm, where)
+        for swap, (hold, order), along_tool in itertools.product(
+            (swap_first, not swap_first), carries, (False, True)
+        ):
+            geo = _place_geometry(world, state, self, c_arm, f_arm, where, order, along_tool, hold)
+            try:
+                _check_reach(ctx, c_arm, geo.reach(c_arm), where)
+                _check_reach(ctx, f_arm, geo.reach(f_arm), where)
+                segments, after = _emit_place(self, state, geo, c_arm, f_arm)
+                if swap:
+                    more, after = _hand_over(ctx, after, geo, c_arm, f_arm, self.cable, where)
+                    segments += more
+            except InputError as e:
+                first = first or e
+                continue
+            found = True
+            yield segments, after
+        if not found:
+            raise first or _error(f"{where}: no way to place it")
 
 
 def _place_carries(
@@ -502,7 +530,9 @@ def step_ways(
         raise TypeError(f"steps[{i}]: {step.skill} is not a cable skill")
     with at_step(i):
         if isinstance(step, PlaceConnector):
-            yield from step.ways(ctx, replace(state, step=i))
+            yield from step.ways(
+                ctx, replace(state, step=i), _route_end(steps[i + 1 :], step.cable)
+            )
             return
         if isinstance(step, RouteCable):
             yield step.plan(ctx, replace(state, step=i))
@@ -512,7 +542,8 @@ def step_ways(
             segments, state = release_and_retract(state)
         state = _look_ahead(ctx.world, replace(state, step=i), step, steps[i + 1 :])
         either = _placed_by_either(steps[i + 1 :], step.cable)
-        for more, after in step.ways(ctx, state, either):
+        then = _works_at(steps[i + 1 :], step.cable)
+        for more, after in step.ways(ctx, state, either, then):
             yield segments + more, after
 
 
@@ -1001,6 +1032,78 @@ def _emit_place(
         route=(_point(geo.rear),),
         pull_distance=geo.pull_distance,
     )
+
+
+def _crossed(ctx: PlanningContext, c_arm: str, f_arm: str, place: str, route_end: str) -> bool:
+    """Whether the arms reach less far, in all, with the connector arm routing to
+    ``route_end`` and the other one staying by the connector guide ``place`` (the cable
+    handed over) than in the published roles."""
+    kept = _base_distance(ctx, c_arm, place) + _base_distance(ctx, f_arm, route_end)
+    swapped = _base_distance(ctx, f_arm, place) + _base_distance(ctx, c_arm, route_end)
+    return swapped < kept
+
+
+def _hand_over(
+    ctx: PlanningContext,
+    state: CableState,
+    geo: _PlaceGeometry,
+    c_arm: str,
+    f_arm: str,
+    cable: str,
+    where: str,
+) -> tuple[list[Segment], CableState]:
+    """The connector placed, the other hand lets go of the cable and moves up and out of the
+    way (to the side of the cable its base is on, the other side, or ahead along it: the
+    first where some pair of the arms' IK solutions keeps the cell's clearance); the
+    connector hand, open, comes down and grasps the cable where that hand held it (the cable
+    from the seated connector to there is short and straight), to route it. The other arm
+    becomes the pivot arm. An error when the connector arm cannot reach there or no way out
+    of the way leaves the arms free of each other."""
+    label = f"PlaceConnector {geo.guide}: hand the cable over"
+    up, T_f = geo.up, state.tcp[f_arm]
+    T_take = cg.nearer_turn(
+        state.tcp[c_arm],
+        cg.tcp_frame(T_f[:3, 3], geo.axis, up, geo.axis, state.lean),
+        state.wound.get(c_arm, 0.0),
+    )
+    T_above = cg.lifted(T_take, up, cg.APPROACH_HEIGHT)
+    _check_reach(ctx, c_arm, [("taking the cable over", T_take), ("above it", T_above)], where)
+    T_up = cg.lifted(T_f, up, cg.RETRACT_HEIGHT)
+    side = np.cross(up, geo.axis)
+    if float(side @ _towards_base(ctx.world, f_arm, T_f[:3, 3], up)) < 0.0:
+        side = -side
+    why: str | None = None
+    for away in (side, -side, geo.axis):
+        T_away = cg.at(T_up, T_up[:3, 3] + HAND_OVER_AWAY * away)
+        whys = (
+            _pair_blocked(ctx, {c_arm: T, f_arm: T_away}, ctx.clearance) for T in (T_above, T_take)
+        )
+        why = next((w for w in whys if w is not None), None)
+        if why is None:
+            break
+    if why is not None:
+        raise _error(
+            f"{where}: handing the cable over, no pair of the arms' inverse kinematics "
+            f"solutions keeps the cell's clearance ({_mm(ctx.clearance)} mm) with the "
+            "connector hand taking the cable and the other hand out of its way"
+            + (f" ({why})" if why else "")
+        )
+    element = cg.element_of(geo.guide)
+    b = _Builder(state)
+    b.add(
+        f"{label}: {f_arm} lets go",
+        [_cartesian(f_arm, np.concatenate([cg.line(T_f, T_up), cg.line(T_up, T_away)[1:]]))],
+        before=[GripperEvent(f_arm, OPEN)],
+    )
+    b.add(f"{label}: {c_arm} to the cable", [_transit(c_arm, T_above)])
+    b.add(
+        f"{label}: {c_arm} takes the cable",
+        [_cartesian(c_arm, cg.line(T_above, T_take))],
+        after=[GripperEvent(c_arm, GRASP, cable)],
+        near=[(c_arm, element)],
+    )
+    after = b.state.hold(c_arm, cable, geo.s_other)
+    return b.segments, replace(after, routing_arm=c_arm)
 
 
 # =========================================================================== RouteCable
@@ -2015,6 +2118,30 @@ def _placed_by_either(rest: Sequence[Skill], cable: str) -> bool:
         if isinstance(step, PlaceConnector) and step.cable == cable:
             return step.arm == "auto"
     return False
+
+
+def _route_end(rest: Sequence[Skill], cable: str) -> str | None:
+    """The last guide ``cable`` is routed through (before the next PickCable), if any."""
+    last: str | None = None
+    for step in rest:
+        if isinstance(step, PickCable):
+            break
+        if isinstance(step, RouteCable) and step.cable == cable:
+            last = step.guides[-1]
+    return last
+
+
+def _works_at(rest: Sequence[Skill], cable: str) -> tuple[str, str] | None:
+    """Where the arms work on ``cable`` after its PickCable: the connector guide, and the last
+    guide it is routed through (the connector guide when none); None without a
+    PlaceConnector (before the next PickCable)."""
+    place: str | None = None
+    for step in rest:
+        if isinstance(step, PickCable):
+            break
+        if isinstance(step, PlaceConnector) and step.cable == cable:
+            place = step.guide
+    return None if place is None else (place, _route_end(rest, cable) or place)
 
 
 def _look_ahead(

@@ -46,11 +46,15 @@ def _from(
     if isinstance(step, RouteCable):
         yield from _guide(ctx, steps, i, replace(state, step=i), 0)
         return
-    # a PickCable decides which arm holds the connector end and which routes: a guide out of
-    # the routing arm's reach (errors that blame "arms") comes back here, to the other arm
-    picks = isinstance(step, PickCable)
+    # a PickCable decides which arm holds the connector end, a PlaceConnector which arm routes
+    # (the other one, or the connector arm after a hand-over): a guide out of the routing
+    # arm's reach (errors that blame "arms") comes back to the latest of them, to the other arm
     for segments, after in step_ways(ctx, steps, i, state):
-        decides = {"arms": f"{after.connector_arm} holds the connector"} if picks else {}
+        decides = (
+            {"arms": f"{after.connector_arm} holds the connector"}
+            if isinstance(step, PickCable)
+            else {"arms": f"{after.routing_arm} routes"}
+        )
         then = functools.partial(_from, ctx, steps, i + 1, after)
         yield Candidate(tuple(segments), then=then, decides=decides)
 

@@ -9,8 +9,9 @@ candidates. A family that cannot plan a choice at all (its generator raises) sen
 to the choice before. An error that blames something a choice decided (``InputError.blames``,
 ``Candidate.decides``) sends it straight back to the latest choice that decided it, to its
 next candidate that decides it otherwise: the choices between could not change it. A
-candidate whose segments begin as the failed one's did, up to the one that failed, is passed
-over (no transit among them: compiled from the same place, they fail the same way).
+candidate whose segments begin as any failed candidate's of its choice did, up to the one
+that failed, is passed over (no transit among them: compiled from the same place, they fail
+the same way; ways that differ only after a shared first segment come in any order).
 ``MAX_TRIES`` candidates taken in all; then the first error is raised: with one candidate
 per choice, exactly the error of compiling the first candidates.
 
@@ -21,7 +22,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -42,6 +43,9 @@ MAX_TRIES = 16  # candidates taken after the first ones, per compile: a failing 
 class _Choice:
     options: Iterator[Candidate]  # the ones not tried yet
     taken: Candidate
+    # what the candidates taken here compiled up to the segment that failed (_prefix), when
+    # it may be skipped in others
+    failed: set[tuple[object, ...]] = field(default_factory=set)
 
 
 def compile_candidates(
@@ -60,8 +64,6 @@ def compile_candidates(
         # the choice of the segment being compiled; the choice, and the place in it, of the
         # furthest segment compiled (where the error the compiler gives arose)
         current = [len(chosen) - 1, -1, -1]
-        ran: tuple[object, ...] | None = None  # what the failed candidate compiled, if it may
-        # be skipped in others
         try:
             _grow(chosen, pending)
             _compile_from(compiler, chosen, start, marks, before_each, current)
@@ -75,8 +77,10 @@ def compile_candidates(
             # (search.add_all) ends with the error of the attempt that got furthest
             failed, blames = (current[1] if current[1] >= 0 else current[0]), e.blames
             ran = _prefix(chosen[failed].taken.segments, current[2])
+            if ran is not None:
+                chosen[failed].failed.add(ran)
         k = _jump(chosen, failed, blames) if blames is not None else None
-        k = k if k is not None else _next_candidate(chosen, failed, ran)
+        k = k if k is not None else _next_candidate(chosen, failed)
         if k is None:
             break
         for j in [j for j in marks if j > k]:
@@ -155,10 +159,10 @@ def _compile_from(
 
 
 def _jump(chosen: list[_Choice], failed: int, blames: str) -> int | None:
-    """Take, at the latest choice up to ``failed`` that decided ``blames``, its next
-    candidate that decides it otherwise; the choices after it are dropped. The choice
-    changed, or None (nothing decided it, or no candidate decides it otherwise: the search
-    then goes on as without the blame)."""
+    """Take, at the latest choice up to ``failed`` that decided ``blames`` and has a next
+    candidate that decides it otherwise, that candidate; the choices after it are dropped.
+    The choice changed, or None (nothing decided it, or no candidate decides it otherwise:
+    the search then goes on as without the blame)."""
     for k in range(min(failed, len(chosen) - 1), -1, -1):
         was = chosen[k].taken.decides.get(blames)
         if was is None:
@@ -169,7 +173,7 @@ def _jump(chosen: list[_Choice], failed: int, blames: str) -> int | None:
                 taken = next(chosen[k].options)
             except (StopIteration, InputError):
                 chosen[k].options = itertools.chain(passed, chosen[k].options)
-                return None
+                break  # an earlier choice may decide it otherwise
             if taken.decides.get(blames) != was:
                 del chosen[k + 1 :]
                 chosen[k].taken = taken
@@ -179,20 +183,17 @@ def _jump(chosen: list[_Choice], failed: int, blames: str) -> int | None:
     return None
 
 
-def _next_candidate(
-    chosen: list[_Choice], failed: int, ran: tuple[object, ...] | None = None
-) -> int | None:
+def _next_candidate(chosen: list[_Choice], failed: int) -> int | None:
     """Take the next candidate at choice ``failed`` or, when it has none, at the choices
-    before it; the choices after it are dropped. At ``failed``, a candidate whose segments
-    begin as ``ran`` (those the failed candidate compiled, up to the failing one) is passed
-    over: compiled from the same place, they fail the same way. The choice changed, or
-    None."""
+    before it; the choices after it are dropped. A candidate whose segments begin as a failed
+    one's of its choice (``_Choice.failed``) is passed over: compiled from the same place,
+    they fail the same way. The choice changed, or None."""
     k = min(failed, len(chosen) - 1)
     del chosen[k + 1 :]
     while k >= 0:
         try:
             taken = next(chosen[k].options)
-            while ran is not None and k == failed and _prefix(taken.segments, len(ran) - 1) == ran:
+            while _failed_before(chosen[k], taken):
                 taken = next(chosen[k].options)
             chosen[k].taken = taken
             return k
@@ -203,6 +204,11 @@ def _next_candidate(
         del chosen[k:]
         k -= 1
     return None
+
+
+def _failed_before(choice: _Choice, taken: Candidate) -> bool:
+    """Whether ``taken`` begins as a candidate that failed at ``choice`` did."""
+    return any(_prefix(taken.segments, len(ran) - 1) == ran for ran in choice.failed)
 
 
 def _prefix(segments: tuple[Segment, ...], last: int) -> tuple[object, ...] | None:

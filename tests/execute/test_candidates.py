@@ -247,3 +247,23 @@ def test_the_compiler_refuses_a_mark_ahead_of_what_it_compiled() -> None:
     c.restore(start)
     with pytest.raises(ValueError, match="the mark is ahead of what is compiled"):
         c.restore(ahead)
+
+
+def test_a_candidate_beginning_as_any_that_failed_before_is_passed_over() -> None:
+    """Two ways fail in their first segments, each out of reach; the third begins as the first
+    did: it is passed over though another way failed after the first (ways that differ only
+    after a shared first segment come in any order)."""
+    out = (0.40, 0.15, 1.40)
+    away = (0.40, 1.35, 0.20)  # 1.2 m sideways from NEAR: out of reach too
+    first, second = Candidate((slide(1, NEAR, out),)), Candidate((slide(1, NEAR, away),))
+    same = Candidate((slide(1, NEAR, out), slide(1, out, NEAR)))
+    other = Candidate((slide(1, NEAR, ALSO),))
+
+    def compiled(*ways: Candidate) -> list[str]:
+        seen: list[str] = []
+        start = Candidate((hop(0, NEAR),), then=lambda: choice(*ways))
+        taken = compile_candidates(compiler(), choice(start), lambda s: seen.append(s.label))
+        assert taken == [start, other]
+        return seen
+
+    assert compiled(first, second, same, other) == compiled(first, second, other)

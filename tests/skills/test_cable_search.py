@@ -22,11 +22,14 @@ from typing import Any
 
 import pytest
 
+from bench.board_check import check_compiled
+from bench.boards import make_board
 from cellengine import pipeline
 from cellengine.cli import main
 from cellengine.errors import InputError
 from cellengine.execute.candidates import MAX_TRIES
 from cellengine.family import Candidate, SkillFamily
+from cellengine.pipeline import compile_plan
 from cellengine.skill import Skill
 from cellengine.skills import cable_geometry as cg
 from tests.conftest import CELLS
@@ -201,6 +204,37 @@ def test_placing_the_connector_sends_the_search_back_to_another_pick(
     assert (out / "trajectory.json").is_file()
 
 
+def test_a_route_towards_the_connector_arm_hands_the_cable_over(
+    tmp_path: Path, watch: Watch
+) -> None:
+    """Board 5 of bench/boards.py: the connector guide at (346, 151) mm in the cell, in front of
+    the left arm, and the route heading from it towards the right arm (guide3 at (339, -132)
+    mm). The combs give the right arm the connector end; the published roles would leave it
+    holding the cable by the connector on the left arm's side while the left arm routes into
+    the right one's (the arms met 6.6 mm apart releasing guide1). PlaceConnector's first way
+    hands the cable over once the connector is seated: the left hand lets go and moves out
+    of the way, the right hand takes the cable where it held it and routes, the left arm
+    pivots. It compiles with that way and passes the benchmark's independent check."""
+    make_board(5, tmp_path / "board")
+    compiled = compile_plan(tmp_path / "board" / "plan.yaml", "split")
+    picks = [c for p, _, c in watch.taken if p == ()]
+    assert {c.decides["arms"] for c in picks} == {"right holds the connector"}
+    places = [(p, n, c) for p, n, c in watch.taken if len(p) == 1]
+    assert places[-1][1] == 0 and places[-1][2].decides["arms"] == "right routes"
+    segments = [s.segment for s in compiled.program.segments]
+    over = "PlaceConnector routing.connector: hand the cable over"
+    assert [s.label for s in segments if s.label.startswith(over)] == [
+        f"{over}: left lets go",
+        f"{over}: right to the cable",
+        f"{over}: right takes the cable",
+    ]
+    inserts = [s.facts for s in segments if "routing_arm" in s.facts]
+    assert {(f["routing_arm"], f["other_arm"]) for f in inserts} == {("right", "left")}
+    assert len(inserts) == 3  # guide1..3
+    result = check_compiled(compiled)
+    assert result.ok, result.failures
+
+
 # ------------------------------------------------------------------ (c) boards nothing can do
 
 
@@ -240,8 +274,9 @@ def test_a_cable_too_short_for_the_route_is_refused_at_the_step(
 def test_a_guide_out_of_reach_of_both_arms_is_refused_at_the_step(
     tmp_path: Path, watch: Watch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """plan_straight with guide1 at (1150, 0) mm in the cell: 1.2 m from both bases. The
-    routing arm of every PickCable way (left) cannot reach it; the first error is printed."""
+    """plan_straight with guide1 at (1150, 0) mm in the cell: 1.2 m from both bases. Neither
+    arm can route it (the left arm as published, the right one after a hand-over); the first
+    error is printed."""
     cell = board(tmp_path, {GUIDE1: (870.0, 210.0)})
     path = cell / "plan_straight.yaml"
     assert refused(path, tmp_path / "out", capsys) == (
@@ -251,9 +286,12 @@ def test_a_guide_out_of_reach_of_both_arms_is_refused_at_the_step(
     )
     # PickCable's ways: 3 tips x the far hand as published or turned; those giving the
     # connector to the left arm cross the arms over the combs and are not offered
-    assert watch.at(0) == list(range(6))
+    assert watch.at(0) == [0]
     assert watch.at(2) == []
-    # guide1 refused after each way tried (PlaceConnector's, after the first pick; no pick
-    # gives the left arm the connector end), routed by the left arm, until the budget ran out
+    # guide1 refused after each PlaceConnector way tried; the refusal blames the arms, so the
+    # search goes back to the latest choice of which arm routes, PlaceConnector's, to a way
+    # deciding it otherwise (the cable handed over, or not), until the budget ran out
+    routes = [c.decides["arms"] for p, _, c in watch.taken if len(p) == 1]
+    assert routes[0] == "left routes" and set(routes) == {"left routes", "right routes"}
     arms = [re.findall(r"out of reach of arm '(\w+)'", why) for _, why in watch.refused]
-    assert arms == [["left"]] * (MAX_TRIES + 1)
+    assert arms == [["left"], ["right"]] * (MAX_TRIES // 2) + [["left"]]
