@@ -1271,6 +1271,7 @@ def _basics(
 
 THETA_TOL = math.radians(0.5)  # angles closer than this are one
 BISECT_TOL = math.radians(0.2)  # the least clear sliding angle, to this
+LEAST_MORE = math.radians(1.0)  # also offered: this much steeper than the least clear angle
 
 
 def guide_ways(
@@ -1289,8 +1290,8 @@ def guide_ways(
     the bases), turning before sliding and the stand-backs, ranked by how much longer the
     motion gets (a steeper slide swings farther). ``clear_from(basics, side, turn_first)``,
     when given, is the least angle at which the slide keeps its hand clear of the guide (None:
-    none does); that angle is offered too, the steps missing it by up to THETA_STEP. An error
-    naming what blocks when no angle clears the guide."""
+    none does); that angle is offered too (and LEAST_MORE steeper), the steps missing it by
+    up to THETA_STEP. An error naming what blocks when no angle clears the guide."""
     b0 = _basics(world, state, guide, r_arm)
     prints = cg.footprints(world, guide, b0.up)
     theta0 = b0.theta_min + cg.THETA_MARGIN
@@ -1319,7 +1320,10 @@ def guide_ways(
         for side, first in itertools.product((1.0, -1.0), (False, True)):
             least = None if clear_from is None or n == 0 else clear_from(b, side, first)
             if least is not None and least > start:
-                angles.append((least, (side, first)))
+                # and a little steeper: the least angle is the default tips'; other tips
+                # (LEANS, slide turns) need slightly more
+                steeper = [a for a in (least, least + LEAST_MORE) if a <= cg.THETA_MAX]
+                angles += [(a, (side, first)) for a in steeper]
         for theta, only in angles:
             clear, blocked = _slide_sides(prints, b, theta, _beside(state, guide))
             if not first_blocked:
