@@ -175,6 +175,16 @@ def slide(step: int, a: tuple[float, float, float], b: tuple[float, float, float
     return Segment(step, f"along to {b}", (ArmPath("left", "cartesian", line(a, b)),))
 
 
+def compiled_after_near(*ways: Candidate) -> list[str]:
+    """The labels compiled (in order, again when the search comes back) for a hop to NEAR
+    then a choice of ``ways``, the last of which must be the one taken."""
+    seen: list[str] = []
+    start = Candidate((hop(0, NEAR),), then=lambda: choice(*ways))
+    taken = compile_candidates(compiler(), choice(start), lambda s: seen.append(s.label))
+    assert taken == [start, ways[-1]]
+    return seen
+
+
 def test_a_candidate_beginning_as_the_one_that_failed_is_passed_over() -> None:
     """Choice 1's first way fails in its first segment, a Cartesian line out of reach; its
     second way begins with the same line (then goes on): compiled from the same place it would
@@ -184,17 +194,10 @@ def test_a_candidate_beginning_as_the_one_that_failed_is_passed_over() -> None:
     same = Candidate((slide(1, NEAR, out), slide(1, out, NEAR)))
     other = Candidate((slide(1, NEAR, ALSO),))
 
-    def compiled(*ways: Candidate) -> list[str]:
-        seen: list[str] = []
-        start = Candidate((hop(0, NEAR),), then=lambda: choice(*ways))
-        taken = compile_candidates(compiler(), choice(start), lambda s: seen.append(s.label))
-        assert taken == [start, other]
-        return seen
-
     # the failing line is compiled (the compiler going back to the transit before it, too) as
     # often with ``same`` among the ways as without it
-    assert compiled(failed, same, other) == compiled(failed, other)
-    assert compiled(failed, other)[-1] == f"along to {ALSO}"
+    assert compiled_after_near(failed, same, other) == compiled_after_near(failed, other)
+    assert compiled_after_near(failed, other)[-1] == f"along to {ALSO}"
 
 
 class _Scripted:
@@ -259,11 +262,6 @@ def test_a_candidate_beginning_as_any_that_failed_before_is_passed_over() -> Non
     same = Candidate((slide(1, NEAR, out), slide(1, out, NEAR)))
     other = Candidate((slide(1, NEAR, ALSO),))
 
-    def compiled(*ways: Candidate) -> list[str]:
-        seen: list[str] = []
-        start = Candidate((hop(0, NEAR),), then=lambda: choice(*ways))
-        taken = compile_candidates(compiler(), choice(start), lambda s: seen.append(s.label))
-        assert taken == [start, other]
-        return seen
-
-    assert compiled(first, second, same, other) == compiled(first, second, other)
+    assert compiled_after_near(first, second, same, other) == compiled_after_near(
+        first, second, other
+    )
