@@ -440,6 +440,17 @@ class RouteCable(Skill):
             k = self.guides.index(guide)
             after = (cg.element_of(self.guides[k + 1]),) if k + 1 < len(self.guides) else ()
             gp = replace(gp, beside=(*gp.beside, *after, *_under(ctx, gp.slot, gp.up)))
+            if a_key not in screen.hows:
+                arms = (r_arm, o_arm)
+                how = _approach_how(ctx, state, self.cable, way, gp, arms, screen.prints)
+                screen.hows[a_key] = how
+            if screen.hows[a_key] != way.approach:
+                way = replace(way, approach=screen.hows[a_key])
+                r_key = replace(way, pivot_lean=cg.PIVOT_LEAN)
+                built = _guide_plan(
+                    world, state, self.cable, guide, r_arm, o_arm, way, screen.prints
+                )
+                gp = replace(built, beside=gp.beside)
             if r_key not in routed:
                 routed[r_key] = _routing_hand_blocked(ctx, world, self.cable, gp, r_arm)
             if p_key not in pivots:
@@ -466,6 +477,7 @@ class _Screen:
     prints: tuple[cg.Footprint, ...]  # the other elements' (cg.footprints of the guide)
     approaches: dict[tuple[float, float, float], InputError | None] = field(default_factory=dict)
     routed: dict[GuideWay, InputError | None] = field(default_factory=dict)
+    hows: dict[tuple[float, float, float], str] = field(default_factory=dict)  # APPROACHES
     pivots: dict[tuple[float, float, float], InputError | None] = field(default_factory=dict)
 
 
@@ -478,6 +490,31 @@ def _approach_blocked(ctx: PlanningContext, gp: GuidePlan, r_arm: str) -> InputE
         e.blames = "arms"  # the other arm might reach: PickCable decides which
         return e
     return None
+
+
+def _approach_how(
+    ctx: PlanningContext,
+    state: CableState,
+    cable: str,
+    way: GuideWay,
+    gp: GuidePlan,
+    arms: tuple[str, str],
+    prints: Sequence[cg.Footprint],
+) -> str:
+    """The first of APPROACHES on which the routing hand keeps clear coming to the approach
+    pose of ``way`` (``gp``, built with way.approach), as _check_clear holds it; the first
+    when none does (_check_clear says why)."""
+    from cellengine.motion.collision import DEFAULT_CLEARANCE  # the motion stack: planning only
+
+    for how in APPROACHES:
+        if how != way.approach:
+            built = _guide_plan(
+                ctx.world, state, cable, gp.guide, *arms, replace(way, approach=how), prints
+            )
+            gp = replace(built, beside=gp.beside)
+        if _env_near(ctx, arms[0], gp.approach, SLIDE, gp.beside, DEFAULT_CLEARANCE, 1) is None:
+            return how
+    return APPROACHES[0]
 
 
 def _routing_hand_blocked(
@@ -1132,6 +1169,7 @@ class GuidePlan:
     elevation: float  # of the lift, seen from the pivot
     reorient: Poses | None
     approach: Poses  # to Ap: X_offset before the near face, facing the guide
+    approached: str  # how (APPROACHES)
     slide: Poses  # R_cable from Ap at theta
     other_above: Mat
     pivot: Mat  # the other hand's grasp: Ap, where the routing hand stopped
@@ -1205,6 +1243,14 @@ class GuideWay:
     # back over the base)
     towards_base: float = 1.0
     slide_turn: float = 1.0  # the share of theta the routing hand turns as it slides
+    approach: str = "direct"  # how the routing hand comes to the approach pose: APPROACHES
+
+
+# How the routing hand comes to Ap, the first that keeps clear: straight from where it is;
+# last along the guide's axis from X_offset before Ap; down onto Ap from over the guide's
+# top. (Coming in at an angle, the hand turned to the guide sweeps its fingers over the
+# guide's near corner.)
+APPROACHES = ("direct", "along the axis", "from above")
 
 
 @dataclass(frozen=True)
@@ -1421,7 +1467,7 @@ def _guide_plan(
     if g.rotation_angle(T_r0, T_ap) > cg.REORIENT_MIN:
         reorient = cg.turn_in_place(T_r0, T_ap)
         T_r0 = reorient[-1]
-    approach = cg.line(T_r0, T_ap)
+    approach = _approach_path(T_r0, T_ap, b, way.approach)
     # Sliding, the hand turns about the vertical to hold the cable along the slide (or by a
     # share of it, see cg.SLIDE_TURNS); the swing over the slot turns it back, so it inserts
     # in the approach orientation.
@@ -1471,6 +1517,7 @@ def _guide_plan(
         elevation=elevation,
         reorient=reorient,
         approach=approach,
+        approached=way.approach,
         slide=slide,
         other_above=cg.lifted(T_pivot, up, cg.APPROACH_HEIGHT),
         pivot=T_pivot,
@@ -1530,6 +1577,22 @@ def _pivot(state: CableState, b: _Basics, o_arm: str, tip_o: Vec, way: GuideWay)
     when ``tip_o`` says so)."""
     T = cg.tcp_frame(b.ap, b.axis, b.up, tip_o, way.pivot_lean)
     return cg.nearer_turn(state.tcp[o_arm], T, state.wound.get(o_arm, 0.0))
+
+
+def _approach_path(T_r0: Mat, T_ap: Mat, b: _Basics, how: str) -> Poses:
+    """The routing hand's path from ``T_r0`` to ``T_ap``, ``how`` (APPROACHES)."""
+    if how == "direct":
+        return cg.line(T_r0, T_ap)
+    if how == "along the axis":
+        vias = [cg.at(T_ap, b.ap - b.x_offset * b.axis)]
+    else:  # from above: up from where it is to over the guide's top, over and down
+        over = b.rise + cg.Z_OFFSET
+        up_by = float(np.dot(b.ap + over * b.up - T_r0[:3, 3], b.up))
+        vias = [cg.lifted(T_r0, b.up, up_by)] if up_by > 0.0 else []
+        vias.append(cg.lifted(T_ap, b.up, over))
+    points = [T_r0, *vias, T_ap]
+    legs = [cg.line(T0, T1) for T0, T1 in itertools.pairwise(points)]
+    return np.concatenate([legs[0], *(leg[1:] for leg in legs[1:])])
 
 
 def _pivot_blocked(
@@ -1678,6 +1741,7 @@ def _emit_guide(
         [_cartesian(r_arm, gp.approach)],
         before=b.mode_event(r_arm, SLIDE, cable),
         near=near,
+        facts={"approach": gp.approached},
     )
     b.add(
         f"{label}: slide R_cable",

@@ -235,6 +235,23 @@ def test_a_route_towards_the_connector_arm_hands_the_cable_over(
     assert result.ok, result.failures
 
 
+def test_a_hand_coming_in_at_an_angle_approaches_along_the_guide(tmp_path: Path) -> None:
+    """Board 12 of bench/boards.py: from the connector guide the route turns into guide1, so
+    the routing hand, turned to guide1 where it let go of the connector, would come to its
+    approach pose at an angle and sweep its fingers 0.98 mm past guide1's near corner (the
+    hand keeps 1 mm from the guides it works between). It comes in another way
+    (skills/cable.py APPROACHES): the plan compiles and passes the benchmark's check."""
+    make_board(12, tmp_path / "board")
+    compiled = compile_plan(tmp_path / "board" / "plan.yaml", "split")
+    segments = [s.segment for s in compiled.program.segments]
+    approaches = [(s.label, s.facts["approach"]) for s in segments if "approach" in s.facts]
+    label, how = approaches[0]
+    assert label == "RouteCable routing.guide1: approach sliding"
+    assert how in ("along the axis", "from above")
+    result = check_compiled(compiled)
+    assert result.ok, result.failures
+
+
 # ------------------------------------------------------------------ (c) boards nothing can do
 
 
