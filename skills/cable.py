@@ -46,7 +46,7 @@ from cellengine.motion import interpolate as ip
 from cellengine.program import Anchor, Annotation, ArmPath, GripperEvent, Segment
 from cellengine.skill import CableRef, GuideRef, KeypointRef, Skill
 from cellengine.skills import cable_geometry as cg
-from cellengine.skills.cable_state import CableState
+from cellengine.skills.cable_state import ANY_BRANCH, CableState
 from cellengine.world import World
 
 if TYPE_CHECKING:  # planning needs the motion stack; parsing a plan does not
@@ -427,9 +427,9 @@ class RouteCable(Skill):
         p_key = (way.gap, way.pivot_lean, way.towards_base)
         a_key = (way.gap, way.lean, way.towards_base)
         approaches, routed, pivots = screen.approaches, screen.routed, screen.pivots
-        known = approaches.get(a_key) or routed.get(r_key) or pivots.get(p_key)
-        if known is not None:
-            return known
+        for seen in (approaches.get(a_key), routed.get(r_key), pivots.get(p_key)):
+            if isinstance(seen, InputError):
+                return seen
         try:
             gp = _guide_plan(world, state, self.cable, guide, r_arm, o_arm, way, screen.prints)
             if a_key not in approaches:
@@ -452,12 +452,16 @@ class RouteCable(Skill):
                 )
                 gp = replace(built, beside=gp.beside)
             if r_key not in routed:
-                routed[r_key] = _routing_hand_blocked(ctx, world, self.cable, gp, r_arm)
+                may = state.branches_of(r_arm)
+                routed[r_key] = _routing_hand_blocked(ctx, world, self.cable, gp, r_arm, may)
             if p_key not in pivots:
                 pivots[p_key] = _pivot_blocked(ctx, state, guide, r_arm, o_arm, way)
-            blocked = routed[r_key] or pivots[p_key]
-            if blocked is not None:
-                return blocked
+            found, pivoting = routed[r_key], pivots[p_key]
+            if isinstance(found, InputError):
+                return found
+            if pivoting is not None:
+                return pivoting
+            gp = replace(gp, branches=found)
             try:
                 _check_reach(ctx, o_arm, gp.reach_other(), gp.where)
             except InputError as e:
@@ -476,7 +480,8 @@ class _Screen:
 
     prints: tuple[cg.Footprint, ...]  # the other elements' (cg.footprints of the guide)
     approaches: dict[tuple[float, float, float], InputError | None] = field(default_factory=dict)
-    routed: dict[GuideWay, InputError | None] = field(default_factory=dict)
+    # why not, or the routing arm's branches that can
+    routed: dict[GuideWay, InputError | frozenset[int]] = field(default_factory=dict)
     hows: dict[tuple[float, float, float], str] = field(default_factory=dict)  # APPROACHES
     pivots: dict[tuple[float, float, float], InputError | None] = field(default_factory=dict)
 
@@ -518,10 +523,10 @@ def _approach_how(
 
 
 def _routing_hand_blocked(
-    ctx: PlanningContext, world: World, cable: str, gp: GuidePlan, r_arm: str
-) -> InputError | None:
+    ctx: PlanningContext, world: World, cable: str, gp: GuidePlan, r_arm: str, may: frozenset[int]
+) -> InputError | frozenset[int]:
     """Why the routing hand alone cannot do ``gp`` (the cable's length, its reach, its
-    clearances, its own links), or None."""
+    clearances, its own links), or the branches of ``may`` on which it can."""
     try:
         try:
             _check_reach(ctx, r_arm, gp.reach_routing()[1:], gp.where)
@@ -530,10 +535,9 @@ def _routing_hand_blocked(
             raise
         _check_length(world, cable, _hand(world, r_arm), gp)
         _check_clear(ctx, gp, r_arm)
-        _check_self(ctx, gp, r_arm)
+        return _check_self(ctx, gp, r_arm, may)
     except InputError as e:
         return e
-    return None
 
 
 CableSkill = PickCable | PlaceConnector | RouteCable
@@ -814,7 +818,7 @@ def _emit_pick(
 ) -> tuple[list[Segment], CableState]:
     name = step.cable
     label = f"PickCable {name}"
-    b = _Builder(replace(state, cable=name, connector_arm=c_arm))
+    b = _Builder(replace(state, cable=name, connector_arm=c_arm).transited(c_arm, f_arm))
     arms = (c_arm, f_arm)
     above = {a: cg.lifted(geo.grasp[a], geo.up, cg.APPROACH_HEIGHT) for a in arms}
     b.add(
@@ -1139,7 +1143,7 @@ def _hand_over(
         after=[GripperEvent(c_arm, GRASP, cable)],
         near=[(c_arm, element)],
     )
-    after = b.state.hold(c_arm, cable, geo.s_other)
+    after = b.state.hold(c_arm, cable, geo.s_other).transited(c_arm)
     return b.segments, replace(after, routing_arm=c_arm)
 
 
@@ -1184,6 +1188,8 @@ class GuidePlan:
     # lies under the cable (_under): cg.CLEARANCE from them, the cell's clearance from
     # everything else
     beside: tuple[str, ...]
+    # the routing arm's IK branches that can do it (of those it may be on), once screened
+    branches: frozenset[int] = ANY_BRANCH
 
     @property
     def radius(self) -> float:
@@ -1215,6 +1221,7 @@ class GuidePlan:
             guides=(*state.guides, self.guide),
             route=route,
             pull_distance=self.radius - (self.dims.length / 2.0 + self.x_offset),
+            branches={**state.branches, r_arm: self.branches},
         )
         s = s.hold(o_arm, cable, self.laid)
         return s.hold(r_arm, cable, self.laid + self.radius)
@@ -1944,23 +1951,28 @@ def _check_both_free(
 
 
 def _pair_room(
-    ctx: PlanningContext, a: str, b: str, poses: Sequence[tuple[Mat, Mat]], keep: float
+    ctx: PlanningContext,
+    a: str,
+    b: str,
+    poses: Sequence[tuple[Mat, Mat]],
+    keep: float,
+    a_on: frozenset[int] = ANY_BRANCH,
 ) -> float:
     """How far apart (m) the two arms can stay while their tools pass ``poses`` (T_cell_tcp
-    of ``a``, of ``b``): the most, over the pairs of IK branches that are free of collisions
-    at every pose and keep ``keep`` between the arms, of their least distance there; -inf
-    when no pair does; inf for an arm solved numerically (it has no branches). A continuous
-    motion keeps its branches."""
+    of ``a``, of ``b``): the most, over the pairs of IK branches (``a``'s of ``a_on``) that
+    are free of collisions at every pose and keep ``keep`` between the arms, of their least
+    distance there; -inf when no pair does; inf for an arm solved numerically (it has no
+    branches). A continuous motion keeps its branches."""
     alive: NDArray[np.bool_] | None = None
     least = np.full(64, math.inf)
+    allowed = np.repeat(np.isin(np.arange(8), sorted(a_on)), 8)  # pair i: a's i // 8
     for T_a, T_b in poses:
         q_a, q_b = ctx.iks[a].by_branch(T_a), ctx.iks[b].by_branch(T_b)
         if q_a is None or q_b is None:
             return math.inf  # an arm solved numerically has no branches: the compiler finds out
         Q = _solution_pairs(ctx, a, q_a, b, q_b)
         ok: NDArray[np.bool_] = np.asarray(~np.isnan(Q).any(axis=1))
-        if alive is not None:
-            ok &= alive
+        ok &= alive if alive is not None else allowed
         ok[ok] = ~ctx.checker.check_batch(Q[ok])
         for i in np.flatnonzero(ok):
             least[i] = min(least[i], ctx.checker.distance(Q[i], between=(a, b))[0])
@@ -1968,6 +1980,16 @@ def _pair_room(
         if not alive.any():
             return -math.inf
     return float(least[alive].max()) if alive is not None else -math.inf
+
+
+def _solutions(ctx: PlanningContext, arm: str, T: Mat, on: frozenset[int] | None) -> Vec:
+    """``arm``'s inverse kinematics solutions at ``T``: those of the branches ``on`` when
+    given (an arm solved numerically has none: all)."""
+    rows = ctx.iks[arm].by_branch(T) if on is not None and on != ANY_BRANCH else None
+    if rows is None:
+        return ctx.iks[arm].solve_all(T)
+    rows = rows[sorted(on or ())]
+    return rows[~np.isnan(rows).any(axis=1)]
 
 
 def _solution_pairs(ctx: PlanningContext, a: str, sols_a: Vec, b: str, sols_b: Vec) -> Vec:
@@ -1979,13 +2001,18 @@ def _solution_pairs(ctx: PlanningContext, a: str, sols_a: Vec, b: str, sols_b: V
     return Q
 
 
-def _pair_blocked(ctx: PlanningContext, poses: Mapping[str, Mat], keep: float = 0.0) -> str | None:
+def _pair_blocked(
+    ctx: PlanningContext,
+    poses: Mapping[str, Mat],
+    keep: float = 0.0,
+    on: Mapping[str, frozenset[int]] = MappingProxyType({}),
+) -> str | None:
     """None when some pair of the two arms' inverse kinematics solutions at ``poses``
-    (T_cell_tcp per arm) is free of collisions, and keeps ``keep`` (m) between the arms;
-    else why none is ("" when an arm has no solution, else the first pair's contact or
-    least distance)."""
+    (T_cell_tcp per arm; of the branches ``on`` names for an arm) is free of collisions, and
+    keeps ``keep`` (m) between the arms; else why none is ("" when an arm has no solution,
+    else the first pair's contact or least distance)."""
     (a, T_a), (b, T_b) = poses.items()
-    sols_a, sols_b = ctx.iks[a].solve_all(T_a), ctx.iks[b].solve_all(T_b)
+    sols_a, sols_b = _solutions(ctx, a, T_a, on.get(a)), _solutions(ctx, b, T_b, on.get(b))
     if len(sols_a) == 0 or len(sols_b) == 0:
         return ""
     Q = _solution_pairs(ctx, a, sols_a, b, sols_b)
@@ -2008,7 +2035,8 @@ def _check_pivot_free(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: st
     pivot: some pair of the arms' solutions is free there and above it, and keeps the
     cell's clearance between the arms."""
     for what, T in (("above the pivot", gp.other_above), ("at the pivot", gp.pivot)):
-        why = _pair_blocked(ctx, {r_arm: gp.slide[-1], o_arm: T}, ctx.clearance)
+        poses = {r_arm: gp.slide[-1], o_arm: T}
+        why = _pair_blocked(ctx, poses, ctx.clearance, {r_arm: gp.branches})
         if why is not None:
             raise _error(
                 f"{gp.where}: every inverse kinematics solution of the other arm {what} is in "
@@ -2032,7 +2060,7 @@ def _check_pair_along(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: st
     held = np.concatenate((gp.pull_path, gp.lift, gp.swing, gp.insert))
     poses = [(gp.slide[-1], T) for T in (*down[::STRIDE], down[-1])]
     poses += [(T, gp.pivot) for T in (*held[::STRIDE], held[-1])]
-    room = _pair_room(ctx, r_arm, o_arm, poses, 0.0)
+    room = _pair_room(ctx, r_arm, o_arm, poses, 0.0, gp.branches)
     if room < ctx.clearance:
         at_best = "collide" if room == -math.inf else f"pass {_mm(room)} mm apart at best"
         raise _Blocked.of(
@@ -2101,25 +2129,29 @@ def _check_hands(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) ->
             )
 
 
-def _check_self(ctx: PlanningContext, gp: GuidePlan, r_arm: str) -> None:
-    """Some IK branch of the routing arm follows the way's paths, from the approach to the
-    insert (it does not change branch between them: no transit), without its tool or links
-    coming within the checker's clearance of its own links: near its base, the tool turned to
-    a guide can meet the shoulder on every branch. None does: an error that blames the arms
-    (the other arm might route this guide)."""
+def _check_self(
+    ctx: PlanningContext, gp: GuidePlan, r_arm: str, may: frozenset[int]
+) -> frozenset[int]:
+    """The IK branches of ``may`` (those the routing arm may be on: it does not change branch
+    from its last transit on) on which it follows the way's paths, from the approach to the
+    insert, without its tool or links coming within the checker's clearance of its own
+    links: near its base, the tool turned to a guide can meet the shoulder on every branch.
+    None does: an error that blames the arms (the other arm might route this guide)."""
     from cellengine.execute.following import surviving  # the motion stack: planning only
 
     paths = (gp.approach, gp.slide, gp.pull_path, gp.lift, gp.swing, gp.insert)
     poses = np.concatenate(paths)
-    alive, nearest = surviving(ctx.cell, ctx.checker, r_arm, poses, ctx.home)
+    alive, nearest = surviving(ctx.cell, ctx.checker, r_arm, poses, ctx.home, may)
     if not alive:
+        which = "any of its IK branches" if may == ANY_BRANCH else "the IK branches it may be on"
         error = _error(
-            f"{gp.where}: the routing arm ({r_arm}) cannot follow this guide's paths on any "
-            f"of its IK branches without hitting itself ({', '.join(nearest[1])}; the guide "
+            f"{gp.where}: the routing arm ({r_arm}) cannot follow this guide's paths on "
+            f"{which} without hitting itself ({', '.join(nearest[1])}; the guide "
             f"is {_mm(_base_distance(ctx, r_arm, gp.guide))} mm from its base)"
         )
         error.blames = "arms"  # the other arm might route it: PickCable decides which
         raise error
+    return frozenset(alive)
 
 
 def _env_near(

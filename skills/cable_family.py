@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 
 from cellengine.errors import at_step
 from cellengine.family import Candidate
+from cellengine.program import Segment
 from cellengine.skill import Skill
 from cellengine.skills.cable import (
     PickCable,
@@ -19,7 +20,7 @@ from cellengine.skills.cable import (
     release_and_retract,
     step_ways,
 )
-from cellengine.skills.cable_state import CableState
+from cellengine.skills.cable_state import ANY_BRANCH, CableState
 
 if TYPE_CHECKING:
     from cellengine.context import PlanningContext
@@ -50,6 +51,10 @@ def _from(
     # (the other one, or the connector arm after a hand-over): a guide out of the routing
     # arm's reach (errors that blame "arms") comes back to the latest of them, to the other arm
     for segments, after in step_ways(ctx, steps, i, state):
+        narrowed = _narrowed(ctx, state, segments, after)
+        if narrowed is None:
+            continue
+        after = narrowed
         decides = (
             {"arms": f"{after.connector_arm} holds the connector"}
             if isinstance(step, PickCable)
@@ -75,12 +80,40 @@ def _guide(
                 segments, after = next(ways)
             except StopIteration:
                 return
+            narrowed = _narrowed(ctx, state, segments, after)
+            if narrowed is None:
+                continue
+            after = narrowed
             then = (
                 functools.partial(_from, ctx, steps, i + 1, after)
                 if last
                 else functools.partial(_guide, ctx, steps, i, after, k + 1)
             )
             yield Candidate(tuple(segments), then=then)
+
+
+def _narrowed(
+    ctx: PlanningContext, state: CableState, segments: Sequence[Segment], after: CableState
+) -> CableState | None:
+    """``after`` (the state ``segments`` leave from ``state``) with the IK branches each arm
+    may be on: those of ``state``'s that follow its Cartesian paths in ``segments`` within
+    reach and clear of itself, any after a transit of it. None when an arm is left with
+    none: the compiler's transit before could not have chosen a branch that runs them (it
+    looks ahead at the same poses, execute/following.py)."""
+    from cellengine.execute.following import surviving  # the motion stack: planning only
+
+    branches = dict(state.branches)
+    for segment in segments:
+        for path in segment.paths:
+            if path.kind == "transit":
+                branches.pop(path.arm, None)
+                continue
+            may = branches.get(path.arm, ANY_BRANCH)
+            alive, _ = surviving(ctx.cell, ctx.checker, path.arm, path.poses, ctx.home, may)
+            if not alive:
+                return None
+            branches[path.arm] = frozenset(alive)
+    return replace(after, branches=branches)
 
 
 FAMILY = CableFamily()

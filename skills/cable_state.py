@@ -27,6 +27,7 @@ if TYPE_CHECKING:
     from cellengine.context import PlanningContext
 
 Point = tuple[float, float, float]
+ANY_BRANCH = frozenset(range(8))  # a UR arm's closed-form IK branches
 
 
 @dataclass(frozen=True)
@@ -81,6 +82,9 @@ class CableState:
     # how far each TCP has turned about the vertical since home (rad, signed, summed along
     # every path): the wrist's winding, which nearer_turn keeps within WIND_LIMIT
     wound: Mapping[str, float] = field(default_factory=lambda: MappingProxyType({}))
+    # the IK branches (ArmIK.by_branch rows) each arm may still be on: those that followed
+    # every pose the skills screened since the arm's last transit; an arm absent, any
+    branches: Mapping[str, frozenset[int]] = field(default_factory=lambda: MappingProxyType({}))
 
     def __post_init__(self) -> None:
         object.__setattr__(
@@ -89,6 +93,7 @@ class CableState:
         object.__setattr__(self, "mode", MappingProxyType(dict(self.mode)))
         object.__setattr__(self, "held", MappingProxyType(dict(self.held)))
         object.__setattr__(self, "wound", MappingProxyType(dict(self.wound)))
+        object.__setattr__(self, "branches", MappingProxyType(dict(self.branches)))
 
     @classmethod
     def at_home(cls, ctx: PlanningContext) -> CableState:
@@ -113,6 +118,13 @@ class CableState:
             T = T_next
         wound = {**self.wound, arm: self.wound.get(arm, 0.0) + turn}
         return replace(self, tcp={**self.tcp, arm: poses[-1]}, wound=wound)
+
+    def branches_of(self, arm: str) -> frozenset[int]:
+        return self.branches.get(arm, ANY_BRANCH)
+
+    def transited(self, *arms: str) -> CableState:
+        """After a transit of ``arms``: each may reach its goal on any branch."""
+        return replace(self, branches={a: b for a, b in self.branches.items() if a not in arms})
 
     def gripped(self, event: GripperEvent) -> CableState:
         """After a gripper event: its mode; nothing held when it opens (an event that holds

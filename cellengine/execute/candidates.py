@@ -12,8 +12,12 @@ next candidate that decides it otherwise: the choices between could not change i
 candidate whose segments begin as any failed candidate's of its choice did, up to the one
 that failed, is passed over (no transit among them: compiled from the same place, they fail
 the same way; ways that differ only after a shared first segment come in any order).
-``MAX_TRIES`` candidates taken in all; then the first error is raised: with one candidate
-per choice, exactly the error of compiling the first candidates.
+An error that blames an arm's own configuration (a joint limit, its IK branch, its links
+meeting) after the search went back sends it first to compiling the candidates taken again
+from the start, once: a transit that chose the arm's branch and turns looked ahead at the
+candidates taken then, and looks ahead at these. ``MAX_TRIES`` candidates taken in all
+(a compile again counts as one); then the first error is raised: with one candidate per
+choice, exactly the error of compiling the first candidates.
 
 Deterministic: candidates are tried in the order the family offers them.
 """
@@ -60,6 +64,7 @@ def compile_candidates(
     start = 0  # the first choice whose segments are not compiled; the compiler is at its mark
     pending: Iterator[Candidate] | None = first
     first_error: InputError | None = None
+    recompiled: set[tuple[int, ...]] = set()  # the combinations compiled again from the start
     for _ in range(MAX_TRIES + 1):
         # the choice of the segment being compiled; the choice, and the place in it, of the
         # furthest segment compiled (where the error the compiler gives arose)
@@ -76,6 +81,18 @@ def compile_candidates(
             # the choice of the furthest segment compiled: going back to earlier transits
             # (search.add_all) ends with the error of the attempt that got furthest
             failed, blames = (current[1] if current[1] >= 0 else current[0]), e.blames
+            combination = tuple(id(c.taken) for c in chosen)
+            if blames == "configuration" and start > 0 and combination not in recompiled:
+                # the transit that chose the arm's branch and turns was compiled looking
+                # ahead at other candidates: compile these again from the start, each
+                # transit looking ahead at them (what failed from elsewhere may not fail)
+                recompiled.add(combination)
+                for choice in chosen:
+                    choice.failed.clear()
+                marks = {0: marks[0]}
+                start, pending = 0, None
+                compiler.restore(marks[0])
+                continue
             ran = _prefix(chosen[failed].taken.segments, current[2])
             if ran is not None:
                 chosen[failed].failed.add(ran)

@@ -13,6 +13,7 @@ cell will be is the compiler's to find out.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Collection
 
@@ -25,6 +26,9 @@ from cellengine.motion.robot import CellModel
 from cellengine.motion.scene import Pair
 
 STRIDE = 4  # poses: as winding.STRIDE, 8 deg or 20 mm between samples at most
+# m: where a sample comes this near the clearance, the poses between it and the next are
+# checked too (a tool turning past the shoulder dips below it between samples)
+NEAR = 0.010
 
 
 def followable(
@@ -48,26 +52,44 @@ def surviving(
     q: Vec,
     branches: Collection[int] = range(8),
 ) -> tuple[set[int], tuple[float, Pair]]:
-    """Which of ``branches`` follow ``poses`` (every STRIDE-th and the last) within reach and
+    """Which of ``branches`` follow ``poses`` (every STRIDE-th and the last, and every pose
+    between two samples where either comes within NEAR of the clearance) within reach and
     the checker's clearance of the arm itself, the other joints as in ``q``; and the closest
     the arm came to itself on a branch that did not (inf when none came too close). Every
     branch survives for an arm solved numerically (it has none)."""
     ik = arm_ik(cell.arms[arm])
     alive, nearest = set(branches), (math.inf, ("", ""))
     here = np.array(q, dtype=float)
-    for T in [*poses[::STRIDE], poses[-1]]:
-        rows = ik.by_branch(T)
-        if rows is None:
-            return alive, nearest
+    rows: dict[int, Vec | None] = {}
+
+    def distance(i: int, k: int) -> tuple[float, Pair] | None:
+        """Branch k's distance to itself at pose i (-inf: out of reach); None: no IK."""
+        if i not in rows:
+            rows[i] = ik.by_branch(poses[i])
+        row = rows[i]
+        if row is None:
+            return None
+        if np.isnan(row[k]).any():
+            return -math.inf, ("", "")
+        here[cell.slices[arm]] = row[k]
+        return checker.distance(here, between=(arm, arm))
+
+    samples = sorted({*range(0, len(poses), STRIDE), len(poses) - 1})
+    before: dict[int, float] = {}
+    for a, b in itertools.pairwise([samples[0], *samples]):
         for k in sorted(alive):
-            if np.isnan(rows[k]).any():
+            # between two samples, each pose where either comes near
+            found = distance(b, k)
+            if found is None:
+                return alive, nearest
+            near = min(found[0], before.get(k, math.inf)) < DEFAULT_CLEARANCE + NEAR
+            checked = [found, *(distance(i, k) for i in range(a + 1, b) if near)]
+            worst = min((f for f in checked if f is not None), key=lambda f: f[0])
+            before[k] = found[0]
+            if worst[0] < DEFAULT_CLEARANCE:
                 alive.discard(k)
-                continue
-            here[cell.slices[arm]] = rows[k]
-            d, pair = checker.distance(here, between=(arm, arm))
-            if d < DEFAULT_CLEARANCE:
-                alive.discard(k)
-                nearest = min(nearest, (d, pair))
+                if worst[0] > -math.inf:
+                    nearest = min(nearest, worst)
         if not alive:
             break
     return alive, nearest

@@ -14,7 +14,14 @@ from cellengine.program import Segment
 
 
 class Refused(Exception):
-    """A segment that cannot be compiled; the message says why, without the step."""
+    """A segment that cannot be compiled; the message says why, without the step.
+    ``configuration``: an arm's own configuration is to blame (a joint limit or jump, its IK
+    branch's reach, its links meeting each other): the transit that chose its branch and
+    turns, not the path, may be what has to change."""
+
+    def __init__(self, message: str, configuration: bool = False) -> None:
+        super().__init__(message)
+        self.configuration = configuration
 
 
 class NoMoreChoices(Refused):
@@ -36,4 +43,6 @@ def in_plan_terms(segment: Segment, why: Refused) -> StepError:
     """The error a user sees: the step and segment, then why; carrying the step's index, so
     whoever has the plan puts it at the step's line."""
     cls = ChoicesExhausted if isinstance(why, NoMoreChoices) else StepError
-    return cls(Problem(f"{step_name(segment)}: {why}"), segment.step)
+    error = cls(Problem(f"{step_name(segment)}: {why}"), segment.step)
+    error.blames = "configuration" if why.configuration else None
+    return error

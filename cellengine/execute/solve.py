@@ -28,6 +28,7 @@ from cellengine.execute.winding import rewound
 from cellengine.motion.cartesian import (
     ArmInCell,
     CartesianResult,
+    Stop,
     cartesian_path,
     closed_chain_path,
     dual_cartesian_path,
@@ -316,10 +317,21 @@ def closed_chain(
 
 
 def _refuse_short(result: CartesianResult, what: str) -> None:
-    if result.stop is not None:
+    stop = result.stop
+    if stop is not None:
         raise Refused(
-            f"{what} stops at {100.0 * result.fraction:.0f} % of its length: {result.stop.message}"
+            f"{what} stops at {100.0 * result.fraction:.0f} % of its length: {stop.message}",
+            _own(stop),
         )
+
+
+def _own(stop: Stop) -> bool:
+    """Whether an arm's own configuration stopped the path: a limit, a jump, its branch out
+    of reach, two of its own links meeting."""
+    if stop.kind == "collision":
+        arms = {name.split("/", 1)[0] for name in stop.pair or ("", "?")}
+        return len(arms) == 1 and stop.arm is not None
+    return stop.kind != "unreachable"
 
 
 def _names(arms: Sequence[str]) -> str:

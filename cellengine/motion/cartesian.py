@@ -79,7 +79,7 @@ from cellengine.motion.ik import ArmIK, arm_ik, wrap
 from cellengine.motion.interpolate import step_lengths
 from cellengine.motion.robot import Arm, CellModel
 
-StopKind = Literal["unreachable", "limit", "joint_jump", "collision"]
+StopKind = Literal["unreachable", "branch", "limit", "joint_jump", "collision"]
 
 TWO_PI = 2.0 * math.pi
 # A joint beyond its limit by less than this is on it (round-off of the unwrapping).
@@ -322,7 +322,8 @@ def _unreachable_on_branch(ik: ArmIK, i: int, branch: int, valid_i: BoolArray) -
         )
     else:
         why = "no IK branch reaches it (outside the workspace)"
-    return Stop("unreachable", i, f"waypoint {i}: {why}", arm=ik.arm.name)
+    kind: StopKind = "branch" if others else "unreachable"  # "branch": others reach it
+    return Stop(kind, i, f"waypoint {i}: {why}", arm=ik.arm.name)
 
 
 def _branch_name(b: int) -> str:

@@ -6,8 +6,10 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 
+import numpy as np
 import pytest
 
+from cellengine import geometry as g
 from cellengine.errors import InputError, Problem, StepError
 from cellengine.execute import Compiler
 from cellengine.execute.candidates import compile_candidates
@@ -265,3 +267,29 @@ def test_a_candidate_beginning_as_any_that_failed_before_is_passed_over() -> Non
     assert compiled_after_near(first, second, same, other) == compiled_after_near(
         first, second, other
     )
+
+
+def turned(start: tuple[float, float, float], degrees: float) -> Segment:
+    """The left tool turned about its own axis by ``degrees``, 2 deg a pose: the wrist's last
+    joint turns with it (its limits: +-360 deg)."""
+    T0 = pose(start)
+    angles = np.radians(np.linspace(0.0, degrees, int(abs(degrees) / 2) + 1))
+    poses = np.array([T0 @ g.transform(g.rot_z(a), np.zeros(3)) for a in angles])
+    return Segment(1, f"turn {degrees:+.0f} deg", (ArmPath("left", "cartesian", poses),))
+
+
+def test_an_arm_that_cannot_turn_on_from_an_earlier_transit_compiles_again_from_there() -> None:
+    """The hop's transit chooses the wrist's turns looking ahead at the first candidates
+    after it (a 400 deg turn one way, then a hop out of reach); once the search goes to the
+    next candidate (400 deg the other way), the wrist is near the other limit: an error that
+    blames the arm's configuration, not the path. The candidates are compiled again from the
+    start, the hop now looking ahead at the turn it leads to."""
+    c = compiler()
+    seen: list[str] = []
+    first = (turned(NEAR, 400.0), hop(1, FAR))
+    other = (turned(NEAR, -400.0),)
+    start = Candidate((hop(0, NEAR),), then=lambda: choice(Candidate(first), Candidate(other)))
+    compile_candidates(c, choice(start), lambda s: seen.append(s.label))
+    assert labels(c) == [f"to {NEAR}", "turn -400 deg"]
+    assert seen[:2] == [f"to {NEAR}", "turn +400 deg"]
+    assert seen[-3:] == ["turn -400 deg", f"to {NEAR}", "turn -400 deg"]
