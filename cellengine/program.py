@@ -109,9 +109,17 @@ class Segment:
     # {"guide": "routing.guide2", "slot": [x, y, z]}
     facts: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
     annotations: tuple[Annotation, ...] = ()
+    # (arm, IK branches): the skill checked this segment's poses of that arm on those of its
+    # closed-form IK branches only (ArmIK.by_branch rows); a transit before it chooses a
+    # goal on one of them where it can, and an arm on another is refused here
+    branches: tuple[tuple[str, frozenset[int]], ...] = ()
 
     def arms(self) -> tuple[str, ...]:
         return tuple(p.arm for p in self.paths)
+
+    def branches_of(self, arm: str) -> frozenset[int] | None:
+        """The IK branches ``branches`` requires of ``arm`` (None: any)."""
+        return next((b for a, b in self.branches if a == arm), None)
 
 
 @dataclass(frozen=True)

@@ -468,7 +468,7 @@ class RouteCable(Skill):
                 e.blames = "arms"  # the routing arm might reach: PickCable decides which
                 raise
             _check_hands(ctx, gp, r_arm, o_arm)
-            _check_pivot_free(ctx, gp, r_arm, o_arm)
+            gp = replace(gp, branches=_check_pivot_free(ctx, gp, r_arm, o_arm))
         except InputError as e:
             return e
         return gp
@@ -1221,7 +1221,11 @@ class GuidePlan:
             guides=(*state.guides, self.guide),
             route=route,
             pull_distance=self.radius - (self.dims.length / 2.0 + self.x_offset),
-            branches={**state.branches, r_arm: self.branches},
+            # the other arm came to the pivot on a transit: on any branch
+            branches={
+                **{a: b for a, b in state.branches.items() if a != o_arm},
+                r_arm: self.branches,
+            },
         )
         s = s.hold(o_arm, cable, self.laid)
         return s.hold(r_arm, cable, self.laid + self.radius)
@@ -1959,17 +1963,30 @@ def _pair_room(
     a_on: frozenset[int] = ANY_BRANCH,
 ) -> float:
     """How far apart (m) the two arms can stay while their tools pass ``poses`` (T_cell_tcp
-    of ``a``, of ``b``): the most, over the pairs of IK branches (``a``'s of ``a_on``) that
-    are free of collisions at every pose and keep ``keep`` between the arms, of their least
-    distance there; -inf when no pair does; inf for an arm solved numerically (it has no
-    branches). A continuous motion keeps its branches."""
+    of ``a``, of ``b``): the most of :func:`_pair_rooms`."""
+    return float(max(_pair_rooms(ctx, a, b, poses, keep, a_on).values()))
+
+
+def _pair_rooms(
+    ctx: PlanningContext,
+    a: str,
+    b: str,
+    poses: Sequence[tuple[Mat, Mat]],
+    keep: float,
+    a_on: frozenset[int] = ANY_BRANCH,
+) -> dict[int, float]:
+    """For each IK branch of ``a`` in ``a_on``, how far apart (m) the two arms can stay while
+    their tools pass ``poses`` (T_cell_tcp of ``a``, of ``b``): the most, over ``b``'s
+    branches free of collisions with it at every pose and keeping ``keep`` between the arms,
+    of their least distance there; -inf when none does. {-1: inf} for an arm solved
+    numerically (it has no branches). A continuous motion keeps its branches."""
     alive: NDArray[np.bool_] | None = None
     least = np.full(64, math.inf)
     allowed = np.repeat(np.isin(np.arange(8), sorted(a_on)), 8)  # pair i: a's i // 8
     for T_a, T_b in poses:
         q_a, q_b = ctx.iks[a].by_branch(T_a), ctx.iks[b].by_branch(T_b)
         if q_a is None or q_b is None:
-            return math.inf  # an arm solved numerically has no branches: the compiler finds out
+            return {-1: math.inf}  # no branches: the compiler finds out
         Q = _solution_pairs(ctx, a, q_a, b, q_b)
         ok: NDArray[np.bool_] = np.asarray(~np.isnan(Q).any(axis=1))
         ok &= alive if alive is not None else allowed
@@ -1978,8 +1995,11 @@ def _pair_room(
             least[i] = min(least[i], ctx.checker.distance(Q[i], between=(a, b))[0])
         alive = ok & (least >= keep)
         if not alive.any():
-            return -math.inf
-    return float(least[alive].max()) if alive is not None else -math.inf
+            break
+    if alive is None:
+        alive = np.zeros(64, dtype=bool)
+    room = np.where(alive, least, -math.inf).reshape(8, 8).max(axis=1)
+    return {k: float(room[k]) for k in sorted(a_on)}
 
 
 def _solutions(ctx: PlanningContext, arm: str, T: Mat, on: frozenset[int] | None) -> Vec:
@@ -2030,10 +2050,13 @@ def _pair_blocked(
     return f"the arms {_mm(nearest[0])} mm apart at best ({', '.join(nearest[1])})"
 
 
-def _check_pivot_free(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) -> None:
+def _check_pivot_free(
+    ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str
+) -> frozenset[int]:
     """While the routing hand holds still at the slide's end, the other arm comes down to the
     pivot: some pair of the arms' solutions is free there and above it, and keeps the
-    cell's clearance between the arms."""
+    cell's clearance between the arms, and on to the insert (:func:`_check_pair_along`).
+    The routing arm's branches (of gp.branches) on which it is so."""
     for what, T in (("above the pivot", gp.other_above), ("at the pivot", gp.pivot)):
         poses = {r_arm: gp.slide[-1], o_arm: T}
         why = _pair_blocked(ctx, poses, ctx.clearance, {r_arm: gp.branches})
@@ -2045,22 +2068,38 @@ def _check_pivot_free(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: st
                 f"{math.degrees(gp.theta):.1f} deg, stopping {_mm(gp.a)} mm before the guide)"
                 + (f" ({why})" if why else "")
             )
-    _check_pair_along(ctx, gp, r_arm, o_arm)
+    ends = (gp.other_above, gp.pivot)
+    kept = frozenset(
+        k
+        for k in gp.branches
+        if all(
+            _pair_blocked(
+                ctx, {r_arm: gp.slide[-1], o_arm: T}, ctx.clearance, {r_arm: frozenset({k})}
+            )
+            is None
+            for T in ends
+        )
+    )
+    return _check_pair_along(ctx, replace(gp, branches=kept or gp.branches), r_arm, o_arm)
 
 
-def _check_pair_along(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) -> None:
+def _check_pair_along(
+    ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str
+) -> frozenset[int]:
     """From the other arm coming down to the pivot to the insert (both arms on Cartesian
     paths, so each keeps its IK branch), some pair of branches keeps the cell's clearance
     between the arms at poses along the way (every STRIDE-th): near the pivot the routing
     arm's wrist passes over the other arm's forearm on some boards and under it on others.
-    Else the way is refused, by how much it falls short."""
+    The routing arm's branches (of gp.branches) in such a pair; else the way is refused, by
+    how much it falls short."""
     from cellengine.execute.following import STRIDE  # the motion stack: planning only
 
     down = cg.line(gp.other_above, gp.pivot)
     held = np.concatenate((gp.pull_path, gp.lift, gp.swing, gp.insert))
     poses = [(gp.slide[-1], T) for T in (*down[::STRIDE], down[-1])]
     poses += [(T, gp.pivot) for T in (*held[::STRIDE], held[-1])]
-    room = _pair_room(ctx, r_arm, o_arm, poses, 0.0, gp.branches)
+    rooms = _pair_rooms(ctx, r_arm, o_arm, poses, 0.0, gp.branches)
+    room = max(rooms.values())
     if room < ctx.clearance:
         at_best = "collide" if room == -math.inf else f"pass {_mm(room)} mm apart at best"
         raise _Blocked.of(
@@ -2070,6 +2109,7 @@ def _check_pair_along(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: st
             f"theta = {math.degrees(gp.theta):.1f} deg, stopping {_mm(gp.a)} mm before the "
             f"guide); the cell's clearance is {_mm(ctx.clearance)} mm",
         )
+    return frozenset(k for k, r in rooms.items() if k >= 0 and r >= ctx.clearance) or gp.branches
 
 
 def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str) -> None:

@@ -54,7 +54,7 @@ def _from(
         narrowed = _narrowed(ctx, state, segments, after)
         if narrowed is None:
             continue
-        after = narrowed
+        segments, after = narrowed
         decides = (
             {"arms": f"{after.connector_arm} holds the connector"}
             if isinstance(step, PickCable)
@@ -83,7 +83,7 @@ def _guide(
             narrowed = _narrowed(ctx, state, segments, after)
             if narrowed is None:
                 continue
-            after = narrowed
+            segments, after = narrowed
             then = (
                 functools.partial(_from, ctx, steps, i + 1, after)
                 if last
@@ -94,26 +94,46 @@ def _guide(
 
 def _narrowed(
     ctx: PlanningContext, state: CableState, segments: Sequence[Segment], after: CableState
-) -> CableState | None:
-    """``after`` (the state ``segments`` leave from ``state``) with the IK branches each arm
-    may be on: those of ``state``'s that follow its Cartesian paths in ``segments`` within
-    reach and clear of itself, any after a transit of it. None when an arm is left with
-    none: the compiler's transit before could not have chosen a branch that runs them (it
-    looks ahead at the same poses, execute/following.py)."""
+) -> tuple[list[Segment], CableState] | None:
+    """``segments`` requiring of each arm the IK branches it may be on (Segment.branches), and
+    ``after`` (the state they leave from ``state``) with those: the branches of ``state``'s
+    on which the arm follows its Cartesian paths in ``segments`` within reach and clear of
+    itself (any after a transit of it), and that the skill's checks kept (``after``'s). None
+    when an arm is left with none: no transit before could choose a branch that runs them."""
     from cellengine.execute.following import surviving  # the motion stack: planning only
 
     branches = dict(state.branches)
-    for segment in segments:
+    runs: dict[str, list[int]] = {}  # each arm's segments since its last transit in these
+    required: list[dict[str, frozenset[int]]] = [{} for _ in segments]
+
+    def close(arm: str) -> None:
+        for k in runs.pop(arm, []):
+            if arm in branches:
+                required[k][arm] = branches[arm]
+
+    for k, segment in enumerate(segments):
         for path in segment.paths:
             if path.kind == "transit":
+                close(path.arm)
                 branches.pop(path.arm, None)
-                continue
-            may = branches.get(path.arm, ANY_BRANCH)
-            alive, _ = surviving(ctx.cell, ctx.checker, path.arm, path.poses, ctx.home, may)
-            if not alive:
-                return None
-            branches[path.arm] = frozenset(alive)
-    return replace(after, branches=branches)
+            else:
+                may = branches.get(path.arm, ANY_BRANCH)
+                alive, _ = surviving(ctx.cell, ctx.checker, path.arm, path.poses, ctx.home, may)
+                if not alive:
+                    return None
+                branches[path.arm] = frozenset(alive)
+            runs.setdefault(path.arm, []).append(k)
+    for arm in list(runs):
+        kept = branches.get(arm, ANY_BRANCH) & after.branches_of(arm)
+        if not kept:
+            return None
+        branches[arm] = kept
+        close(arm)
+    out = [
+        replace(s, branches=tuple(sorted(r.items()))) if r else s
+        for s, r in zip(segments, required, strict=True)
+    ]
+    return out, replace(after, branches=branches)
 
 
 FAMILY = CableFamily()

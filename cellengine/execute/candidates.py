@@ -247,6 +247,7 @@ def _prefix(segments: tuple[Segment, ...], last: int) -> tuple[object, ...] | No
             s.keep_distance,
             s.contacts,
             s.near,
+            s.branches,
         )
         for s in head
     )

@@ -29,18 +29,21 @@ from numpy.typing import ArrayLike
 from cellengine.arrays import Vec
 from cellengine.execute import winding
 from cellengine.execute.checks import gate, kept_distance
+from cellengine.execute.following import required
 from cellengine.execute.held import Held, Holding
 from cellengine.execute.merge import MERGES, Merge, Merged, merge_rows, on_one_axis
 from cellengine.execute.preview import preview
 from cellengine.execute.refused import Refused, in_plan_terms
 from cellengine.execute.schedule import SCHEDULE_DT, schedule
 from cellengine.execute.search import add_all
+from cellengine.execute.solve import Lookahead
 from cellengine.execute.split import SPLIT_THRESHOLD
 from cellengine.execute.strategies import STRATEGIES, Part, Strategy, solve_segment
 from cellengine.info.cell import DEFAULT_CLEARANCE
 from cellengine.motion.clearance import least
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.gate import SAMPLE_DT, GateReport
+from cellengine.motion.ik import arm_ik
 from cellengine.motion.robot import CellModel, tool_parts
 from cellengine.motion.scene import Pair, pair_key
 from cellengine.motion.trajectory import Trajectory, concatenate
@@ -177,7 +180,13 @@ class Compiler:
         accept = preview(self.cell, self.checker, following) if has_transit else None
         ahead = None
         if has_transit:
-            ahead = {p.arm: winding.ahead(following, p.arm) for p in segment.paths}
+            ahead = {
+                p.arm: Lookahead(
+                    winding.ahead(following, p.arm), required([segment, *following], p.arm)
+                )
+                for p in segment.paths
+            }
+        self._check_branches(segment)
         parts = solve_segment(
             self.cell,
             self.checker,
@@ -228,6 +237,23 @@ class Compiler:
             parts = tool_parts(self.cell.arms[arm])
             out |= {pair_key(p, s) for p in parts for s in shapes}
         return frozenset(out)
+
+    def _check_branches(self, segment: Segment) -> None:
+        """Refuse a Cartesian path of an arm on an IK branch the segment does not require of
+        it (Segment.branches): the skill's checks of its poses did not look at that branch,
+        and the transit that chose it did not look ahead at them."""
+        for path in segment.paths:
+            on = segment.branches_of(path.arm)
+            ik = arm_ik(self.cell.arms[path.arm])
+            if path.kind == "transit" or on is None or ik.closed_form is None:
+                continue
+            branch = ik.branch(self.q[self.cell.slices[path.arm]])
+            if branch not in on:
+                raise Refused(
+                    f"the {path.arm} arm is on IK branch {branch}; the skill checked this "
+                    f"segment's poses on branches {sorted(on)} only",
+                    configuration=True,
+                )
 
     def _merge_for(self, segment: Segment) -> Merge:
         """A coupling (closed chain, kept distance) needs one time law for both arms: the

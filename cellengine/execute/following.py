@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Collection
+from collections.abc import Collection, Sequence
 
 import numpy as np
 
@@ -24,6 +24,7 @@ from cellengine.motion.collision import DEFAULT_CLEARANCE, CollisionChecker
 from cellengine.motion.ik import arm_ik
 from cellengine.motion.robot import CellModel
 from cellengine.motion.scene import Pair
+from cellengine.program import Segment
 
 STRIDE = 4  # poses: as winding.STRIDE, 8 deg or 20 mm between samples at most
 # m: where a sample comes this near the clearance, the poses between it and the next are
@@ -32,16 +33,38 @@ NEAR = 0.010
 
 
 def followable(
-    cell: CellModel, checker: CollisionChecker, arm: str, sols: Vec, poses: Poses | None, q: Vec
+    cell: CellModel,
+    checker: CollisionChecker,
+    arm: str,
+    sols: Vec,
+    poses: Poses | None,
+    q: Vec,
+    on: frozenset[int] | None = None,
 ) -> list[bool]:
     """For each of ``sols`` (k, n): whether its IK branch follows ``poses`` (the arm's poses
-    up to its next transit) within reach and clear of itself, the other joints as in ``q``.
-    All True for an arm without branches (solved numerically) or without poses ahead."""
+    up to its next transit) within reach and clear of itself, the other joints as in ``q``,
+    and is one of ``on`` (:func:`required`) when given. All True for an arm without branches
+    (solved numerically) or without poses ahead and nothing required."""
     ik = arm_ik(cell.arms[arm])
-    if poses is None or len(sols) == 0 or ik.closed_form is None:
+    if (poses is None and on is None) or len(sols) == 0 or ik.closed_form is None:
         return [True] * len(sols)
-    alive, _ = surviving(cell, checker, arm, poses, q, {ik.branch(sol) for sol in sols})
-    return [ik.branch(sol) in alive for sol in sols]
+    branches = {ik.branch(sol) for sol in sols} & (set(range(8)) if on is None else set(on))
+    if poses is not None:
+        branches, _ = surviving(cell, checker, arm, poses, q, branches)
+    return [ik.branch(sol) in branches for sol in sols]
+
+
+def required(segments: Sequence[Segment], arm: str) -> frozenset[int] | None:
+    """The IK branches ``segments`` require of ``arm`` (Segment.branches), from the first
+    (a transit of it) up to its next transit; None when they require none."""
+    out: frozenset[int] | None = None
+    for k, segment in enumerate(segments):
+        if k > 0 and any(p.arm == arm and p.kind == "transit" for p in segment.paths):
+            break
+        on = segment.branches_of(arm)
+        if on is not None:
+            out = on if out is None else out & on
+    return out
 
 
 def surviving(

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Iterator, Mapping, Sequence
+from typing import NamedTuple
 
 import numpy as np
 
@@ -41,7 +42,17 @@ from cellengine.motion.topp import SplinePath
 from cellengine.motion.transit import CellChecker, plan_for_arms
 
 Accept = Callable[[Vec], bool]  # a goal configuration -> whether what follows can run from it
-Ahead = Mapping[str, Poses | None]  # each arm's Cartesian poses up to its next transit
+
+
+class Lookahead(NamedTuple):
+    """What follows a transit of one arm, up to its next: its Cartesian poses, and the IK
+    branches those segments require of it (following.required)."""
+
+    poses: Poses | None
+    on: frozenset[int] | None = None
+
+
+Ahead = Mapping[str, Lookahead]
 
 PLANNER_SEED = 0  # OMPL is re-seeded per query: the same segment gives the same path
 PLANNER_TIME = 1.0  # s per transit query
@@ -86,19 +97,22 @@ def transit(
 
     ``ahead``: each arm's Cartesian poses after the transit, up to its next one: a joint
     that turns more than a full turn is put on the turn from which they stay within its
-    limits (:mod:`~cellengine.execute.winding`).
+    limits (:mod:`~cellengine.execute.winding`); goals on a branch the segments there do
+    not require of the arm (:class:`Lookahead`) go last, as goals that cannot follow them.
 
     ``choice`` > 0: the choice-th goal configuration in that order, and only it (the compiler
     comes back with the next choice when a later segment cannot run from the first);
     :class:`NoMoreChoices` past the last."""
     arms = tuple(goals)
-    ahead = ahead or {}
+    ahead = {arm: (ahead or {}).get(arm, Lookahead(None)) for arm in arms}
     per_arm = [
-        rewound(cell, arm, _ik_goals(cell, arm, goals[arm], q), ahead.get(arm), q[cell.slices[arm]])
+        rewound(
+            cell, arm, _ik_goals(cell, arm, goals[arm], q), ahead[arm].poses, q[cell.slices[arm]]
+        )
         for arm in arms
     ]
     follows = [
-        followable(cell, checker, arm, sols, ahead.get(arm), q)
+        followable(cell, checker, arm, sols, ahead[arm].poses, q, ahead[arm].on)
         for arm, sols in zip(arms, per_arm, strict=True)
     ]
     tiers = _goal_configurations(cell, arms, per_arm, q, follows)

@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from cellengine.errors import InputError
-from cellengine.execute import STRATEGIES, compile_segments, program_trajectory
+from cellengine.execute import STRATEGIES, Compiler, compile_segments, program_trajectory
 from cellengine.execute.checks import tcp_distances
 from cellengine.motion.cartesian import ArmInCell, cartesian_path
 from cellengine.motion.gate import check_cell_trajectory
+from cellengine.motion.ik import arm_ik
 from cellengine.program import ArmPath, GripperEvent, Program, Segment
 from tests.execute.scenes import (
     LEFT_READY,
@@ -262,4 +265,40 @@ def test_a_coupling_of_an_unknown_arm_is_refused() -> None:
     assert str(e.value) == (
         "<input>: step 1 (hands apart): keep_distance names an unknown arm 'middle' "
         "(the cell has left, right)"
+    )
+
+
+def test_a_transit_reaches_its_goal_on_a_branch_the_segments_after_it_require() -> None:
+    """A segment requiring a branch of an arm (Segment.branches): the transit before it puts
+    the arm on one of them where it can; an arm on another is refused there, the error
+    blaming the arm's configuration (execute/candidates.py then compiles again from the
+    start)."""
+    world, cell, checker = cable_cell()
+    ik = arm_ik(cell.arms["left"])
+    up = (LEFT_READY[0], LEFT_READY[1], LEFT_READY[2] + 0.05)
+    lift = Segment(1, "lift", (ArmPath("left", "cartesian", line(LEFT_READY, up)),))
+    first = compile_segments(world, cell, checker, [ready(), lift], home(cell))
+    on = ik.branch(first.segments[-1].trajectory.q[-1][cell.slices["left"]])
+    rows = ik.by_branch(pose(LEFT_READY))
+    assert rows is not None
+
+    def free(k: int) -> bool:  # the left arm there on branch k, the right one at home
+        q = home(cell)
+        q[cell.slices["left"]] = rows[k]
+        return not np.isnan(rows[k]).any() and not checker.in_collision(q)
+
+    other = next(k for k in range(8) if k != on and free(k))
+    required = replace(lift, branches=(("left", frozenset({other})),))
+    program = compile_segments(world, cell, checker, [ready(), required], home(cell))
+    q = program.segments[-1].trajectory.q[-1][cell.slices["left"]]
+    assert ik.branch(q) == other
+    # a transit that did not look ahead at it: the arm there on its own branch, refused
+    c = Compiler(world, cell, checker, home(cell))
+    c.add(ready())
+    with pytest.raises(InputError) as e:
+        c.add(required)
+    assert e.value.blames == "configuration"
+    assert str(e.value) == (
+        f"<input>: step 2 (lift): the left arm is on IK branch {on}; the skill checked this "
+        f"segment's poses on branches [{other}] only"
     )

@@ -6,14 +6,16 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import replace
 
 import numpy as np
 
 from cellengine import geometry as g
 from cellengine.execute import solve
-from cellengine.execute.following import followable
+from cellengine.execute.following import followable, required
 from cellengine.execute.refused import Refused
 from cellengine.motion.ik import arm_ik
+from cellengine.program import ArmPath, Segment
 from tests.execute.scenes import cable_cell, home
 
 
@@ -61,3 +63,34 @@ def test_without_poses_ahead_every_goal_follows() -> None:
         arc_near_the_base(cell.arms["left"].T_cell_base[:3, 3])[0]
     )
     assert followable(cell, checker, "left", sols, None, home(cell)) == [True] * len(sols)
+
+
+def test_the_branches_required_after_a_transit_are_those_up_to_the_next() -> None:
+    """following.required: what the segments from a transit of the arm up to its next one
+    require of it, all of them at once; none when they require nothing."""
+    T = arc_near_the_base(np.zeros(3))
+    go = Segment(0, "go", (ArmPath("left", "transit", T[:1]),))
+    along = Segment(0, "along", (ArmPath("left", "cartesian", T),))
+    again = Segment(0, "again", (ArmPath("left", "transit", T[:1]),))
+
+    def need(s: Segment, branches: set[int]) -> Segment:
+        return replace(s, branches=(("left", frozenset(branches)),))
+
+    assert required([go, along, again], "left") is None
+    got = required([go, need(along, {1, 2, 3}), need(along, {2, 3, 6}), need(again, {5})], "left")
+    assert got == frozenset({2, 3})
+    assert required([go, need(along, {1})], "right") is None
+
+
+def test_a_goal_on_a_branch_not_required_does_not_follow() -> None:
+    _, cell, checker = cable_cell()
+    ik = arm_ik(cell.arms["left"])
+    poses = arc_near_the_base(cell.arms["left"].T_cell_base[:3, 3])
+    sols = ik.solve_all(poses[0])
+    free = followable(cell, checker, "left", sols, poses, home(cell))
+    one = next(ik.branch(s) for s, f in zip(sols, free, strict=True) if f)
+    only = followable(cell, checker, "left", sols, poses, home(cell), frozenset({one}))
+    assert only == [f and ik.branch(s) == one for s, f in zip(sols, free, strict=True)]
+    assert followable(cell, checker, "left", sols, None, home(cell), frozenset({one})) == [
+        ik.branch(s) == one for s in sols
+    ]

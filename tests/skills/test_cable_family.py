@@ -7,6 +7,7 @@ around its base (the tool meets the shoulder on some branches, tests/execute).""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -38,16 +39,26 @@ def test_an_arms_branches_narrow_along_its_paths_and_open_again_at_a_transit() -
     base = ctx.cell.arms["left"].T_cell_base[:3, 3]
     tipped, other_way = arc(base, 30.0), arc(base, -30.0)
     one = [Segment(0, "around", (ArmPath("left", "cartesian", tipped),))]
-    after = _narrowed(ctx, state, one, state)
-    assert after is not None
+    narrowed = _narrowed(ctx, state, one, state)
+    assert narrowed is not None
+    segments, after = narrowed
     kept = after.branches_of("left")
     assert kept and kept < ANY_BRANCH  # some branches meet the shoulder, some do not
     assert after.branches_of("right") == ANY_BRANCH  # it did not move
+    assert segments[0].branches == (("left", kept),)  # what the compiler holds the arm to
     # tipped the other way, the tool meets the shoulder on every branch left
     back = Segment(0, "back", (ArmPath("left", "cartesian", other_way),))
     alone = _narrowed(ctx, state, [back], state)
-    assert alone is not None and not kept & alone.branches_of("left")
+    assert alone is not None and not kept & alone[1].branches_of("left")
     assert _narrowed(ctx, state, [*one, back], state) is None
-    # a transit between them: the arm may reach the second arc's start on any branch
+    # the skill's own checks kept fewer: those
+    fewer = replace(state, branches={"left": frozenset(sorted(kept)[:1])})
+    narrowed = _narrowed(ctx, state, one, fewer)
+    assert narrowed is not None and narrowed[1].branches_of("left") == fewer.branches["left"]
+    # a transit between them: the arm may reach the second arc's start on any branch, and
+    # the segments before it and after it require each their own
     hop = Segment(0, "hop", (ArmPath("left", "transit", other_way[:1]),))
-    assert _narrowed(ctx, state, [*one, hop, back], state) is not None
+    narrowed = _narrowed(ctx, state, [*one, hop, back], state)
+    assert narrowed is not None
+    required = [s.branches_of("left") for s in narrowed[0]]
+    assert required[0] == kept and required[1] == required[2] == alone[1].branches_of("left")
