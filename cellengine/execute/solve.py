@@ -342,9 +342,8 @@ def _refuse_short(result: CartesianResult, what: str) -> None:
 def _own(stop: Stop) -> bool:
     """Whether an arm's own configuration stopped the path: a limit, a jump, its branch out
     of reach, two of its own links meeting."""
-    if stop.kind == "collision":
-        arms = {name.split("/", 1)[0] for name in stop.pair or ("", "?")}
-        return len(arms) == 1 and stop.arm is not None
+    if stop.kind == "collision":  # objects of an arm are named "arm/link"
+        return stop.pair is not None and len({n.split("/", 1)[0] for n in stop.pair}) == 1
     return stop.kind != "unreachable"
 
 
