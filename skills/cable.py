@@ -233,7 +233,7 @@ def _place_carries(
     holds the cable meanwhile (cg.PLACE_HOLDS) and the order of the carry (PLACE_ORDERS).
     Left out: a way along which the other hand's tool comes within the cell's clearance of
     the cell, or no pair of the arms' IK branches stays free and the clearance apart (at
-    poses along it, _pair_room). The published hold first (no regrasp: the shortest), then
+    poses along it, _pair_rooms). The published hold first (no regrasp: the shortest), then
     the most room between the arms. None left: an error that blames the arms (the other arm
     might place it)."""
     kept: list[tuple[int, float, int, tuple[float, float], str]] = []
@@ -245,7 +245,7 @@ def _place_carries(
         if ctx.probe.nearest(f_arm, [T_f for _, T_f in poses], GRASP, (), ctx.clearance):
             continue
         clear = True
-        room = _pair_room(ctx, c_arm, f_arm, poses, ctx.clearance)
+        room = max(_pair_rooms(ctx, c_arm, f_arm, poses, ctx.clearance).values())
         if room >= ctx.clearance:
             published = hold == cg.PLACE_HOLDS[0]
             kept.append((0, 0.0, k, hold, order) if published else (1, -room, k, hold, order))
@@ -1952,19 +1952,6 @@ def _check_both_free(
                 f"{where}: every inverse kinematics solution of {what} is in collision"
                 + (f" ({why})" if why else "")
             )
-
-
-def _pair_room(
-    ctx: PlanningContext,
-    a: str,
-    b: str,
-    poses: Sequence[tuple[Mat, Mat]],
-    keep: float,
-    a_on: frozenset[int] = ANY_BRANCH,
-) -> float:
-    """How far apart (m) the two arms can stay while their tools pass ``poses`` (T_cell_tcp
-    of ``a``, of ``b``): the most of :func:`_pair_rooms`."""
-    return float(max(_pair_rooms(ctx, a, b, poses, keep, a_on).values()))
 
 
 def _pair_rooms(
