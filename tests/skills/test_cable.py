@@ -906,7 +906,7 @@ def test_placing_keeps_the_published_hold_first_then_the_most_room() -> None:
         geo = C._place_geometry(ctx.world, state, step, "right", "left", "w", order, hold=hold)
         poses = [pair for _, paths in geo.carry for pair in C._samples(paths)]
         poses += C._samples(geo.insert)
-        rooms.append(C._pair_room(ctx, "right", "left", poses, ctx.clearance))
+        rooms.append(max(C._pair_rooms(ctx, "right", "left", poses, ctx.clearance).values()))
     assert len(rooms) > 0
     assert min(rooms) >= ctx.clearance
     assert rooms == sorted(rooms, reverse=True)
