@@ -8,9 +8,10 @@ what is rejected); with --remodel the REMODEL sample is added at 8 placements. E
 is compiled with each strategy by ``cellengine.pipeline.compile_plan`` and each compiled
 program checked by bench/board_check.py (independent of the skills). Printed and written to
 DIR/results.json: the success rate per strategy, a histogram of the failure reasons
-(messages normalised into classes) and the compile times. The folders of the boards that
-failed with some strategy stay in DIR/boards/; the others are deleted. Results do not depend
-on --jobs: every task is a pure function of its board and strategy.
+(messages normalised into classes) and the compile times; each outcome is also appended to
+DIR/outcomes.jsonl as it finishes (a run cut short keeps its figures). The folders of the
+boards that failed with some strategy stay in DIR/boards/; the others are deleted. Results
+do not depend on --jobs: every task is a pure function of its board and strategy.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ import subprocess
 import sys
 import time
 from collections import Counter
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -206,6 +207,23 @@ def _print(summary: dict[str, object], outcomes: list[Outcome]) -> None:
         print(f"  {n:4d}  {reason}   e.g. {example.board} {example.strategy}")
 
 
+def _run_all(tasks: list[tuple[str, str, str]], jobs: int, log: Path) -> list[Outcome]:
+    """Every task's outcome in the tasks' order; each is also appended to ``log`` (one JSON
+    line) as it finishes, so that a run cut short still leaves its figures."""
+    log.parent.mkdir(parents=True, exist_ok=True)
+    log.unlink(missing_ok=True)
+    done: dict[int, Outcome] = {}
+    with ProcessPoolExecutor(max_workers=jobs) as pool, log.open("a") as f:
+        futures = {pool.submit(run_one, *t): i for i, t in enumerate(tasks)}
+        for fut in as_completed(futures):
+            o = done[futures[fut]] = fut.result()
+            f.write(json.dumps(asdict(o)) + "\n")
+            f.flush()
+            print(f"[{len(done)}/{len(tasks)}] {o.board} {o.strategy}: "
+                  f"{'ok' if o.ok else o.reason} ({o.compile_s:.0f} s)", flush=True)  # fmt: skip
+    return [done[i] for i in range(len(tasks))]
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--boards", type=int, default=50)
@@ -220,8 +238,7 @@ def main(argv: list[str] | None = None) -> int:
     plans = make_boards(args.boards, args.seed, args.remodel, args.out)
     tasks = [(str(p), b, s) for b, p in plans.items() for s in strategies]
     t0 = time.perf_counter()
-    with ProcessPoolExecutor(max_workers=args.jobs) as pool:
-        outcomes = list(pool.map(run_one, *zip(*tasks, strict=True)))
+    outcomes = _run_all(tasks, args.jobs, args.out / "outcomes.jsonl")
     wall = time.perf_counter() - t0
     summary = summarise(outcomes, strategies)
     _print(summary, outcomes)
