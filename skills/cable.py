@@ -46,6 +46,7 @@ from cellengine.motion import interpolate as ip
 from cellengine.program import Anchor, Annotation, ArmPath, GripperEvent, Segment
 from cellengine.skill import CableRef, GuideRef, KeypointRef, Skill
 from cellengine.skills import cable_geometry as cg
+from cellengine.skills.best_first import best_first
 from cellengine.skills.cable_state import ANY_BRANCH, CableState
 from cellengine.world import World
 
@@ -325,9 +326,11 @@ class RouteCable(Skill):
         # differ only in it are checked once.
         checked: dict[GuideWay, GuidePlan | InputError] = {}
         screen = _Screen(tuple(cg.footprints(world, guide, cg.platform_up(world, guide))))
-        ways = list(guide_ways(world, state, guide, r_arm, self._clear_from(ctx, state, k)))
-        self._check_any_length(ctx, state, k, ways, r_arm, o_arm)
-        for way in ways:
+        heads, theta0 = _way_heads(world, state, guide, r_arm, self._clear_from(ctx, state, k))
+        ways = _ranked(heads, theta0)
+        first = next(ways)  # a head has ways
+        self._check_any_length(ctx, state, k, heads, first, r_arm, o_arm)
+        for way in itertools.chain((first,), ways):
             key = replace(way, stand_back=cg.STAND_BACK)
             if key not in checked:
                 checked[key] = self._checked(ctx, state, guide, way, r_arm, o_arm, screen)
@@ -353,7 +356,8 @@ class RouteCable(Skill):
         ctx: PlanningContext,
         state: CableState,
         k: int,
-        ways: Sequence[GuideWay],
+        heads: Sequence[_Head],
+        first: GuideWay,
         r_arm: str,
         o_arm: str,
     ) -> None:
@@ -363,12 +367,12 @@ class RouteCable(Skill):
         world, guide = ctx.world, self.guides[k]
         last = np.asarray(state.route[-1], dtype=float)
         need = math.inf
-        for gap, after in {(w.gap, w.gap_after) for w in ways}:
+        for gap, after in {(h.gap, a) for h in heads for a in h.afters}:
             b = _basics(world, state, guide, r_arm, gap, after)
             need = min(need, float(np.linalg.norm(b.ap - last)) + b.r_cable + b.pull)
         hand = _hand(world, r_arm)
-        if ways and state.route_length() + need + hand.end_margin > world.cable(self.cable).length:
-            gp = _guide_plan(world, state, self.cable, guide, r_arm, o_arm, ways[0])
+        if state.route_length() + need + hand.end_margin > world.cable(self.cable).length:
+            gp = _guide_plan(world, state, self.cable, guide, r_arm, o_arm, first)
             try:
                 _check_reach(ctx, r_arm, gp.reach_routing(), gp.where)
             except InputError:
@@ -1349,6 +1353,19 @@ def guide_ways(
     when given, is the least angle at which the slide keeps its hand clear of the guide (None:
     none does); that angle is offered too (and LEAST_MORE steeper), the steps missing it by
     up to THETA_STEP. An error naming what blocks when no angle clears the guide."""
+    heads, theta0 = _way_heads(world, state, guide, r_arm, clear_from)
+    yield from _ranked(heads, theta0)
+
+
+def _way_heads(
+    world: World,
+    state: CableState,
+    guide: str,
+    r_arm: str,
+    clear_from: Callable[[_Basics, float, bool], float | None] | None,
+) -> tuple[list[_Head], float]:
+    """guide_ways' heads in their order, and the published sliding angle; the error when no
+    angle clears the guide."""
     b0 = _basics(world, state, guide, r_arm)
     prints = cg.footprints(world, guide, b0.up)
     theta0 = b0.theta_min + cg.THETA_MARGIN
@@ -1361,7 +1378,7 @@ def guide_ways(
             f"deg margin, but beyond {math.degrees(cg.THETA_MAX):.0f} deg the slide would go "
             "back along the cable"
         )
-    ranked: list[tuple[float, int, GuideWay]] = []
+    heads: list[_Head] = []
     first_blocked: list[str] = []
     centred_after = _centred_gap(world, guide, b0, after=True)  # the same for every A
     for gap in (*cg.APPROACH_GAPS, *_centred_gap(world, guide, b0, after=False)):
@@ -1386,27 +1403,10 @@ def guide_ways(
             if not first_blocked:
                 first_blocked = blocked
             for rank, side in enumerate(clear):
-                if only is not None and side != only[0]:
-                    continue
-                firsts = (False, True) if only is None else (only[1],)
-                for lean, pivot, back, after, first, base, share in itertools.product(
-                    cg.LEANS,
-                    cg.PIVOT_LEANS,
-                    cg.STAND_BACKS,
-                    afters,
-                    firsts,
-                    (1.0, 0.0, -1.0),
-                    cg.SLIDE_TURNS,
-                ):
-                    cost = abs(theta - theta0) + 0.05 * rank + abs(back - cg.STAND_BACK)
-                    cost += 0.5 * (abs(lean - cg.LEAN) + abs(pivot - cg.PIVOT_LEAN))
-                    cost += (0.0 if after is None else abs(after - gap)) + 0.01 * first
-                    # ending farther past swings farther: only when nearer does not work
-                    cost += 0.5 if after is not None and after > gap else 0.0
-                    cost += 0.3 * (1.0 - base) + 0.2 * (1.0 - share)
-                    way = GuideWay(theta, side, lean, pivot, back, gap, after, first, base, share)
-                    ranked.append((cost, len(ranked), way))
-    if not ranked:
+                if only is None or side == only[0]:
+                    firsts = (False, True) if only is None else (only[1],)
+                    heads.append(_Head(theta, side, rank, gap, afters, firsts))
+    if not heads:
         raise _error(
             f"{b0.where}: no sliding angle clears the guide: sliding at theta = "
             f"{math.degrees(theta0):.1f} deg is blocked on the "
@@ -1416,7 +1416,70 @@ def guide_ways(
             "the guide: move the guides that block it farther from the slide, or use "
             "narrower fingers"
         )
-    yield from (way for _, _, way in sorted(ranked, key=lambda r: (r[0], r[1])))
+    return heads, theta0
+
+
+def _ranked(heads: Sequence[_Head], theta0: float) -> Iterator[GuideWay]:
+    """Every way of ``heads`` (with the tips, stand-back, insert end, turning first,
+    tipping towards the base and share of the turn in the slide), ranked by how much longer
+    the motion gets, lazily."""
+    dims = [
+        (cg.LEANS, cg.PIVOT_LEANS, cg.STAND_BACKS, h.afters, h.firsts, BASES, cg.SLIDE_TURNS)
+        for h in heads
+    ]
+
+    # costs to COST_DIGITS: ways whose costs differ by rounding alone keep the order listed
+    def cost(i: int, c: tuple[Any, ...]) -> float:
+        return round(_way_cost(heads[i], theta0, *c), COST_DIGITS)
+
+    def part(i: int, dim: int, v: Any) -> float:  # a dim's share in the cost, to order it
+        if dim == 3:
+            d = 0.0 if v is None else abs(v - heads[i].gap) + 0.5 * (v > heads[i].gap)
+        else:
+            d = abs(float(v) - (cg.LEAN, cg.PIVOT_LEAN, cg.STAND_BACK, 0, 0.0, 1.0, 1.0)[dim])
+        return round(d, COST_DIGITS)
+
+    for i, (lean, pivot, back, after, first, base, share) in best_first(dims, cost, part):
+        h = heads[i]
+        yield GuideWay(h.theta, h.side, lean, pivot, back, h.gap, after, first, base, share)
+
+
+BASES = (1.0, 0.0, -1.0)  # GuideWay.towards_base's values, best first
+COST_DIGITS = 9  # ways' costs (radians and metres, summed) are compared to 1e-9
+
+
+@dataclass(frozen=True)
+class _Head:
+    """A sliding angle, side and stop before the guide, and the insert ends and turning
+    first or not that go with them."""
+
+    theta: float
+    side: float
+    rank: int  # 0: the side farther from the other elements
+    gap: float
+    afters: tuple[float | None, ...]
+    firsts: tuple[bool, ...]
+
+
+def _way_cost(
+    h: _Head,
+    theta0: float,
+    lean: float,
+    pivot: float,
+    back: float,
+    after: float | None,
+    first: bool,
+    base: float,
+    share: float,
+) -> float:
+    """How much longer the motion of a way gets than the published one's (a steeper slide
+    swings farther), roughly: the ranking of ways."""
+    cost = abs(h.theta - theta0) + 0.05 * h.rank + abs(back - cg.STAND_BACK)
+    cost += 0.5 * (abs(lean - cg.LEAN) + abs(pivot - cg.PIVOT_LEAN))
+    cost += (0.0 if after is None else abs(after - h.gap)) + 0.01 * first
+    # ending farther past swings farther: only when nearer does not work
+    cost += 0.5 if after is not None and after > h.gap else 0.0
+    return cost + 0.3 * (1.0 - base) + 0.2 * (1.0 - share)
 
 
 def _centred_gap(world: World, guide: str, b: _Basics, after: bool) -> tuple[float, ...]:
