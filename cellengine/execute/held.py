@@ -107,7 +107,7 @@ def _mat(rows: tuple[tuple[float, ...], ...]) -> Mat:
 
 class Holding:
     """What the grippers hold and where containers stand (:class:`Held`), and a checker whose
-    scene has them (``checker``: a new one whenever that changes; the base scene is never
+    scene has them (``checker``: another whenever that changes; the base scene is never
     changed). Containers start where objects.yaml stands them (the base scene has them
     there); one grasped rides on the gripper, one let go stands where the hand put it."""
 
@@ -121,9 +121,10 @@ class Holding:
             {n: _rows(world.pose(c.at)) for n, c in containers.items() if c.at is not None},
         )
         self.checker = CollisionChecker(scene)
-        # scenes per held state: a grasp-release cycle comes back to the same states, and
-        # assembling a scene costs far more than a checker on it
+        # scenes and their checkers per held state: a grasp-release cycle comes back to the
+        # same states (checkers are never changed after they are built)
         self.scenes: dict[tuple[object, ...], CollisionScene] = {}
+        self.checkers: dict[tuple[object, ...], CollisionChecker] = {}
 
     @property
     def by_arm(self) -> Mapping[str, str]:
@@ -173,8 +174,10 @@ class Holding:
         key = state.key()
         if key not in self.scenes:
             self.scenes[key] = self._scene(state)
+        if key not in self.checkers:
+            self.checkers[key] = CollisionChecker(self.scenes[key])
         self.state = state
-        self.checker = CollisionChecker(self.scenes[key])
+        self.checker = self.checkers[key]
 
     def _scene(self, state: Held) -> CollisionScene:
         base = with_jaw(self.base, state.jaw) if state.jaw else self.base

@@ -84,26 +84,36 @@ class ToolProbe:
         within: float,
     ) -> Nearest | None:
         tool = self._tool(arm, mode)
+        statics = [
+            s for s in self.statics if s.name not in skip and s.name.split("#")[0] not in skip
+        ]
+        if not statics or not tool or len(poses) == 0:
+            return None
+        # every (pose, static, tool solid)'s bound from the bounding spheres, then coal on the
+        # pairs in the order of their bounds, until no bound is below the nearest found
+        P = np.asarray(poses, dtype=float).reshape(-1, 4, 4)
+        c_tcp = np.array([t.T[:3, :3] @ t.centre + t.T[:3, 3] for t in tool])
+        c_t = np.einsum("nij,mj->nmi", P[:, :3, :3], c_tcp) + P[:, None, :3, 3]
+        c_s = np.array([s.T[:3, :3] @ s.centre + s.T[:3, 3] for s in statics])
+        r = np.array([s.radius for s in statics])[None, :, None] + [t.radius for t in tool]
+        bound = np.linalg.norm(c_t[:, None, :, :] - c_s[None, :, None, :], axis=-1) - r
+        near = np.argwhere(bound < within)  # (pose, static, solid), in the loops' order
         best: Nearest | None = None
-        limit = within
+        limit, first = within, (len(P), 0, 0)
         request, result = coal.DistanceRequest(), coal.DistanceResult()
-        for T_cell_tcp in poses:
-            for s in self.statics:
-                if s.name in skip or s.name.split("#")[0] in skip:
-                    continue
-                c_s = s.T[:3, :3] @ s.centre + s.T[:3, 3]
-                for t in tool:
-                    T = T_cell_tcp @ t.T
-                    c_t = T[:3, :3] @ t.centre + T[:3, 3]
-                    if float(np.linalg.norm(c_t - c_s)) - s.radius - t.radius >= limit:
-                        continue
-                    result.clear()
-                    d = coal.distance(
-                        t.shape, _transform(T), s.shape, _transform(s.T), request, result
-                    )
-                    if d < limit:
-                        limit = float(d)
-                        best = Nearest(float(d), t.name, s.name)
+        for i, k, m in near[np.argsort(bound[tuple(near.T)], kind="stable")].tolist():
+            if bound[i, k, m] > limit:
+                break
+            s, t = statics[k], tool[m]
+            result.clear()
+            T = P[i] @ t.T
+            d = float(
+                coal.distance(t.shape, _transform(T), s.shape, _transform(s.T), request, result)
+            )
+            # ties: the first in pose, static, solid order, as looping over them would give
+            if d < limit or (d == limit and best is not None and (i, k, m) < first):
+                limit, first = d, (i, k, m)
+                best = Nearest(d, t.name, s.name)
         return best
 
     def under(self, level: float, up: Vec) -> frozenset[str]:

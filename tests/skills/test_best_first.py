@@ -26,7 +26,7 @@ def test_best_first_lists_the_product_as_sorting_it_by_cost_then_position_would(
                 strict=True,
             )
         )
-        got = list(best_first(groups, lambda i, c: base[i] + sum(c), lambda i, j, v: float(v)))
+        got = list(best_first(groups, lambda i, c, b=base: b[i] + sum(c), lambda i, j, v: float(v)))
         assert got == [(i, c) for _, i, _, c in expected], seed
 
 
