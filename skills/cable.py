@@ -322,8 +322,8 @@ class RouteCable(Skill):
         # clearance, else the first way's
         closest: tuple[float, InputError] | None = None
         found = False
-        # Where the other hand stands back to is not part of what is checked here: ways that
-        # differ only in it are checked once.
+        # Where the other hand stands back to matters only to the arms' clearance while the
+        # routing hand comes (_coming): ways that differ only in it are otherwise checked once.
         checked: dict[GuideWay, GuidePlan | InputError] = {}
         screen = _Screen(tuple(cg.footprints(world, guide, cg.platform_up(world, guide))))
         heads, theta0 = _way_heads(world, state, guide, r_arm, self._clear_from(ctx, state, k))
@@ -335,13 +335,16 @@ class RouteCable(Skill):
             if key not in checked:
                 checked[key] = self._checked(ctx, state, guide, way, r_arm, o_arm, screen)
             gp = checked[key]
+            if not isinstance(gp, InputError):
+                gp = replace(gp, stand_back=way.stand_back)
+                gp = _coming(ctx, state, gp, way, (r_arm, o_arm), screen, (way.stand_back,))
             if isinstance(gp, InputError):
                 score = gp.distance if isinstance(gp, _Blocked) else -math.inf
                 if closest is None or score > closest[0]:
                     closest = (score, gp)
                 continue
             found = True
-            yield replace(gp, stand_back=way.stand_back)
+            yield gp
         if not found:
             # too little room between two guides explains it better than any way's distance
             where = f"steps[{state.step}] RouteCable {guide}"
@@ -426,12 +429,18 @@ class RouteCable(Skill):
         else why not. Each check is made once for the ways that share what it depends on
         (``screen``): the routing hand's approach, what the routing hand does, the other
         hand's descent."""
-        world = ctx.world
-        r_key = replace(way, pivot_lean=cg.PIVOT_LEAN)
+        world, arms = ctx.world, (r_arm, o_arm)
+        r_key = replace(way, pivot_lean=cg.PIVOT_LEAN, stand_back=cg.STAND_BACK)
         p_key = (way.gap, way.pivot_lean, way.towards_base)
         a_key = (way.gap, way.lean, way.towards_base)
         approaches, routed, pivots = screen.approaches, screen.routed, screen.pivots
-        for seen in (approaches.get(a_key), routed.get(r_key), pivots.get(p_key)):
+        backs = _stand_backs(state, o_arm)
+        for seen in (
+            approaches.get(a_key),
+            routed.get(r_key),
+            pivots.get(p_key),
+            _coming_blocked(screen, way, backs),
+        ):
             if isinstance(seen, InputError):
                 return seen
         try:
@@ -445,12 +454,11 @@ class RouteCable(Skill):
             after = (cg.element_of(self.guides[k + 1]),) if k + 1 < len(self.guides) else ()
             gp = replace(gp, beside=(*gp.beside, *after, *_under(ctx, gp.slot, gp.up)))
             if a_key not in screen.hows:
-                arms = (r_arm, o_arm)
                 how = _approach_how(ctx, state, self.cable, way, gp, arms, screen.prints)
                 screen.hows[a_key] = how
             if screen.hows[a_key] != way.approach:
                 way = replace(way, approach=screen.hows[a_key])
-                r_key = replace(way, pivot_lean=cg.PIVOT_LEAN)
+                r_key = replace(way, pivot_lean=cg.PIVOT_LEAN, stand_back=cg.STAND_BACK)
                 built = _guide_plan(
                     world, state, self.cable, guide, r_arm, o_arm, way, screen.prints
                 )
@@ -465,7 +473,10 @@ class RouteCable(Skill):
                 return found
             if pivoting is not None:
                 return pivoting
-            gp = replace(gp, branches=found)
+            coming = _coming(ctx, state, replace(gp, branches=found), way, arms, screen, backs)
+            if isinstance(coming, InputError):
+                return coming
+            gp = coming
             try:
                 _check_reach(ctx, o_arm, gp.reach_other(), gp.where)
             except InputError as e:
@@ -488,6 +499,9 @@ class _Screen:
     routed: dict[GuideWay, InputError | frozenset[int]] = field(default_factory=dict)
     hows: dict[tuple[float, float, float], str] = field(default_factory=dict)  # APPROACHES
     pivots: dict[tuple[float, float, float], InputError | None] = field(default_factory=dict)
+    # the room between the arms per routing branch while the routing hand comes and slides
+    # (and why not, when no branch has it)
+    coming: dict[GuideWay, tuple[dict[int, float], _Blocked | None]] = field(default_factory=dict)
 
 
 def _approach_blocked(ctx: PlanningContext, gp: GuidePlan, r_arm: str) -> InputError | None:
@@ -2024,31 +2038,34 @@ def _pair_rooms(
     poses: Sequence[tuple[Mat, Mat]],
     keep: float,
     a_on: frozenset[int] = ANY_BRANCH,
+    b_on: frozenset[int] = ANY_BRANCH,
 ) -> dict[int, float]:
     """For each IK branch of ``a`` in ``a_on``, how far apart (m) the two arms can stay while
-    their tools pass ``poses`` (T_cell_tcp of ``a``, of ``b``): the most, over ``b``'s
-    branches free of collisions with it at every pose and keeping ``keep`` between the arms,
-    of their least distance there; -inf when none does. {-1: inf} for an arm solved
-    numerically (it has no branches). A continuous motion keeps its branches."""
-    alive: NDArray[np.bool_] | None = None
-    least = np.full(64, math.inf)
-    allowed = np.repeat(np.isin(np.arange(8), sorted(a_on)), 8)  # pair i: a's i // 8
+    their tools pass ``poses`` (T_cell_tcp of ``a``, of ``b``), over ``b``'s branches (in
+    ``b_on``): the most, over the pairs of branches that keep ``keep`` between the arms at
+    every pose, of their least distance there (the arms against each other only: the
+    tools' contacts with the cell are the skills' other checks). Below ``keep`` when no
+    pair does: the most, over the pairs, of how near they came when they first came nearer
+    than ``keep`` (each pair comes within it; measuring on would cost far more); -inf when
+    every pair meets. {-1: inf} for an arm solved numerically (it has no branches). A
+    continuous motion keeps its branches."""
+    on_a, on_b = np.isin(np.arange(8), sorted(a_on)), np.isin(np.arange(8), sorted(b_on))
+    alive = np.outer(on_a, on_b).reshape(64)  # pair i: a's branch i // 8, b's i % 8
+    least = np.where(alive, math.inf, -math.inf)
     for T_a, T_b in poses:
         q_a, q_b = ctx.iks[a].by_branch(T_a), ctx.iks[b].by_branch(T_b)
         if q_a is None or q_b is None:
             return {-1: math.inf}  # no branches: the compiler finds out
         Q = _solution_pairs(ctx, a, q_a, b, q_b)
-        ok: NDArray[np.bool_] = np.asarray(~np.isnan(Q).any(axis=1))
-        ok &= alive if alive is not None else allowed
-        ok[ok] = ~ctx.checker.check_batch(Q[ok])
+        ok: NDArray[np.bool_] = alive & ~np.isnan(Q).any(axis=1)
+        least[alive & ~ok] = -math.inf  # no solution there
         for i in np.flatnonzero(ok):
-            least[i] = min(least[i], ctx.checker.distance(Q[i], between=(a, b))[0])
+            d = ctx.checker.distance(Q[i], between=(a, b))[0]
+            least[i] = min(least[i], d) if d > 0.0 else -math.inf
         alive = ok & (least >= keep)
         if not alive.any():
             break
-    if alive is None:
-        alive = np.zeros(64, dtype=bool)
-    room = np.where(alive, least, -math.inf).reshape(8, 8).max(axis=1)
+    room = least.reshape(8, 8).max(axis=1)
     return {k: float(room[k]) for k in sorted(a_on)}
 
 
@@ -2100,6 +2117,95 @@ def _pair_blocked(
     return f"the arms {_mm(nearest[0])} mm apart at best ({', '.join(nearest[1])})"
 
 
+def _coming_key(way: GuideWay, stand_back: float) -> GuideWay:
+    """What _coming measures depends on: the routing hand's motion (its approach follows from
+    the way) and where the other hand stands back to."""
+    return replace(
+        way, pivot_lean=cg.PIVOT_LEAN, gap_after=None, stand_back=stand_back, approach="direct"
+    )
+
+
+def _stand_backs(state: CableState, o_arm: str) -> tuple[float, ...]:
+    """Where the other hand may stand back to: only when it holds the cable at a guide."""
+    return cg.STAND_BACKS if o_arm in state.held else (cg.STAND_BACK,)
+
+
+def _coming(
+    ctx: PlanningContext,
+    state: CableState,
+    gp: GuidePlan,
+    way: GuideWay,
+    arms: tuple[str, str],
+    screen: _Screen,
+    backs: Sequence[float],
+) -> GuidePlan | InputError:
+    """gp if, while the other hand stands back from the previous guide (when it holds the
+    cable there, to one of ``backs``) and then the routing hand comes to the guide and slides
+    (Cartesian paths: each arm keeps its IK branch, the other arm one of those it may be on),
+    some pair of branches keeps the cell's clearance between the arms at poses along the way,
+    with the routing arm's branches narrowed to those in such a pair; else why not, by how
+    much it falls short. Measured once for the ways that share those motions."""
+    r_arm, o_arm = arms
+    kept: set[int] = set()
+    best = -math.inf
+    for back in backs:
+        key = _coming_key(way, back)
+        if key not in screen.coming:
+            rooms = _coming_rooms(ctx, state, replace(gp, stand_back=back), r_arm, o_arm)
+            room = max(rooms.values())
+            why = _coming_error(ctx, state, gp, arms, room) if room < ctx.clearance else None
+            screen.coming[key] = (rooms, why)
+        rooms, _ = screen.coming[key]
+        if -1 in rooms:
+            return gp  # no branches: the compiler finds out
+        kept |= {k for k in gp.branches if rooms[k] >= ctx.clearance}
+        best = max(best, *(rooms[k] for k in gp.branches))
+    if kept:
+        return replace(gp, branches=frozenset(kept))
+    return _coming_error(ctx, state, gp, arms, best)
+
+
+def _coming_blocked(screen: _Screen, way: GuideWay, backs: Sequence[float]) -> InputError | None:
+    """_coming's error, known before the way is built, when no branch has the room whatever
+    the stand-back."""
+    known = [screen.coming.get(_coming_key(way, back)) for back in backs]
+    whys = [k[1] for k in known if k is not None and k[1] is not None]
+    return max(whys, key=lambda e: e.distance) if len(whys) == len(backs) else None
+
+
+def _coming_error(
+    ctx: PlanningContext, state: CableState, gp: GuidePlan, arms: tuple[str, str], room: float
+) -> _Blocked:
+    r_arm, o_arm = arms
+    at_best = "collide" if room == -math.inf else f"come within {_mm(room)} mm of each other"
+    return _Blocked.of(
+        room - ctx.clearance,
+        f"{gp.where}: however the two arms are posed, they {at_best} while the routing arm "
+        f"({r_arm}) comes to the guide and slides (at theta = {math.degrees(gp.theta):.1f} "
+        f"deg, stopping {_mm(gp.a)} mm before it), the other arm "
+        f"{'standing back from the previous guide' if o_arm in state.held else 'still'}; "
+        f"the cell's clearance is {_mm(ctx.clearance)} mm",
+    )
+
+
+def _coming_rooms(
+    ctx: PlanningContext, state: CableState, gp: GuidePlan, r_arm: str, o_arm: str
+) -> dict[int, float]:
+    """_pair_rooms of every routing branch over _coming's motions (every STRIDE-th pose),
+    keeping the cell's clearance."""
+    from cellengine.execute.following import STRIDE  # the motion stack: planning only
+
+    T_r, T_o = state.tcp[r_arm], state.tcp[o_arm]
+    poses: list[tuple[Mat, Mat]] = []
+    if o_arm in state.held:
+        back = _stand_back(state, o_arm, gp.up, gp.stand_back)
+        poses += [(T_r, T) for T in (*back[::STRIDE], back[-1])]
+        T_o = back[-1]
+    coming = np.concatenate([p for p in (gp.reorient, gp.approach, gp.slide) if p is not None])
+    poses += [(T, T_o) for T in (*coming[::STRIDE], coming[-1])]
+    return _pair_rooms(ctx, r_arm, o_arm, poses, ctx.clearance, b_on=state.branches_of(o_arm))
+
+
 def _check_pivot_free(
     ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str
 ) -> frozenset[int]:
@@ -2148,10 +2254,10 @@ def _check_pair_along(
     held = np.concatenate((gp.pull_path, gp.lift, gp.swing, gp.insert))
     poses = [(gp.slide[-1], T) for T in (*down[::STRIDE], down[-1])]
     poses += [(T, gp.pivot) for T in (*held[::STRIDE], held[-1])]
-    rooms = _pair_rooms(ctx, r_arm, o_arm, poses, 0.0, gp.branches)
+    rooms = _pair_rooms(ctx, r_arm, o_arm, poses, ctx.clearance, gp.branches)
     room = max(rooms.values())
     if room < ctx.clearance:
-        at_best = "collide" if room == -math.inf else f"pass {_mm(room)} mm apart at best"
+        at_best = "collide" if room == -math.inf else f"come within {_mm(room)} mm of each other"
         raise _Blocked.of(
             room - ctx.clearance,
             f"{gp.where}: however the two arms are posed, they {at_best} while the other arm "
