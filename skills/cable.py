@@ -439,6 +439,7 @@ class RouteCable(Skill):
             approaches.get(a_key),
             routed.get(r_key),
             pivots.get(p_key),
+            screen.came.get(_coming_key(way, cg.STAND_BACK)),
             _coming_blocked(screen, way, backs),
         ):
             if isinstance(seen, InputError):
@@ -464,8 +465,14 @@ class RouteCable(Skill):
                 )
                 gp = replace(built, beside=gp.beside)
             if r_key not in routed:
-                may = state.branches_of(r_arm)
-                routed[r_key] = _routing_hand_blocked(ctx, world, self.cable, gp, r_arm, may)
+                c_key, may = _coming_key(way, cg.STAND_BACK), state.branches_of(r_arm)
+
+                def came() -> InputError | frozenset[int]:
+                    if c_key not in screen.came:
+                        screen.came[c_key] = _coming_hand_blocked(ctx, gp, r_arm, may)
+                    return screen.came[c_key]
+
+                routed[r_key] = _routing_hand_blocked(ctx, world, self.cable, gp, r_arm, came)
             if p_key not in pivots:
                 pivots[p_key] = _pivot_blocked(ctx, state, guide, r_arm, o_arm, way)
             found, pivoting = routed[r_key], pivots[p_key]
@@ -499,6 +506,8 @@ class _Screen:
     routed: dict[GuideWay, InputError | frozenset[int]] = field(default_factory=dict)
     hows: dict[tuple[float, float, float], str] = field(default_factory=dict)  # APPROACHES
     pivots: dict[tuple[float, float, float], InputError | None] = field(default_factory=dict)
+    # why the routing hand cannot come to the guide and slide, or its branches that can
+    came: dict[GuideWay, InputError | frozenset[int]] = field(default_factory=dict)
     # the room between the arms per routing branch while the routing hand comes and slides
     # (and why not, when no branch has it)
     coming: dict[GuideWay, tuple[dict[int, float], _Blocked | None]] = field(default_factory=dict)
@@ -541,10 +550,16 @@ def _approach_how(
 
 
 def _routing_hand_blocked(
-    ctx: PlanningContext, world: World, cable: str, gp: GuidePlan, r_arm: str, may: frozenset[int]
+    ctx: PlanningContext,
+    world: World,
+    cable: str,
+    gp: GuidePlan,
+    r_arm: str,
+    came: Callable[[], InputError | frozenset[int]],
 ) -> InputError | frozenset[int]:
     """Why the routing hand alone cannot do ``gp`` (the cable's length, its reach, its
-    clearances, its own links), or the branches of ``may`` on which it can."""
+    clearances, its own links), or the branches on which it can; ``came``: how it comes to
+    the guide and slides (_coming_hand_blocked, shared by many ways)."""
     try:
         try:
             _check_reach(ctx, r_arm, gp.reach_routing()[1:], gp.where)
@@ -552,8 +567,23 @@ def _routing_hand_blocked(
             e.blames = "arms"  # the other arm might reach: PickCable decides which
             raise
         _check_length(world, cable, _hand(world, r_arm), gp)
-        _check_clear(ctx, gp, r_arm)
-        return _check_self(ctx, gp, r_arm, may)
+        alive = came()
+        if isinstance(alive, InputError):
+            return alive
+        _check_clear(ctx, gp, r_arm, coming=False)
+        return _check_self(ctx, gp, r_arm, alive, coming=False)
+    except InputError as e:
+        return e
+
+
+def _coming_hand_blocked(
+    ctx: PlanningContext, gp: GuidePlan, r_arm: str, may: frozenset[int]
+) -> InputError | frozenset[int]:
+    """Why the routing hand cannot come to the guide and slide (its clearances, its own
+    links), or the branches of ``may`` on which it can."""
+    try:
+        _check_clear(ctx, gp, r_arm, coming=True)
+        return _check_self(ctx, gp, r_arm, may, coming=True)
     except InputError as e:
         return e
 
@@ -2119,10 +2149,9 @@ def _pair_blocked(
 
 def _coming_key(way: GuideWay, stand_back: float) -> GuideWay:
     """What _coming measures depends on: the routing hand's motion (its approach follows from
-    the way) and where the other hand stands back to."""
-    return replace(
-        way, pivot_lean=cg.PIVOT_LEAN, gap_after=None, stand_back=stand_back, approach="direct"
-    )
+    the way; the insert's end sets R_cable, how far it slides) and where the other hand
+    stands back to."""
+    return replace(way, pivot_lean=cg.PIVOT_LEAN, stand_back=stand_back, approach="direct")
 
 
 def _stand_backs(state: CableState, o_arm: str) -> tuple[float, ...]:
@@ -2268,9 +2297,10 @@ def _check_pair_along(
     return frozenset(k for k, r in rooms.items() if k >= 0 and r >= ctx.clearance) or gp.branches
 
 
-def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str) -> None:
+def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, coming: bool) -> None:
     """The routing hand's tool keeps the cell's clearance from everything but the guide it
-    works at, and cg.CLEARANCE from that guide, along the way's Cartesian paths (every other
+    works at, and cg.CLEARANCE from that guide, along the way's Cartesian paths up to the
+    slide's end (``coming``) or from there on (every other
     pose: the compiler checks them all, with the arms; leaving the guide before, every pose
     and the checker's clearance from the guides it works between, as the compiler holds
     it), so a way that cannot is not handed to the compiler. (The hand turning with the
@@ -2292,7 +2322,8 @@ def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str) -> None:
         (r_arm, "swinging over the slot", GRASP, gp.swing, work),
         (r_arm, "inserting", GRASP, gp.insert, work),
     )  # the other hand's descent to the pivot: _pivot_blocked, before the way is built
-    for arm, what, mode, poses, (own_limit, stride) in paths:
+    n = len(turn) + 2
+    for arm, what, mode, poses, (own_limit, stride) in paths[:n] if coming else paths[n:]:
         found = _env_near(ctx, arm, poses, mode, gp.beside, own_limit, stride)
         if found is not None:
             near, limit, own = found
@@ -2326,16 +2357,21 @@ def _check_hands(ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str) ->
 
 
 def _check_self(
-    ctx: PlanningContext, gp: GuidePlan, r_arm: str, may: frozenset[int]
+    ctx: PlanningContext, gp: GuidePlan, r_arm: str, may: frozenset[int], coming: bool
 ) -> frozenset[int]:
     """The IK branches of ``may`` (those the routing arm may be on: it does not change branch
     from its last transit on) on which it follows the way's paths, from the approach to the
-    insert, without its tool or links coming within the checker's clearance of its own
-    links: near its base, the tool turned to a guide can meet the shoulder on every branch.
-    None does: an error that blames the arms (the other arm might route this guide)."""
+    slide's end (``coming``), or from there to the insert, without its tool or links coming
+    within the checker's clearance of its own links: near its base, the tool turned to a
+    guide can meet the shoulder on every branch. None does: an error that blames the arms
+    (the other arm might route this guide)."""
     from cellengine.execute.following import surviving  # the motion stack: planning only
 
-    paths = (gp.approach, gp.slide, gp.pull_path, gp.lift, gp.swing, gp.insert)
+    paths = (
+        (gp.approach, gp.slide)
+        if coming
+        else (gp.slide[-1:], gp.pull_path, gp.lift, gp.swing, gp.insert)
+    )
     poses = np.concatenate(paths)
     alive, nearest = surviving(ctx.cell, ctx.checker, r_arm, poses, ctx.home, may)
     if not alive:

@@ -9,7 +9,7 @@ from collections.abc import Iterator, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
-from cellengine.errors import at_step
+from cellengine.errors import InputError, at_step
 from cellengine.family import Candidate
 from cellengine.program import Segment
 from cellengine.skill import Skill
@@ -31,11 +31,18 @@ class CableFamily:
     skills: tuple[type[Skill], ...] = (PickCable, PlaceConnector, RouteCable)
 
     def plan(self, ctx: PlanningContext, steps: Sequence[Skill]) -> Iterator[Candidate]:
-        return _from(ctx, steps, 0, CableState.at_home(ctx))
+        return _from(ctx, steps, 0, CableState.at_home(ctx), {})
+
+
+# A guide no way of which can be routed from a state, by (step, guide, CableState.key()):
+# the search often comes back to the same state by another way of an earlier step (a
+# different grasp that leaves the arms where they were), and finding that out again means
+# screening every way of the guide.
+Failed = dict[tuple[int, int, tuple[object, ...]], InputError | None]
 
 
 def _from(
-    ctx: PlanningContext, steps: Sequence[Skill], i: int, state: CableState
+    ctx: PlanningContext, steps: Sequence[Skill], i: int, state: CableState, failed: Failed
 ) -> Iterator[Candidate]:
     """The candidates for ``steps[i]`` from ``state`` (for a RouteCable, its first guide's);
     after the last step, the release."""
@@ -45,7 +52,7 @@ def _from(
         return
     step = steps[i]
     if isinstance(step, RouteCable):
-        yield from _guide(ctx, steps, i, replace(state, step=i), 0)
+        yield from _guide(ctx, steps, i, replace(state, step=i), 0, failed)
         return
     # a PickCable decides which arm holds the connector end, a PlaceConnector which arm routes
     # (the other one, or the connector arm after a hand-over): a guide out of the routing
@@ -60,12 +67,17 @@ def _from(
             if isinstance(step, PickCable)
             else {"arms": f"{after.routing_arm} routes"}
         )
-        then = functools.partial(_from, ctx, steps, i + 1, after)
+        then = functools.partial(_from, ctx, steps, i + 1, after, failed)
         yield Candidate(tuple(segments), then=then, decides=decides)
 
 
 def _guide(
-    ctx: PlanningContext, steps: Sequence[Skill], i: int, state: CableState, k: int
+    ctx: PlanningContext,
+    steps: Sequence[Skill],
+    i: int,
+    state: CableState,
+    k: int,
+    failed: Failed,
 ) -> Iterator[Candidate]:
     """RouteCable ``steps[i]``: the candidates for its guide ``k``, each a choice of its own
     (a later guide that cannot be routed from where a way left the hands sends the compiler
@@ -73,21 +85,34 @@ def _guide(
     step = steps[i]
     assert isinstance(step, RouteCable)
     last = k + 1 == len(step.guides)
+    key = (i, k, state.key())
     with at_step(i):
+        if key in failed:  # none of its ways from this state: as found the first time
+            if (error := failed[key]) is not None:
+                raise error
+            return
         ways = step.ways(ctx, state, k)
+        offered = False
         while True:
             try:
                 segments, after = next(ways)
             except StopIteration:
+                if not offered:
+                    failed[key] = None
                 return
+            except InputError as e:
+                if not offered:
+                    failed[key] = e
+                raise
             narrowed = _narrowed(ctx, state, segments, after)
             if narrowed is None:
                 continue
             segments, after = narrowed
+            offered = True
             then = (
-                functools.partial(_from, ctx, steps, i + 1, after)
+                functools.partial(_from, ctx, steps, i + 1, after, failed)
                 if last
-                else functools.partial(_guide, ctx, steps, i, after, k + 1)
+                else functools.partial(_guide, ctx, steps, i, after, k + 1, failed)
             )
             yield Candidate(tuple(segments), then=then)
 

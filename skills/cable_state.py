@@ -119,6 +119,19 @@ class CableState:
         wound = {**self.wound, arm: self.wound.get(arm, 0.0) + turn}
         return replace(self, tcp={**self.tcp, arm: poses[-1]}, wound=wound)
 
+    def key(self) -> tuple[object, ...]:
+        """The state as a hashable value, poses to 1e-9 m (a skill given states with equal
+        keys does the same)."""
+        return (
+            tuple((a, np.round(T, 9).tobytes()) for a, T in sorted(self.tcp.items())),
+            tuple((a, m) for a, m in sorted(self.mode.items())),
+            tuple(sorted(self.held.items())),
+            (self.step, self.cable, self.connector_arm, self.routing_arm, self.place_guide),
+            (self.guides, self.route, round(self.pull_distance, 9), round(self.lean, 9)),
+            tuple((a, round(w, 9)) for a, w in sorted(self.wound.items())),
+            tuple((a, tuple(sorted(b))) for a, b in sorted(self.branches.items())),
+        )
+
     def branches_of(self, arm: str) -> frozenset[int]:
         return self.branches.get(arm, ANY_BRANCH)
 

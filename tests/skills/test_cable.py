@@ -610,7 +610,7 @@ def test_the_routing_hand_leaving_the_guide_before_is_screened() -> None:
     way = C.GuideWay(math.radians(51.4633), -1.0, gap=25.0 * MM)
     gp = C._guide_plan(world, state, route.cable, "routing.guide2", r_arm, o_arm, way)
     with pytest.raises(InputError) as err:
-        C._check_clear(ctx, gp, r_arm)
+        C._check_clear(ctx, gp, r_arm, coming=True)
     assert err.value.problems[0].message == (
         "steps[2] RouteCable routing.guide2: left/tool/finger_right would run 2.1 mm into "
         "routing.guide1 approaching (sliding at theta = 51.5 deg on the right, stopping 25.0 "
