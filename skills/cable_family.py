@@ -57,10 +57,13 @@ def _from(
     # a PickCable decides which arm holds the connector end, a PlaceConnector which arm routes
     # (the other one, or the connector arm after a hand-over): a guide out of the routing
     # arm's reach (errors that blame "arms") comes back to the latest of them, to the other arm
+    offered, stranded = False, set[str]()
     for segments, after in step_ways(ctx, steps, i, state):
         narrowed = _narrowed(ctx, state, segments, after)
-        if narrowed is None:
+        if isinstance(narrowed, str):
+            stranded.add(narrowed)
             continue
+        offered = True
         segments, after = narrowed
         decides = (
             {"arms": f"{after.connector_arm} holds the connector"}
@@ -69,6 +72,9 @@ def _from(
         )
         then = functools.partial(_from, ctx, steps, i + 1, after, failed)
         yield Candidate(tuple(segments), then=then, decides=decides)
+    if not offered and stranded:
+        with at_step(i):
+            raise _stranded(i, step, stranded)
 
 
 def _guide(
@@ -92,20 +98,24 @@ def _guide(
                 raise error
             return
         ways = step.ways(ctx, state, k)
-        offered = False
+        offered, stranded = False, set[str]()
         while True:
             try:
                 segments, after = next(ways)
             except StopIteration:
-                if not offered:
-                    failed[key] = None
+                if offered:
+                    return
+                why = failed[key] = _stranded(i, step, stranded) if stranded else None
+                if why is not None:
+                    raise why from None
                 return
             except InputError as e:
                 if not offered:
                     failed[key] = e
                 raise
             narrowed = _narrowed(ctx, state, segments, after)
-            if narrowed is None:
+            if isinstance(narrowed, str):
+                stranded.add(narrowed)
                 continue
             segments, after = narrowed
             offered = True
@@ -117,14 +127,25 @@ def _guide(
             yield Candidate(tuple(segments), then=then)
 
 
+def _stranded(i: int, step: Skill, arms: set[str]) -> InputError:
+    """Every way of ``step`` dropped by _narrowed: which arms it left with no IK branch."""
+    which = " or ".join(sorted(arms))
+    return InputError.at(
+        f"steps[{i}] {step.skill}: every way of doing it leaves an arm ({which}) on no inverse "
+        "kinematics branch that follows its Cartesian paths within reach and clear of itself "
+        "from where the steps before left it",
+        None,
+    )
+
+
 def _narrowed(
     ctx: PlanningContext, state: CableState, segments: Sequence[Segment], after: CableState
-) -> tuple[list[Segment], CableState] | None:
+) -> tuple[list[Segment], CableState] | str:
     """``segments`` requiring of each arm the IK branches it may be on (Segment.branches), and
     ``after`` (the state they leave from ``state``) with those: the branches of ``state``'s
     on which the arm follows its Cartesian paths in ``segments`` within reach and clear of
-    itself (any after a transit of it), and that the skill's checks kept (``after``'s). None
-    when an arm is left with none: no transit before could choose a branch that runs them."""
+    itself (any after a transit of it), and that the skill's checks kept (``after``'s). The
+    arm, when one is left with none: no transit before could choose a branch that runs them."""
     from cellengine.execute.following import surviving  # the motion stack: planning only
 
     branches = dict(state.branches)
@@ -145,13 +166,13 @@ def _narrowed(
                 may = branches.get(path.arm, ANY_BRANCH)
                 alive, _ = surviving(ctx.cell, ctx.checker, path.arm, path.poses, ctx.home, may)
                 if not alive:
-                    return None
+                    return path.arm
                 branches[path.arm] = frozenset(alive)
             runs.setdefault(path.arm, []).append(k)
     for arm in list(runs):
         kept = branches.get(arm, ANY_BRANCH) & after.branches_of(arm)
         if not kept:
-            return None
+            return arm
         branches[arm] = kept
         close(arm)
     out = [

@@ -10,13 +10,17 @@ import math
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from cellengine import geometry as g
 from cellengine.context import build_context
-from cellengine.info.load import load_world
+from cellengine.errors import StepError
+from cellengine.info.load import load_plan, load_world
 from cellengine.program import ArmPath, Segment
+from cellengine.skills import cable_family
 from cellengine.skills.cable_family import _narrowed
 from cellengine.skills.cable_state import ANY_BRANCH, CableState
+from tests.conftest import CELLS
 from tests.execute.scenes import CELL
 
 
@@ -40,7 +44,7 @@ def test_an_arms_branches_narrow_along_its_paths_and_open_again_at_a_transit() -
     tipped, other_way = arc(base, 30.0), arc(base, -30.0)
     one = [Segment(0, "around", (ArmPath("left", "cartesian", tipped),))]
     narrowed = _narrowed(ctx, state, one, state)
-    assert narrowed is not None
+    assert not isinstance(narrowed, str)
     segments, after = narrowed
     kept = after.branches_of("left")
     assert kept and kept < ANY_BRANCH  # some branches meet the shoulder, some do not
@@ -49,16 +53,33 @@ def test_an_arms_branches_narrow_along_its_paths_and_open_again_at_a_transit() -
     # tipped the other way, the tool meets the shoulder on every branch left
     back = Segment(0, "back", (ArmPath("left", "cartesian", other_way),))
     alone = _narrowed(ctx, state, [back], state)
-    assert alone is not None and not kept & alone[1].branches_of("left")
-    assert _narrowed(ctx, state, [*one, back], state) is None
+    assert not isinstance(alone, str) and not kept & alone[1].branches_of("left")
+    assert _narrowed(ctx, state, [*one, back], state) == "left"  # the arm left with none
     # the skill's own checks kept fewer: those
     fewer = replace(state, branches={"left": frozenset(sorted(kept)[:1])})
     narrowed = _narrowed(ctx, state, one, fewer)
-    assert narrowed is not None and narrowed[1].branches_of("left") == fewer.branches["left"]
+    assert not isinstance(narrowed, str)
+    assert narrowed[1].branches_of("left") == fewer.branches["left"]
     # a transit between them: the arm may reach the second arc's start on any branch, and
     # the segments before it and after it require each their own
     hop = Segment(0, "hop", (ArmPath("left", "transit", other_way[:1]),))
     narrowed = _narrowed(ctx, state, [*one, hop, back], state)
-    assert narrowed is not None
+    assert not isinstance(narrowed, str)
     required = [s.branches_of("left") for s in narrowed[0]]
     assert required[0] == kept and required[1] == required[2] == alone[1].branches_of("left")
+
+
+def test_a_step_whose_every_way_strands_an_arm_says_so(monkeypatch: pytest.MonkeyPatch) -> None:
+    """When every way of a step leaves an arm on no branch (every candidate dropped), the
+    family raises an error naming the step and the arm, not an empty offer the compiler can
+    only call 'no way to do the plan'; remembered for that state like any other."""
+    loaded = load_plan(CELLS / "cable_routing" / "plan_straight.yaml")
+    ctx = build_context(loaded.world)
+    monkeypatch.setattr(cable_family, "_narrowed", lambda *a: "left")
+    with pytest.raises(StepError) as err:
+        next(cable_family.FAMILY.plan(ctx, loaded.plan.steps))
+    assert err.value.problems[0].message == (
+        "steps[0] PickCable: every way of doing it leaves an arm (left) on no inverse "
+        "kinematics branch that follows its Cartesian paths within reach and clear of itself "
+        "from where the steps before left it"
+    )
