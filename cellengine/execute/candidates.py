@@ -16,8 +16,9 @@ An error that blames an arm's own configuration (a joint limit, its IK branch, i
 meeting) after the search went back sends it first to compiling the candidates taken again
 from the start, once: a transit that chose the arm's branch and turns looked ahead at the
 candidates taken then, and looks ahead at these. ``MAX_TRIES`` candidates taken in all
-(a compile again counts as one); then the first error is raised: with one candidate per
-choice, exactly the error of compiling the first candidates.
+(a compile again counts as one); then the error of the attempt that got furthest is raised
+(the first of those: an error that a later attempt got past is not what stops the plan):
+with one candidate per choice, exactly the error of compiling the first candidates.
 
 Deterministic: candidates are tried in the order the family offers them.
 """
@@ -58,12 +59,14 @@ def compile_candidates(
     before_each: Callable[[Segment], None] | None = None,
 ) -> list[Candidate]:
     """Compile the candidates into ``compiler`` (see the module notes); the candidates taken,
-    in order. The first error when no combination within ``MAX_TRIES`` gets through."""
+    in order. The furthest error when no combination within ``MAX_TRIES`` gets through."""
     chosen: list[_Choice] = []
     marks: dict[int, Mark] = {0: compiler.mark()}  # where each choice's segments begin
     start = 0  # the first choice whose segments are not compiled; the compiler is at its mark
     pending: Iterator[Candidate] | None = first
-    first_error: InputError | None = None
+    # the error of the attempt that got furthest (the first of those), and how far: (the
+    # choice, the place in it) of the segment it stopped at
+    reported: tuple[tuple[int, int], InputError] | None = None
     recompiled: set[tuple[int, ...]] = set()  # the combinations compiled again from the start
     for _ in range(MAX_TRIES + 1):
         # the choice of the segment being compiled; the choice, and the place in it, of the
@@ -74,13 +77,15 @@ def compile_candidates(
             _compile_from(compiler, chosen, start, marks, before_each, current)
             return [c.taken for c in chosen]
         except _Grown as e:  # the choice after the last one taken offered nothing
-            first_error = first_error or e.error
+            if e.error is not None and (reported is None or (len(chosen), -1) > reported[0]):
+                reported = (len(chosen), -1), e.error
             failed, blames = len(chosen), e.error.blames if e.error is not None else None
         except InputError as e:
-            first_error = first_error or e
             # the choice of the furthest segment compiled: going back to earlier transits
             # (search.add_all) ends with the error of the attempt that got furthest
             failed, blames = (current[1] if current[1] >= 0 else current[0]), e.blames
+            if reported is None or (failed, current[2]) > reported[0]:
+                reported = (failed, current[2]), e
             combination = tuple(id(c.taken) for c in chosen)
             if blames == "configuration" and start > 0 and combination not in recompiled:
                 # the transit that chose the arm's branch and turns was compiled looking
@@ -106,9 +111,9 @@ def compile_candidates(
         compiler.restore(marks[start])
         then = chosen[k].taken.then
         pending = then() if then is not None else None
-    if first_error is None:  # a family that offered no candidate at all
+    if reported is None:  # a family that offered no candidate at all
         raise InputError.at("the skill family offered no way to do the plan", None)
-    raise first_error
+    raise reported[1]
 
 
 class _Grown(Exception):
