@@ -1,6 +1,6 @@
 """The compiler's search over a family's candidates (execute/candidates.py), on the reference
 cell: the next candidate where one cannot run, back to an earlier choice when a later one has
-nothing that runs, and the first error when nothing does."""
+nothing that runs, and the error of the attempt that got furthest when nothing does."""
 
 from __future__ import annotations
 
@@ -81,7 +81,7 @@ def test_a_family_that_cannot_plan_a_choice_sends_the_search_back() -> None:
     assert labels(c) == [f"to {ALSO}"]
 
 
-def test_nothing_runs_the_first_error_is_raised() -> None:
+def test_nothing_runs_the_first_of_the_furthest_errors_is_raised() -> None:
     c = compiler()
     with pytest.raises(StepError) as e:
         compile_candidates(
@@ -90,6 +90,17 @@ def test_nothing_runs_the_first_error_is_raised() -> None:
     assert e.value.step == 0
     assert str(e.value).startswith(f"<input>: step 1 (to {FAR}): ")
     assert labels(c) == []
+
+
+def test_nothing_runs_the_error_of_the_attempt_that_got_furthest_is_raised() -> None:
+    """The first candidate stops at its first hop; the second gets past it and stops at the
+    next choice's: that is what stops the plan, not the first error."""
+    c = compiler()
+    beyond = (1.6, 0.15, 0.2)
+    further = Candidate((hop(0, NEAR),), then=lambda: choice(Candidate((hop(1, beyond),))))
+    with pytest.raises(StepError) as e:
+        compile_candidates(c, choice(Candidate((hop(0, FAR),)), further))
+    assert str(e.value).startswith(f"<input>: step 2 (to {beyond}): ")
 
 
 def test_a_family_error_before_anything_compiles_is_raised_as_it_is() -> None:
