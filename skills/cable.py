@@ -2174,13 +2174,15 @@ def _coming(
     some pair of branches keeps the cell's clearance between the arms at poses along the way,
     with the routing arm's branches narrowed to those in such a pair; else why not, by how
     much it falls short. Measured once for the ways that share those motions."""
-    r_arm, o_arm = arms
     kept: set[int] = set()
     best = -math.inf
+    # the routing arm's branches that come and slide clear of itself (gp's are among them)
+    came = screen.came.get(_coming_key(way, cg.STAND_BACK))
+    on = came if isinstance(came, frozenset) and -1 not in came else ANY_BRANCH
     for back in backs:
         key = _coming_key(way, back)
         if key not in screen.coming:
-            rooms = _coming_rooms(ctx, state, replace(gp, stand_back=back), r_arm, o_arm)
+            rooms = _coming_rooms(ctx, state, replace(gp, stand_back=back), arms, on)
             room = max(rooms.values())
             why = _coming_error(ctx, state, gp, arms, room) if room < ctx.clearance else None
             screen.coming[key] = (rooms, why)
@@ -2218,12 +2220,17 @@ def _coming_error(
 
 
 def _coming_rooms(
-    ctx: PlanningContext, state: CableState, gp: GuidePlan, r_arm: str, o_arm: str
+    ctx: PlanningContext,
+    state: CableState,
+    gp: GuidePlan,
+    arms: tuple[str, str],
+    on: frozenset[int],
 ) -> dict[int, float]:
-    """_pair_rooms of every routing branch over _coming's motions (every STRIDE-th pose),
-    keeping the cell's clearance."""
+    """_pair_rooms of the routing arm's branches ``on`` over _coming's motions (every
+    STRIDE-th pose), keeping the cell's clearance."""
     from cellengine.execute.following import STRIDE  # the motion stack: planning only
 
+    r_arm, o_arm = arms
     T_r, T_o = state.tcp[r_arm], state.tcp[o_arm]
     poses: list[tuple[Mat, Mat]] = []
     if o_arm in state.held:
@@ -2232,7 +2239,7 @@ def _coming_rooms(
         T_o = back[-1]
     coming = np.concatenate([p for p in (gp.reorient, gp.approach, gp.slide) if p is not None])
     poses += [(T, T_o) for T in (*coming[::STRIDE], coming[-1])]
-    return _pair_rooms(ctx, r_arm, o_arm, poses, ctx.clearance, b_on=state.branches_of(o_arm))
+    return _pair_rooms(ctx, r_arm, o_arm, poses, ctx.clearance, on, state.branches_of(o_arm))
 
 
 def _check_pivot_free(
