@@ -2208,14 +2208,24 @@ def _coming_error(
     ctx: PlanningContext, state: CableState, gp: GuidePlan, arms: tuple[str, str], room: float
 ) -> _Blocked:
     r_arm, o_arm = arms
+    return _arms_blocked(
+        ctx,
+        gp,
+        room,
+        f"the routing arm ({r_arm}) comes to the guide and slides (at theta = "
+        f"{math.degrees(gp.theta):.1f} deg, stopping {_mm(gp.a)} mm before it), the other arm "
+        f"{'standing back from the previous guide' if o_arm in state.held else 'still'}",
+    )
+
+
+def _arms_blocked(ctx: PlanningContext, gp: GuidePlan, room: float, what: str) -> _Blocked:
+    """A way refused because no pair of the arms' branches keeps the cell's clearance while
+    ``what`` happens; ``room``: how near every pair comes (_pair_rooms)."""
     at_best = "collide" if room == -math.inf else f"come within {_mm(room)} mm of each other"
     return _Blocked.of(
         room - ctx.clearance,
-        f"{gp.where}: however the two arms are posed, they {at_best} while the routing arm "
-        f"({r_arm}) comes to the guide and slides (at theta = {math.degrees(gp.theta):.1f} "
-        f"deg, stopping {_mm(gp.a)} mm before it), the other arm "
-        f"{'standing back from the previous guide' if o_arm in state.held else 'still'}; "
-        f"the cell's clearance is {_mm(ctx.clearance)} mm",
+        f"{gp.where}: however the two arms are posed, they {at_best} while {what}; the cell's "
+        f"clearance is {_mm(ctx.clearance)} mm",
     )
 
 
@@ -2293,13 +2303,13 @@ def _check_pair_along(
     rooms = _pair_rooms(ctx, r_arm, o_arm, poses, ctx.clearance, gp.branches)
     room = max(rooms.values())
     if room < ctx.clearance:
-        at_best = "collide" if room == -math.inf else f"come within {_mm(room)} mm of each other"
-        raise _Blocked.of(
-            room - ctx.clearance,
-            f"{gp.where}: however the two arms are posed, they {at_best} while the other arm "
-            f"holds the pivot and the routing arm ({r_arm}) lays the cable in (sliding at "
-            f"theta = {math.degrees(gp.theta):.1f} deg, stopping {_mm(gp.a)} mm before the "
-            f"guide); the cell's clearance is {_mm(ctx.clearance)} mm",
+        raise _arms_blocked(
+            ctx,
+            gp,
+            room,
+            f"the other arm holds the pivot and the routing arm ({r_arm}) lays the cable in "
+            f"(sliding at theta = {math.degrees(gp.theta):.1f} deg, stopping {_mm(gp.a)} mm "
+            "before the guide)",
         )
     return frozenset(k for k, r in rooms.items() if k >= 0 and r >= ctx.clearance) or gp.branches
 

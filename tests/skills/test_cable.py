@@ -912,6 +912,37 @@ def test_placing_keeps_the_published_hold_first_then_the_most_room() -> None:
     assert rooms == sorted(rooms, reverse=True)
 
 
+def test_the_arms_are_screened_while_the_routing_hand_comes_and_slides() -> None:
+    """plan_straight's guide1, its first way: the routing arm is kept only on branches on
+    which some branch of the other arm, standing still, stays the cell's clearance away while
+    the routing hand approaches and slides (branch 4 comes within it). Asked to keep half a
+    metre, the way is refused, saying how near every pair comes."""
+    world, steps = _world()
+    ctx = context(world)
+    state = CableState.at_home(ctx)
+    for i in range(2):
+        _, state = next(C.step_ways(ctx, steps, i, state))
+    state = replace(state, step=2)
+    route = steps[2]
+    assert isinstance(route, RouteCable)
+    gp = next(route.guide_plans(ctx, state, 0))
+    rooms = C._coming_rooms(ctx, state, gp, ("left", "right"), C.ANY_BRANCH)
+    assert gp.branches and all(rooms[k] >= ctx.clearance for k in gp.branches)
+    assert any(rooms[k] < ctx.clearance for k in C.ANY_BRANCH - gp.branches)
+    way = C.GuideWay(gp.theta, gp.side, gap=gp.a)
+    far = replace(ctx, clearance=0.5)
+    blocked = C._coming(far, state, gp, way, ("left", "right"), C._Screen(()), (cg.STAND_BACK,))
+    assert isinstance(blocked, C._Blocked)
+    near = blocked.distance + 0.5
+    assert 0.0 < near < 0.5
+    assert blocked.problems[0].message == (
+        "steps[2] RouteCable routing.guide1: however the two arms are posed, they come within "
+        f"{near * 1000:.1f} mm of each other while the routing arm (left) comes to the guide and "
+        "slides (at theta = 51.3 deg, stopping 25.0 mm before it), the other arm still; the "
+        "cell's clearance is 500.0 mm"
+    )
+
+
 def test_a_hold_turned_about_the_cable_still_closes_across_it() -> None:
     """Held 30 deg about the cable and 40 mm farther along it, the other hand's fingertips are
     51 + 40 mm from the connector hand's on the guide's axis, its jaw still across the cable,
