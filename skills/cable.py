@@ -2069,16 +2069,18 @@ def _pair_rooms(
     keep: float,
     a_on: frozenset[int] = ANY_BRANCH,
     b_on: frozenset[int] = ANY_BRANCH,
+    measure: bool = True,
 ) -> dict[int, float]:
     """For each IK branch of ``a`` in ``a_on``, how far apart (m) the two arms can stay while
     their tools pass ``poses`` (T_cell_tcp of ``a``, of ``b``), over ``b``'s branches (in
     ``b_on``): the most, over the pairs of branches that keep ``keep`` between the arms at
     every pose, of their least distance there (the arms against each other only: the
-    tools' contacts with the cell are the skills' other checks). Below ``keep`` when no
-    pair does: the most, over the pairs, of how near they came when they first came nearer
-    than ``keep`` (each pair comes within it; measuring on would cost far more); -inf when
-    every pair meets. {-1: inf} for an arm solved numerically (it has no branches). A
-    continuous motion keeps its branches."""
+    tools' contacts with the cell are the skills' other checks); just ``keep`` when not
+    ``measure`` (a yes/no per pose, cheaper: for callers that only compare with ``keep``).
+    Below ``keep`` when no pair does: the most, over the pairs, of how near they came when
+    they first came nearer than ``keep`` (each pair comes within it; measuring on would
+    cost far more); -inf when every pair meets. {-1: inf} for an arm solved numerically (it
+    has no branches). A continuous motion keeps its branches."""
     on_a, on_b = np.isin(np.arange(8), sorted(a_on)), np.isin(np.arange(8), sorted(b_on))
     alive = np.outer(on_a, on_b).reshape(64)  # pair i: a's branch i // 8, b's i % 8
     least = np.where(alive, math.inf, -math.inf)
@@ -2090,6 +2092,9 @@ def _pair_rooms(
         ok: NDArray[np.bool_] = alive & ~np.isnan(Q).any(axis=1)
         least[alive & ~ok] = -math.inf  # no solution there
         for i in np.flatnonzero(ok):
+            if not measure and ctx.checker.apart(Q[i], keep, (a, b)):
+                least[i] = min(least[i], keep)
+                continue
             d = ctx.checker.distance(Q[i], between=(a, b))[0]
             least[i] = min(least[i], d) if d > 0.0 else -math.inf
         alive = ok & (least >= keep)
@@ -2249,7 +2254,8 @@ def _coming_rooms(
         T_o = back[-1]
     coming = np.concatenate([p for p in (gp.reorient, gp.approach, gp.slide) if p is not None])
     poses += [(T, T_o) for T in (*coming[::STRIDE], coming[-1])]
-    return _pair_rooms(ctx, r_arm, o_arm, poses, ctx.clearance, on, state.branches_of(o_arm))
+    b_on = state.branches_of(o_arm)
+    return _pair_rooms(ctx, r_arm, o_arm, poses, ctx.clearance, on, b_on, measure=False)
 
 
 def _check_pivot_free(
@@ -2300,7 +2306,7 @@ def _check_pair_along(
     held = np.concatenate((gp.pull_path, gp.lift, gp.swing, gp.insert))
     poses = [(gp.slide[-1], T) for T in (*down[::STRIDE], down[-1])]
     poses += [(T, gp.pivot) for T in (*held[::STRIDE], held[-1])]
-    rooms = _pair_rooms(ctx, r_arm, o_arm, poses, ctx.clearance, gp.branches)
+    rooms = _pair_rooms(ctx, r_arm, o_arm, poses, ctx.clearance, gp.branches, measure=False)
     room = max(rooms.values())
     if room < ctx.clearance:
         raise _arms_blocked(

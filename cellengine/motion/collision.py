@@ -91,6 +91,7 @@ class CollisionChecker:
         self._inflated = _Checked(model, scene.geometry)
         self._segment_bounds = pin.GeometryData(scene.bounds)
         self._selections: dict[tuple[str, ...] | None, tuple[Any, NDArray[np.bool_]]] = {}
+        self._apart: dict[tuple[tuple[str, ...], float], _Checked] = {}
         self._n_pairs = len(scene.pairs)
 
     # ------------------------------------------------------------------------------ states
@@ -137,6 +138,20 @@ class CollisionChecker:
         if scene.exact_bounds[k]:
             return float(gdata.distanceResults[k].min_distance), scene.pair_names(k)
         return self._refined_distance(gdata, mask)
+
+    def apart(self, q: ArrayLike, keep: float, between: tuple[str, str]) -> bool:
+        """True when every pair with one object of each of two arms is at least ``keep`` (m)
+        apart at q: a yes/no that stops at the first pair within it, ~4x cheaper than
+        :meth:`distance` on the cable-routing cell (coal's security margin: no distance
+        measured for a pair it proves farther)."""
+        key = (tuple(sorted(between)), keep)
+        checked = self._apart.get(key)
+        if checked is None:
+            mask = self._between(between)
+            checked = _Checked(self._model, self._scene.geometry, active=mask)
+            checked.set_margins(np.where(mask, keep, 0.0))
+            self._apart[key] = checked
+        return checked.first_hit(self._model, self._data, self._q(q)) is None
 
     def closer_than(self, q: ArrayLike, limits: Vec) -> dict[int, float]:
         """The checked pairs closer than their limit (m, one per pair) at q, each with its
@@ -308,9 +323,12 @@ class _Checked:
     """One GeometryData over the scene's pairs, with its broad-phase tree and a callback that
     records the first pair in contact."""
 
-    def __init__(self, model: Any, geometry: Any) -> None:
+    def __init__(self, model: Any, geometry: Any, active: NDArray[np.bool_] | None = None) -> None:
         self.geometry = geometry
         self.data = pin.GeometryData(geometry)
+        if active is not None:  # before the broad phase selects the pairs it checks
+            for p in np.flatnonzero(~active):
+                self.data.deactivateCollisionPair(int(p))
         self.manager = BROAD_PHASE(model, geometry, self.data)
         self.callback = pin.CollisionCallBackDefault(geometry, self.data, True)
         n = int(geometry.ngeoms)

@@ -118,12 +118,9 @@ class ArmIK:
         if self.closed_form is None:
             return None
         q_all, valid = self.closed_form.ik_all(self.base_flange(T_cell_tcp), float(self.home[5]))
-        out = np.full((8, self.n), np.nan)
-        for k in np.flatnonzero(valid):
-            w = wrap_near(q_all[k], self.home, self.lower, self.upper)
-            if w is not None:
-                out[k] = w
-        return out
+        w = wrap_rows_near(q_all, self.home, self.lower, self.upper)
+        w[~valid] = np.nan
+        return w
 
     # ------------------------------------------------------------------ many poses
 
@@ -205,6 +202,16 @@ def wrap_near(q: Vec, seed: Vec, lower: Vec, upper: Vec) -> Vec | None:
     w = np.where(w > upper, w - TWO_PI, w)
     if np.any(w < lower) or np.any(w > upper):
         return None
+    out: Vec = w
+    return out
+
+
+def wrap_rows_near(q: Vec, seed: Vec, lower: Vec, upper: Vec) -> Vec:
+    """wrap_near of each row of q (m, n): NaN rows where it gives None."""
+    w = seed + wrap(q - seed)
+    w = np.where(w < lower, w + TWO_PI, w)
+    w = np.where(w > upper, w - TWO_PI, w)
+    w[((w < lower) | (w > upper)).any(axis=1)] = np.nan
     out: Vec = w
     return out
 

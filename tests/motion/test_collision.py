@@ -169,6 +169,20 @@ def test_distance_between_the_arms_at_home(cell: CellModel, checker: CollisionCh
         checker.distance(q, between=("left", "middle"))
 
 
+def test_apart_agrees_with_the_distance_and_sees_only_the_two_arms(
+    cell: CellModel, checker: CollisionChecker, world: World
+) -> None:
+    q = both(cell)
+    d, _ = checker.distance(q, between=("left", "right"))
+    assert checker.apart(q, d - 1e-4, ("left", "right"))
+    assert not checker.apart(q, d + 1e-4, ("right", "left"))
+    # the left tool in a guide: in collision, but not with the other arm
+    T_cell_slot = world.pose("routing.guide2.slot")
+    q = both(cell, left=ik(cell, "left", g.transform(DOWN, T_cell_slot[:3, 3])))
+    assert checker.in_collision(q)
+    assert checker.apart(q, 0.01, ("left", "right"))
+
+
 def test_left_arm_into_the_right_forearm(cell: CellModel, checker: CollisionChecker) -> None:
     # the left TCP pointing along -y, 20 mm inside the right forearm's tube at home
     T_cell_tcp = g.transform(g.rot_x(math.pi / 2), [-0.1, -0.33, 0.6])
