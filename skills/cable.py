@@ -392,14 +392,13 @@ class RouteCable(Skill):
         above it miss a narrow range of angles that clear the guide and the elements on
         the slide's side.)"""
         guide = self.guides[k]
-        r_arm, o_arm = self.arms(ctx, state)
+        r_arm, _ = self.arms(ctx, state)
         own = {cg.element_of(guide)}
-        prints = cg.footprints(ctx.world, guide, cg.platform_up(ctx.world, guide))
 
         def clear(b: _Basics, side: float, first: bool, theta: float) -> bool:
             way = GuideWay(theta, side, gap=b.gap, turn_first=first)
-            gp = _guide_plan(ctx.world, state, self.cable, guide, r_arm, o_arm, way, prints)
-            poses = [*gp.slide[::2], gp.slide[-1]]
+            slide = _slide(b, way, _approach_pose(ctx.world, state, b, r_arm, way))
+            poses = [*slide[::2], slide[-1]]
             return ctx.probe.nearest(r_arm, poses, SLIDE, (), cg.CLEARANCE, own) is None
 
         def least(b: _Basics, side: float, first: bool) -> float | None:
@@ -1567,37 +1566,18 @@ def _guide_plan(
     up, slot, axis, ap, theta, side = b.up, b.slot, b.axis, b.ap, way.theta, way.side
     x_off = b.x_offset
     last = np.asarray(state.route[-1], dtype=float)
-    # The routing hand tips forward and towards its base, the other hand back and towards
-    # its base (the other hand by more): see cg.LEAN and cg.PIVOT_LEAN.
-    # (or only along the cable: tipped sideways, open fingers dip towards the plate)
-    base = way.towards_base
-    tip_r = g.unit(axis + base * _towards_base(world, r_arm, slot, up))
-    tip_o = g.unit(-axis + base * _towards_base(world, o_arm, slot, up))
+    tip_o = g.unit(-axis + way.towards_base * _towards_base(world, o_arm, slot, up))
     T_r0 = state.tcp[r_arm]
-    T_ap = cg.nearer_turn(
-        T_r0, cg.tcp_frame(ap, axis, up, tip_r, way.lean), state.wound.get(r_arm, 0.0)
-    )
+    T_ap = _approach_pose(world, state, b, r_arm, way)
     T_pivot = _pivot(state, b, o_arm, tip_o, way)
     r_cable, pull_r = b.r_cable, b.pull
-    left = np.cross(up, axis)
-    d = math.cos(theta) * axis + side * math.sin(theta) * left
+    d = _slide_direction(b, way)
     reorient = None
     if g.rotation_angle(T_r0, T_ap) > cg.REORIENT_MIN:
         reorient = cg.turn_in_place(T_r0, T_ap)
         T_r0 = reorient[-1]
     approach = _approach_path(T_r0, T_ap, b, way.approach)
-    # Sliding, the hand turns about the vertical to hold the cable along the slide (or by a
-    # share of it, see cg.SLIDE_TURNS); the swing over the slot turns it back, so it inserts
-    # in the approach orientation.
-    turned = g.axis_angle_to_matrix(up, side * theta * way.slide_turn)
-    T_slid = g.transform(turned @ T_ap[:3, :3], ap + r_cable * d)
-    slide = cg.line(T_ap, T_slid)
-    if way.turn_first:
-        # turned first, the hand is as wide across the slide as the published sliding angle
-        # assumes (W_gripper); turning as it goes, its fingers' ends sweep towards the
-        # guide's corner, but its body swings less near the other hand
-        turn = cg.turn_in_place(T_ap, T_slid)
-        slide = np.concatenate([turn, cg.line(turn[-1], T_slid)[1:]])
+    slide = _slide(b, way, T_ap)
     pull_path = cg.line(slide[-1], cg.at(slide[-1], ap + (r_cable + pull_r) * d))
     # Lift: up on the circle about the pivot in the vertical plane of the slide, to the
     # elevation at which radius >= R_lift puts the hand over the guide's far face and
@@ -1647,6 +1627,38 @@ def _guide_plan(
         stand_back=way.stand_back,
         beside=_beside(state, guide),
     )
+
+
+def _approach_pose(world: World, state: CableState, b: _Basics, r_arm: str, way: GuideWay) -> Mat:
+    """T_cell_tcp where the routing hand's slide starts. It tips forward and towards its base
+    (the other hand back and towards its base, by more: cg.LEAN and cg.PIVOT_LEAN), or
+    only along the cable: tipped sideways, open fingers dip towards the plate."""
+    tip = g.unit(b.axis + way.towards_base * _towards_base(world, r_arm, b.slot, b.up))
+    T_r0 = state.tcp[r_arm]
+    frame = cg.tcp_frame(b.ap, b.axis, b.up, tip, way.lean)
+    return cg.nearer_turn(T_r0, frame, state.wound.get(r_arm, 0.0))
+
+
+def _slide_direction(b: _Basics, way: GuideWay) -> Vec:
+    left = np.cross(b.up, b.axis)
+    d: Vec = math.cos(way.theta) * b.axis + way.side * math.sin(way.theta) * left
+    return d
+
+
+def _slide(b: _Basics, way: GuideWay, T_ap: Mat) -> Poses:
+    """The routing hand's slide from ``T_ap``, R_cable along the sliding direction. Sliding,
+    the hand turns about the vertical to hold the cable along the slide (or by a share of
+    it, see cg.SLIDE_TURNS); the swing over the slot turns it back, so it inserts in the
+    approach orientation."""
+    turned = g.axis_angle_to_matrix(b.up, way.side * way.theta * way.slide_turn)
+    T_slid = g.transform(turned @ T_ap[:3, :3], b.ap + b.r_cable * _slide_direction(b, way))
+    if not way.turn_first:
+        return cg.line(T_ap, T_slid)
+    # turned first, the hand is as wide across the slide as the published sliding angle
+    # assumes (W_gripper); turning as it goes, its fingers' ends sweep towards the guide's
+    # corner, but its body swings less near the other hand
+    turn = cg.turn_in_place(T_ap, T_slid)
+    return np.concatenate([turn, cg.line(turn[-1], T_slid)[1:]])
 
 
 def _under(ctx: PlanningContext, slot: Vec, up: Vec) -> tuple[str, ...]:
