@@ -55,6 +55,7 @@ mm farther past the guide, onto the next one on a dense board.)
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -467,8 +468,17 @@ def element_of(ref: str) -> str:
 
 
 def _plane(up: Vec) -> tuple[Vec, Vec]:
-    e1 = g.any_perpendicular(up)
-    return e1, np.cross(up, e1)
+    return _plane_of(tuple(map(float, up)))
+
+
+@functools.lru_cache(maxsize=64)
+def _plane_of(up: tuple[float, float, float]) -> tuple[Vec, Vec]:
+    """Two horizontal axes for ``up`` (a cell has a few ups: one per platform)."""
+    u = np.array(up)
+    e1, e2 = g.any_perpendicular(u), np.cross(u, g.any_perpendicular(u))
+    e1.setflags(write=False)  # shared by every caller
+    e2.setflags(write=False)
+    return e1, e2
 
 
 def _convex(points: Vec, up: Vec) -> Vec:
@@ -496,13 +506,9 @@ def _cross2(o: tuple[float, float], a: tuple[float, float], b: tuple[float, floa
 def outline_distance(outline: Vec, a: Vec, b: Vec, up: Vec) -> float:
     """Horizontal distance from segment ``a``-``b`` to a convex outline; 0 when the segment
     enters it."""
-    e1, e2 = _plane(up)
-
-    def flat(v: Vec) -> tuple[float, float]:
-        return float(v @ e1), float(v @ e2)
-
-    ring = [flat(p) for p in outline]
-    p, q = flat(a), flat(b)
+    E = np.stack(_plane(up), axis=1)  # (3, 2): one product for every point, then floats
+    ring: list[tuple[float, float]] = [(x, y) for x, y in (outline @ E).tolist()]
+    (p, q) = [(x, y) for x, y in (np.stack([a, b]) @ E).tolist()]
     if _inside(ring, p) or _inside(ring, q):
         return 0.0
     best = math.inf
