@@ -181,7 +181,8 @@ class _File:
             starts = np.array([m.start() for m in _MARKUP.finditer(data) if m.group(1) is not None])
             newlines = np.flatnonzero(np.frombuffer(data, np.uint8) == ord("\n"))
             before = np.searchsorted(newlines, starts)  # newlines before each start tag
-            line_start = np.where(before > 0, newlines[np.maximum(before - 1, 0)] + 1, 0)
+            # where each line starts: 0, then after each newline (a one-line file has none)
+            line_start = np.concatenate(([0], newlines + 1))[before]
             self._lines = before + 1
             self._cols = starts - line_start + 1  # in bytes: exact for ASCII, as CAD writes
         i = self._order.get(el)

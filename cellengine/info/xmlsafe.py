@@ -1,7 +1,9 @@
 """Parsing untrusted XML with lxml: no DTD loading, no entities, no network.
 
 A DOCTYPE naming a remote DTD (as CAD exporters write) is accepted and never fetched;
-any ENTITY declaration (XXE, billion laughs) is refused.
+an internal subset (``<!DOCTYPE x [ ... ]>``) is refused: its ENTITY declarations (XXE,
+billion laughs) expand text, and its ATTLIST defaults give every element attributes a
+reader of the element does not see (libxml2 applies them).
 """
 
 from __future__ import annotations
@@ -45,6 +47,16 @@ def parse_xml(path: Path, kind: str = "xml") -> etree._ElementTree:
         for ent in dtd.iterentities():
             _refuse_entities(data, path)
             raise _entity_error(str(ent.name), path, _doctype_line(data), None)
+        subset = _INTERNAL_SUBSET.match(data)
+        if subset:
+            line, col = _position(data, subset.end() - 1)
+            raise InputError.at(
+                "XML internal DTD subsets are not allowed (their declarations change what the "
+                "elements say); remove the part of the DOCTYPE in [ ]",
+                path,
+                line,
+                col,
+            )
     for node in tree.iter(etree.Entity):
         raise InputError.at(
             f"XML entity reference '{node.text}' is not allowed", path, node.sourceline
@@ -55,6 +67,16 @@ def parse_xml(path: Path, kind: str = "xml") -> etree._ElementTree:
 # An <!ENTITY declaration (general or parameter) inside a DOCTYPE's internal subset.
 _ENTITY_DECL = re.compile(rb"<!DOCTYPE[^\[>]*\[.*?(<!ENTITY\s+(?:%\s+)?([^\s>]+))", re.S)
 
+# The prolog up to a DOCTYPE's internal subset '[': an XML declaration, comments and
+# processing instructions, then <!DOCTYPE name [SYSTEM "..." | PUBLIC "..." "..."] [
+_QUOTED = rb"""(?:"[^"]*"|'[^']*')"""
+_INTERNAL_SUBSET = re.compile(
+    rb"(?:\xef\xbb\xbf)?\s*(?:<\?.*?\?>\s*|<!--.*?-->\s*)*<!DOCTYPE\s+[^\s\[>]+"
+    rb"(?:\s+(?:SYSTEM\s+" + _QUOTED + rb"|PUBLIC\s+" + _QUOTED + rb"\s+" + _QUOTED + rb"))?"
+    rb"\s*\[",
+    re.S,
+)
+
 _REWRITES = [  # libxml2's messages that name its own API
     (re.compile(r"^Excessive depth in document: (\d+).*"), r"elements nest more than \1 deep"),
     (re.compile(r"^Huge input lookup.*|^xmlSAX2Characters: huge text node.*"), "text too large"),
@@ -64,8 +86,7 @@ _REWRITES = [  # libxml2's messages that name its own API
 def _refuse_entities(data: bytes, path: Path) -> None:
     m = _ENTITY_DECL.search(data)
     if m:
-        line = data.count(b"\n", 0, m.start(1)) + 1
-        col = m.start(1) - data.rfind(b"\n", 0, m.start(1))
+        line, col = _position(data, m.start(1))
         name = m.group(2).decode("utf-8", "replace")
         raise _entity_error(name, path, line, col)
 
@@ -78,6 +99,14 @@ def _entity_error(name: str, path: Path, line: int | None, col: int | None) -> I
         line,
         col,
     )
+
+
+def _position(data: bytes, i: int) -> tuple[int, int]:
+    """(line, column) of byte ``i`` (columns in bytes, as libxml2's; a BOM is not one)."""
+    start = data.rfind(b"\n", 0, i) + 1
+    if start == 0 and data.startswith(b"\xef\xbb\xbf"):
+        start = 3
+    return data.count(b"\n", 0, i) + 1, i - start + 1
 
 
 def _doctype_line(data: bytes) -> int | None:
