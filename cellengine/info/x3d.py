@@ -27,6 +27,7 @@ from cellengine.arrays import IntArray, Mat
 from cellengine.errors import CellError, InputError, Problem, display_path, known
 from cellengine.geometry import axis_angle_to_matrix, inverse, rot_x, transform_points
 from cellengine.info import primitives
+from cellengine.info.bounds import MAX_COORDINATE, SCALES, scale_ok
 from cellengine.info.files import read_capped, resolve_inside
 from cellengine.info.mesh import Mesh
 from cellengine.info.xmlsafe import parse_xml
@@ -328,6 +329,8 @@ class _Loader:
             raise ctx.file.error(
                 el, f"the pose of '{name}' overflows: its Transform chain has numbers too large"
             )
+        if np.abs(T[:3, 3]).max() > MAX_COORDINATE:
+            raise ctx.file.error(el, f"'{name}' is{_too_far(T[:3, 3])}")
         owner = _Owner(name, ctx.file.name, ctx.file.line(el), T, inverse(T))
         self.owners[name] = owner
         return owner
@@ -433,12 +436,15 @@ class _Loader:
                 el, f"the scene has more than {MAX_TRIANGLES} triangles or vertices"
             )
         owner = ctx.owner or self.loose
-        M = owner.T_inv @ ctx.A  # the shape's frame -> the owner's rigid frame
-        V = transform_points(M, V)
-        if not np.isfinite(V).all():
+        P = transform_points(ctx.A, V)  # in the platform's frame
+        V = transform_points(owner.T_inv @ ctx.A, V)  # in the owner's rigid frame
+        if not (np.isfinite(V).all() and np.isfinite(P).all()):
             raise ctx.file.error(
                 el, f"{_label(el)}: coordinates overflow: the Transform chain has numbers too large"
             )
+        far = np.abs(P).max(axis=1).argmax()
+        if abs(P[far]).max() > MAX_COORDINATE:
+            raise ctx.file.error(el, f"{_label(el)} has a point{_too_far(P[far])}")
         owner.parts.append((V, F))
 
 
@@ -458,6 +464,14 @@ def _tag(el: Element) -> str | None:
 def _name(el: Element) -> str | None:
     name: str | None = el.get("DEF") or el.get("id")
     return name
+
+
+def _too_far(p: Mat) -> str:
+    x, y, z = (f"{round(float(v), 6) + 0.0:.4g}" for v in p)  # to the micrometre, no -0
+    return (
+        f" at ({x}, {y}, {z}) m, beyond {MAX_COORDINATE:g} m of the platform's origin (an X3D "
+        'in millimetres needs a root Transform with scale="0.001 0.001 0.001")'
+    )
 
 
 def _label(el: Element) -> str:
@@ -579,6 +593,8 @@ def _transform_fields(el: Element, f: _File) -> tuple[Mat, Mat]:
     t = _field(el, "translation", 3, _ZERO3, f)
     r = _field(el, "rotation", 4, _NO_ROTATION, f)
     s = _field(el, "scale", 3, _ONE3, f)
+    if not scale_ok(s):
+        raise _bad(el, "scale", f"between {SCALES[0]:g} and {SCALES[1]:g} in size", f)
     c = _field(el, "center", 3, _ZERO3, f)
     so = _field(el, "scaleOrientation", 4, _NO_ROTATION, f)
     R = _rotation(r)

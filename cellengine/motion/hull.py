@@ -13,6 +13,9 @@ from cellengine.arrays import Vec
 # coal's qhull would print through a null stream and crash.
 _QHULL = "Qt Pp"
 FLAT = 1e-9  # thickness over size below which points are flat; qhull copes down to ~1e-13
+# coal's qhull crashes the process on far points with little spread (1e-5 m at 1e11 m): the
+# loaders bound what they read far below this; here, the last guard before qhull
+MAX_COORDINATE = 1e4  # m
 
 
 def convex_hull(points: Vec) -> Any | None:
@@ -21,6 +24,8 @@ def convex_hull(points: Vec) -> Any | None:
     points = np.asarray(points, dtype=float).reshape(-1, 3)
     if not np.isfinite(points).all():
         raise ValueError("coordinates must be finite")
+    if len(points) and np.abs(points).max() > MAX_COORDINATE:
+        raise ValueError(f"coordinates beyond {MAX_COORDINATE:g} m of the origin")
     if is_flat(points):  # qhull would fail, and coal's qhull crashes as it reports why
         return None
     centre = (points.min(axis=0) + points.max(axis=0)) / 2.0  # qhull's precision is absolute

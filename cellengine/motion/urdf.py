@@ -44,6 +44,7 @@ from lxml import etree
 from cellengine import geometry as g
 from cellengine.arrays import Mat
 from cellengine.errors import InputError, known
+from cellengine.info.bounds import MAX_COORDINATE, SCALES, scale_ok
 from cellengine.info.files import read_capped, resolve_inside
 from cellengine.info.xmlsafe import parse_xml
 from cellengine.motion.hull import convex_hull
@@ -336,6 +337,12 @@ class _Reader:
             if not ref:
                 raise self.fail(f"{what}: <mesh> needs a filename", shape_el)
             scale = self.floats(shape_el, "scale", 3, f"{what} mesh", "1 1 1")
+            if not scale_ok(scale):
+                raise self.fail(
+                    f"{what} mesh: 'scale' must be between {SCALES[0]:g} and {SCALES[1]:g} in "
+                    f"size, got '{shape_el.get('scale')}'",
+                    shape_el,
+                )
             mesh = resolve_mesh(ref, self.path, self.cell_dir, shape_el.sourceline)
             shape, kind = mesh_hull(mesh, ref, scale, self.path, shape_el.sourceline), "convex"
         else:
@@ -423,6 +430,13 @@ def mesh_hull(path: Path, ref: str, scale: Sequence[float], urdf: Path, line: in
         raise InputError.at(f"mesh '{ref}' cannot be read: {_one_line(e)}", urdf, line) from None
     if len(vertices) == 0 or len(mesh.faces) == 0:
         raise InputError.at(f"mesh '{ref}' has no triangles", urdf, line)
+    if not np.abs(vertices).max() <= MAX_COORDINATE:  # NaN too
+        raise InputError.at(
+            f"mesh '{ref}' has points beyond {MAX_COORDINATE:g} m of its link (with its scale; "
+            'a mesh in millimetres needs scale="0.001 0.001 0.001")',
+            urdf,
+            line,
+        )
     try:
         hull = convex_hull(vertices)
     except Exception as e:  # qhull on degenerate input

@@ -45,3 +45,10 @@ def test_flat_points_have_no_hull() -> None:
 def test_non_finite_points_are_refused() -> None:
     with pytest.raises(ValueError, match="finite"):
         convex_hull(np.vstack([CUBE, [np.nan, 0, 0]]))
+
+
+def test_far_points_never_reach_qhull() -> None:
+    # a 10 um cloud 1e11 m out: qhull would crash the process (a signal, not an exception)
+    far = CUBE * 1e-5 + 1e11
+    with pytest.raises(ValueError, match="coordinates beyond 10000 m of the origin"):
+        convex_hull(far)

@@ -465,6 +465,30 @@ def test_mesh_format_and_content_errors(
     assert p.line == LINK1_MESH_LINE
 
 
+SCALE_BOUNDS = "link 'link1' collision mesh: 'scale' must be between 1e-06 and 1e+06 in size"
+
+
+@pytest.mark.parametrize(
+    ("scale", "message"),
+    [
+        ("0 0.001 0.001", f"{SCALE_BOUNDS}, got '0 0.001 0.001'"),
+        ("1e80 1e80 1e80", f"{SCALE_BOUNDS}, got '1e80 1e80 1e80'"),
+        (
+            "10 10 10",
+            "mesh '../meshes/cube_mm.stl' has points beyond 100 m of its link (with its scale; "
+            'a mesh in millimetres needs scale="0.001 0.001 0.001")',
+        ),
+    ],
+)
+def test_mesh_scales_within_physical_bounds(mesh_cell: Path, scale: str, message: str) -> None:
+    urdf = mesh_cell / "arm_pkg" / "urdf" / "arm.urdf"
+    urdf.write_text(urdf.read_text().replace('scale="0.001 0.002 0.003"', f'scale="{scale}"'))
+    with pytest.raises(InputError) as e:
+        build_cell_model(load_world(mesh_cell / "cell.yaml"))
+    p = e.value.problems[0]
+    assert (p.message, p.line) == (message, LINK1_MESH_LINE)
+
+
 def test_urdf_entities_never_reach_pinocchio(mesh_cell: Path) -> None:
     urdf = mesh_cell / "arm_pkg" / "urdf" / "arm.urdf"
     text = urdf.read_text().replace(
