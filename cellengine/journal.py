@@ -2,7 +2,9 @@
 read back for ``run --resume`` (:func:`read_progress`): how far the run got.
 
 The journal is append-only, one JSON object per line, on disk at each entry (:class:`Entry`):
-``start`` (or ``resume``), ``recovery`` (a move to where a segment starts), then per segment
+``start`` (with the run's identity: what it was compiled from, see
+:mod:`cellengine.runner.identity`; a new run into the folder starts afresh) or ``resume``,
+``recovery`` (a move to where a segment starts), then per segment
 ``sent`` and ``finished`` (with the arms' q and grippers after it), ``measured`` (a load
 cell), ``replanned``, ``fault`` (what stopped the run), ``timing`` (the servo loop's), ``end``.
 A run killed at any moment leaves whole lines and at most one torn last line, which is
@@ -59,6 +61,8 @@ class Progress:
     measured: dict[str, float] = field(default_factory=dict)
     ended: bool = False
     fault: dict[str, Any] | None = None
+    run: dict[str, Any] | None = None  # the run's identity, from its ``start`` entry
+    started: bool = False  # the journal has a ``start``: progress is of its last run
 
     @property
     def done(self) -> int:
@@ -72,6 +76,20 @@ def drop_torn_tail(path: Path) -> None:
     if data and not data.endswith(b"\n"):
         with path.open("r+b") as f:
             f.truncate(data.rfind(b"\n") + 1)
+
+
+def refuse_unfinished(folder: Path) -> None:
+    """An error when ``folder``'s journal holds a run that did not end: a new program written
+    there would leave that run nothing to resume."""
+    path = folder / JOURNAL
+    if path.is_file() and not (progress := read_progress(path)).ended and progress.started:
+        raise InputError(
+            Problem(
+                "the run folder holds an unfinished run: go on with it with `cellengine run "
+                "PLAN --resume " + str(folder) + "`, or give another --out",
+                str(path),
+            )
+        )
 
 
 def read_progress(path: Path) -> Progress:
@@ -100,8 +118,13 @@ def _progress(entries: list[dict[str, Any]]) -> Progress:
     grippers: dict[str, tuple[str | None, str | None]] = {}
     measured: dict[str, float] = {}
     ended, fault = False, None
+    run: dict[str, Any] | None = None
+    started = False
     for e in entries:
         kind = e["entry"]
+        if kind == Entry.START:  # a new run into the folder: progress is of it alone
+            labels, q, grippers, measured, fault = [], None, {}, {}, None
+            run, started = e.get("run"), True
         if kind == Entry.FINISHED:
             if int(e["segment"]) != len(labels):
                 labels = labels[: int(e["segment"])]  # a replanned or resumed run goes on
@@ -117,4 +140,4 @@ def _progress(entries: list[dict[str, Any]]) -> Progress:
             fault = dict(e.get("fault") or {})
         elif kind == Entry.START:
             ended = False
-    return Progress(tuple(labels), q, grippers, measured, ended, fault)
+    return Progress(tuple(labels), q, grippers, measured, ended, fault, run, started)

@@ -1,32 +1,41 @@
-"""Writing a set of output files all or nothing: each goes to a temporary name beside its
+"""Writing a set of output files all or nothing: each goes to a temporary file beside its
 final one, and only when every file is on disk are they renamed into place (a rename within
-one folder is atomic), so a failure part way leaves no half-written or mismatched files."""
+one folder is atomic, and replaces a link rather than writing through it), so a failure part
+way leaves no half-written or mismatched files. The folder is a checked run folder
+(:mod:`cellengine.runfolder`); temporary names are mkstemp's (created with O_EXCL)."""
 
 from __future__ import annotations
 
 import os
+import tempfile
 from collections.abc import Mapping
 from pathlib import Path
+
+from cellengine.errors import InputError, Problem
+from cellengine.runfolder import check
 
 
 def write_files(out_dir: Path, files: Mapping[str, str]) -> dict[str, Path]:
     """Write ``files`` (file name -> UTF-8 text) into ``out_dir`` (made if needed); return
     each name's path."""
-    out_dir.mkdir(parents=True, exist_ok=True)
+    check(out_dir)
     staged: list[tuple[Path, Path]] = []
     try:
         for name, text in files.items():
-            final = out_dir / name
-            tmp = out_dir / f".{name}.tmp"
-            staged.append((tmp, final))
-            with tmp.open("w", encoding="utf-8") as f:
+            fd, tmp_name = tempfile.mkstemp(prefix=f".{name}.", suffix=".tmp", dir=out_dir)
+            staged.append((Path(tmp_name), out_dir / name))
+            with os.fdopen(fd, "w", encoding="utf-8") as f:
                 f.write(text)
                 f.flush()
                 os.fsync(f.fileno())
-    except BaseException:
+        for tmp, final in staged:
+            tmp.replace(final)
+    except BaseException as e:
         for tmp, _ in staged:
             tmp.unlink(missing_ok=True)
+        if isinstance(e, OSError):  # a full or read-only file system
+            raise InputError(
+                Problem(f"cannot write the run folder: {e.strerror}", str(out_dir))
+            ) from None
         raise
-    for tmp, final in staged:
-        tmp.replace(final)
     return {final.name: final for _, final in staged}

@@ -55,7 +55,6 @@ mm farther past the guide, onto the next one on a dense board.)
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -468,17 +467,8 @@ def element_of(ref: str) -> str:
 
 
 def _plane(up: Vec) -> tuple[Vec, Vec]:
-    return _plane_of(tuple(map(float, up)))
-
-
-@functools.lru_cache(maxsize=64)
-def _plane_of(up: tuple[float, float, float]) -> tuple[Vec, Vec]:
-    """Two horizontal axes for ``up`` (a cell has a few ups: one per platform)."""
-    u = np.array(up)
-    e1, e2 = g.any_perpendicular(u), np.cross(u, g.any_perpendicular(u))
-    e1.setflags(write=False)  # shared by every caller
-    e2.setflags(write=False)
-    return e1, e2
+    e1 = g.any_perpendicular(up)
+    return e1, np.cross(up, e1)
 
 
 def _convex(points: Vec, up: Vec) -> Vec:

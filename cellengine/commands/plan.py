@@ -59,10 +59,14 @@ def _progress() -> Progress:
 
 
 def run(args: argparse.Namespace) -> int:
+    from cellengine.journal import refuse_unfinished
     from cellengine.pipeline import write_plan_outputs
+    from cellengine.runfolder import using
 
     compiled = compile_from_args(args)
-    paths = write_plan_outputs(compiled, args.out)
+    with using(args.out):
+        refuse_unfinished(args.out)
+        paths = write_plan_outputs(compiled, args.out)
     if not args.quiet:
         print(
             f"compiled {len(compiled.program.segments)} segments, "

@@ -14,8 +14,10 @@ from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
 from cellengine.errors import InputError, Problem, display_path
-from cellengine.journal import JOURNAL, Entry, append
+from cellengine.journal import JOURNAL, Entry, append, refuse_unfinished
+from cellengine.runfolder import open_append, using
 from cellengine.runner.driver import DriverOptions, confirm, open_driver
+from cellengine.runner.identity import differences, run_identity
 from cellengine.runner.move import move_to
 from cellengine.runner.outcome import journaled, timed
 from cellengine.runner.play import play
@@ -32,14 +34,16 @@ def run_plan(
     """Write the run directory ``out`` and play the program in it from the start."""
     from cellengine.pipeline import write_plan_outputs
 
-    paths = write_plan_outputs(compiled, out)
-    driver = open_driver(compiled, driver_options)
-    confirm(driver, yes)
-    with (out / JOURNAL).open("a") as journal, driver:
-        append(
-            journal, Entry.START, plan=str(compiled.loaded.plan.file), driver=type(driver).__name__
-        )
-        _drive(compiled, driver, journal, out, quiet)
+    with using(out):
+        refuse_unfinished(out)
+        paths = write_plan_outputs(compiled, out)
+        driver = open_driver(compiled, driver_options)
+        confirm(driver, yes)
+        with open_append(out / JOURNAL) as journal, driver:
+            plan, kind = str(compiled.loaded.plan.file), type(driver).__name__
+            run = run_identity(compiled)
+            append(journal, Entry.START, plan=plan, driver=kind, run=run)
+            _drive(compiled, driver, journal, out, quiet)
     if not quiet:
         print(
             f"ran {len(compiled.program.segments)} segments, "
@@ -61,21 +65,22 @@ def resume_run(
     from cellengine.pipeline import write_plan_outputs
 
     journal_path = run_dir / JOURNAL
-    progress = read_progress(journal_path)
-    if progress.ended:
-        if not quiet:
-            print(f"the run in {display_path(run_dir)} is complete: nothing to do")
-        return
-    compiled = _resumable(compile_plan(), progress, run_dir)
-    write_plan_outputs(compiled, run_dir)
-    q0, grippers = _where_left(progress)
-    driver = open_driver(compiled, driver_options, q0=q0, grippers=grippers)
-    confirm(driver, yes)
-    nxt = compiled.program.segments[progress.done].segment.label
-    drop_torn_tail(journal_path)
-    with journal_path.open("a") as journal, driver:
-        append(journal, Entry.RESUME, from_segment=progress.done, label=nxt)
-        _drive(compiled, driver, journal, run_dir, quiet, progress, q0)
+    with using(run_dir):
+        progress = read_progress(journal_path)
+        if progress.ended:
+            if not quiet:
+                print(f"the run in {display_path(run_dir)} is complete: nothing to do")
+            return
+        compiled = _resumable(compile_plan(), progress, run_dir)
+        write_plan_outputs(compiled, run_dir)
+        q0, grippers = _where_left(progress)
+        driver = open_driver(compiled, driver_options, q0=q0, grippers=grippers)
+        confirm(driver, yes)
+        nxt = compiled.program.segments[progress.done].segment.label
+        drop_torn_tail(journal_path)
+        with open_append(journal_path) as journal, driver:
+            append(journal, Entry.RESUME, from_segment=progress.done, label=nxt)
+            _drive(compiled, driver, journal, run_dir, quiet, progress, q0)
     if not quiet:
         done = len(compiled.program.segments) - progress.done
         print(f"resumed at segment {progress.done} ('{nxt}'): ran {done} more")
@@ -111,6 +116,7 @@ def _resumable(compiled: Compiled, progress: Progress, run_dir: Path) -> Compile
     the segments the run finished and has more."""
     from cellengine.pipeline import compile_loaded
 
+    _same_run(compiled, progress, run_dir)
     if progress.measured:
         compiled = compile_loaded(
             compiled.loaded, compiled.strategy, context=compiled.context, masses=progress.measured
@@ -130,6 +136,32 @@ def _resumable(compiled: Compiled, progress: Progress, run_dir: Path) -> Compile
     if progress.done >= len(labels):
         raise InputError(Problem("every segment was finished; only the end was not journaled"))
     return compiled
+
+
+def _same_run(compiled: Compiled, progress: Progress, run_dir: Path) -> None:
+    """An error unless the run in ``run_dir`` was compiled from the same files, with the same
+    execution, by the same engine (its journaled identity)."""
+    journal = str(run_dir / JOURNAL)
+    if progress.run is None:
+        raise InputError(
+            Problem(
+                "the journal records no run identity (its start entry is missing, or an older "
+                "cellengine wrote it): the run cannot be resumed safely; start a new run in "
+                "another folder",
+                journal,
+            )
+        )
+    changed = differences(progress.run, run_identity(compiled))
+    if changed:
+        raise InputError(
+            Problem(
+                f"the run in {display_path(run_dir)} started from other inputs: "
+                + "; ".join(changed)
+                + ". Resume it with the files and options it started with, or start a new "
+                "run in another folder",
+                str(compiled.loaded.plan.file),
+            )
+        )
 
 
 def _where_left(progress: Progress) -> tuple[Any, dict[str, Any] | None]:

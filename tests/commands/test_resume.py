@@ -13,8 +13,10 @@ import cellengine.skills.cable  # noqa: F401  (registers the cable skills)
 from cellengine.cli import main
 from cellengine.drivers.fault import DriverFault
 from cellengine.drivers.sim import SimDriver
-from cellengine.journal import read_progress
+from cellengine.errors import display_path
+from cellengine.journal import Entry, append, read_progress
 from cellengine.pipeline import Compiled, compile_plan, write_plan_outputs
+from cellengine.runner.identity import run_identity
 from cellengine.runner.outcome import journaled
 from cellengine.runner.play import play as _play
 from tests.conftest import CELLS
@@ -39,6 +41,7 @@ def _faulted_run(tmp_path: Path) -> Compiled:
     segment = c.program.segments[STOP_AT].trajectory
     t_fault = float(np.mean([segment.start_time, segment.end_time]))
     with (tmp_path / "journal.jsonl").open("a") as journal:
+        append(journal, Entry.START, run=run_identity(c))
         driver = SimDriver(c.world.cell, joints, objects=c.world.objects, q0=q0)
         driver.configure()
         driver.activate()
@@ -59,7 +62,7 @@ def test_a_faulted_run_resumes_where_it_stopped(tmp_path: Path) -> None:
     assert main(["run", str(PLAN), "--resume", str(tmp_path), "-q"]) == 0
     entries = _entries(tmp_path)
     kinds = [e["entry"] for e in entries]
-    assert kinds.count("fault") == 1 and kinds.count("resume") == 1
+    assert kinds.count("start") == 1 and kinds.count("fault") == 1 and kinds.count("resume") == 1
     assert kinds.count("recovery") == 1  # the arm stopped mid-segment: a move back first
     finished = [e["segment"] for e in entries if e["entry"] == "finished"]
     assert finished == list(range(len(c.program.segments)))  # each once, none repeated
@@ -116,3 +119,61 @@ def test_a_run_begins_with_a_move_to_the_plans_start(tmp_path: Path) -> None:
         move_to(c, driver, journal, 0)  # there already
     kinds = [e["entry"] for e in _entries(tmp_path)]
     assert kinds == ["recovery"]
+
+
+def test_resume_refuses_a_run_of_other_files_or_another_execution(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    _faulted_run(tmp_path)
+    before = _entries(tmp_path)
+    argv = ["run", str(PLAN), "--resume", str(tmp_path), "-q", "--execution", "sync"]
+    assert main(argv) == 1
+    assert capsys.readouterr().err == (
+        f"{display_path(PLAN)}: the run in {tmp_path} started from other inputs: the execution "
+        "was split, now sync. Resume it with the files and options it started with, or start a "
+        "new run in another folder\n"
+    )
+    assert _entries(tmp_path) == before  # nothing ran, nothing journaled
+
+
+def test_resume_refuses_a_journal_without_its_runs_identity(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "journal.jsonl"
+    path.write_text(
+        '{"entry": "finished", "segment": 0, "label": "a", "q": [0.0], "grippers": {}}\n'
+    )
+    assert main(["run", str(PLAN), "--resume", str(tmp_path), "-q"]) == 1
+    assert capsys.readouterr().err == (
+        f"{path}: the journal records no run identity (its start entry is missing, or an older "
+        "cellengine wrote it): the run cannot be resumed safely; start a new run in another "
+        "folder\n"
+    )
+
+
+def test_progress_is_of_the_last_run_started_in_the_folder(tmp_path: Path) -> None:
+    """A plan run again into a finished folder and killed in its first segment has finished
+    nothing: the earlier run's segments are not this run's."""
+    path = tmp_path / "journal.jsonl"
+    done = '{"entry": "finished", "segment": %d, "label": "s%d", "q": [0.0], "grippers": {}}\n'
+    lines = ['{"entry": "start", "run": {"plan": "x"}}\n']
+    lines += [done % (i, i) for i in range(7)] + ['{"entry": "end"}\n']
+    lines += ['{"entry": "start", "run": {"plan": "y"}}\n', '{"entry": "sent", "segment": 0}\n']
+    path.write_text("".join(lines))
+    progress = read_progress(path)
+    assert (progress.done, progress.ended, progress.run) == (0, False, {"plan": "y"})
+
+
+def test_a_new_run_or_plan_into_a_folder_with_an_unfinished_run_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    _faulted_run(tmp_path)
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    for command in ("run", "plan"):
+        assert main([command, str(PLAN), "--out", str(tmp_path), "-q"]) == 1
+        assert capsys.readouterr().err == (
+            f"{tmp_path / 'journal.jsonl'}: the run folder holds an unfinished run: go on with "
+            f"it with `cellengine run PLAN --resume {tmp_path}`, or give another --out\n"
+        )
+    after = {p.name: p.read_bytes() for p in tmp_path.iterdir() if p.name != ".lock"}
+    assert after == before
