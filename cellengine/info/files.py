@@ -114,7 +114,7 @@ def read_capped(
         fd = os.open(path, os.O_RDONLY | _NONBLOCK)
     except OSError as e:
         raise InputError.at(f"cannot read{name}: {reason(e)}", *where) from None
-    with os.fdopen(fd, "rb") as f:
+    try:
         st = os.fstat(fd)  # of what was opened: a file swapped in since cannot slip through
         if not stat.S_ISREG(st.st_mode):
             what = f"{special(st.st_mode)}, not a regular file"
@@ -124,7 +124,10 @@ def read_capped(
                 f"file is {st.st_size} bytes, more than the {cap}-byte limit for {kind} files",
                 path,
             )
-        data = f.read(cap + 1)
+        with open(fd, "rb", closefd=False) as f:  # (io.open refuses a folder's fd)
+            data = f.read(cap + 1)
+    finally:
+        os.close(fd)
     if len(data) > cap:  # grew while reading
         raise InputError.at(f"file is more than the {cap}-byte limit for {kind} files", path)
     return data
