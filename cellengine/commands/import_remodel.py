@@ -3,9 +3,9 @@ cell.yaml, objects.yaml and plan.yaml (DESIGN 3.2).
 
 The REMODEL platform files are copied into DEST and used as they are (``format: remodel``);
 the process CSVs become objects and plan steps. The platform files are read first, as
-regular files inside SRC within the readers' size caps, then everything is written to a staging folder
-next to DEST, validated there, and moved into place only when it validates, so a failed
-import leaves DEST as it was.
+regular files inside SRC within the readers' size caps; then everything is written to a
+staging folder next to DEST, validated there, and moved into place only when it validates,
+so a failed import leaves DEST as it was.
 """
 
 from __future__ import annotations
