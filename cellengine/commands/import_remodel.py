@@ -2,9 +2,10 @@
 cell.yaml, objects.yaml and plan.yaml (DESIGN 3.2).
 
 The REMODEL platform files are copied into DEST and used as they are (``format: remodel``);
-the process CSVs become objects and plan steps. Everything is written to a staging folder
-next to DEST, validated there, and moved into place only when it validates, so a failed
-import leaves DEST as it was.
+the process CSVs become objects and plan steps. The platform files are read first, as
+regular files inside SRC within the readers' size caps; then everything is written to a
+staging folder next to DEST, validated there, and moved into place only when it validates,
+so a failed import leaves DEST as it was.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ import yaml
 
 from cellengine.errors import EXIT_OK, InputError, Problem, UsageError, display_path, known
 from cellengine.info.cell import UrdfModel
+from cellengine.info.files import read_capped, real
 from cellengine.info.load import load_cell, load_plan, load_world
 from cellengine.info.remodel import load_ids
 from cellengine.info.remodel_csv import (
@@ -41,6 +43,8 @@ COMPONENTS = "Components_definition.csv"
 SEQUENCE = "Assembly_sequence.csv"
 HARNESS = "WH_configuration.xml"
 MODELS = "Jigs_definition*.xml"  # the sample has Jigs_definition_v2.xml
+# The reader's size cap of each kind of copied file (the .wri ids file is read as CSV).
+_CAP_KINDS = {".x3d": "x3d", ".wri": "csv", ".xml": "xml"}
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_-]*$")
 _SKILLS = {"EC": "PickCable", "PC": "PlaceConnector", "RC": "RouteCable"}
 T = TypeVar("T")
@@ -188,7 +192,7 @@ def _platform_files(src: Path) -> dict[str, tuple[Path, Path]]:
     for cad in sorted(src.glob("*_cad.x3d")):
         name = cad.name.removesuffix("_cad.x3d")
         ids = src / f"{name}_ids.wri"
-        if not ids.is_file():
+        if not os.path.lexists(ids):  # there but not a regular file: read_copies says what
             raise InputError.at(
                 f"no {ids.name} next to it: a platform is a <name>_cad.x3d and <name>_ids.wri pair",
                 cad,
@@ -666,12 +670,34 @@ def staging(dest: Path) -> Iterator[Path]:
         shutil.rmtree(tmp, ignore_errors=True)
 
 
-def write_files(tmp: Path, texts: Mapping[str, str], copies: Mapping[str, Path]) -> None:
+def read_copies(source: Source) -> dict[str, bytes]:
+    """The platform files to copy, read before anything is written: regular files inside
+    SRC (a link may lead to one inside it), each within its reader's size cap. Never a
+    stream: a link to /dev/zero filled the disk before anything was validated."""
+    problems: list[Problem] = []
+    out: dict[str, bytes] = {}
+    folder = real(source.folder)
+    for rel, path in source.copies().items():
+        try:
+            if not real(path).is_relative_to(folder):
+                raise InputError.at(
+                    "is a link that leads outside the REMODEL folder; copy the file itself into it",
+                    path,
+                )
+            out[rel] = read_capped(path, _CAP_KINDS.get(path.suffix.lower(), "xml"))
+        except InputError as e:
+            problems.extend(e.problems)
+    if problems:
+        raise InputError(problems)
+    return out
+
+
+def write_files(tmp: Path, texts: Mapping[str, str], copies: Mapping[str, bytes]) -> None:
     for rel, text in texts.items():
         (tmp / rel).write_text(text, encoding="utf-8")
-    for rel, src in copies.items():
+    for rel, data in copies.items():
         (tmp / rel).parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(src, tmp / rel)  # not copy2: REMODEL files are often read-only
+        (tmp / rel).write_bytes(data)  # contents only: REMODEL files are often read-only
 
 
 def check_staged(tmp: Path, dest: Path, inputs: Inputs, steps: Sequence[Step]) -> None:
@@ -682,9 +708,9 @@ def check_staged(tmp: Path, dest: Path, inputs: Inputs, steps: Sequence[Step]) -
     def remap(p: Problem) -> Problem:
         # Problems in the staged copies point at the SRC files a user would edit; those
         # in the written YAML at where it would have been written.
-        if p.file is None or not Path(p.file).resolve().is_relative_to(tmp.resolve()):
+        if p.file is None or not real(Path(p.file)).is_relative_to(real(tmp)):
             return p
-        rel = Path(p.file).resolve().relative_to(tmp.resolve()).as_posix()
+        rel = real(Path(p.file)).relative_to(real(tmp)).as_posix()
         return replace(p, file=str(copies.get(rel, dest / rel)))
 
     try:
@@ -734,6 +760,7 @@ def run(args: argparse.Namespace) -> int:
     texts_names = ("cell.yaml", "objects.yaml", "plan.yaml")
     check_free(dest, [*texts_names, *copies], args.force)
 
+    contents = read_copies(source)  # before anything is written
     inputs = read_inputs(source, setup)
     steps, connectors = build_steps(inputs)
     texts = dict(
@@ -748,7 +775,7 @@ def run(args: argparse.Namespace) -> int:
         )
     )
     with staging(dest) as tmp:
-        write_files(tmp, texts, copies)
+        write_files(tmp, texts, contents)
         check_staged(tmp, dest, inputs, steps)
         move_into_place(tmp, dest)
     print(

@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import errno
 import json
+import os
+import stat
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -11,6 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from cellengine.errors import EXIT_INVALID, EXIT_OK, InputError, Problem, UsageError, display_path
+from cellengine.info.files import real
 from cellengine.info.load import LoadedPlan, load_objects, load_plan, load_world
 from cellengine.info.yamlio import load_yaml
 from cellengine.world import World
@@ -58,8 +62,8 @@ def validate_paths(paths: list[Path], compile_plans: bool = False) -> list[Resul
     for p in paths:
         if p.is_dir():
             files += [(f, False) for f in sorted(p.rglob("*.y*ml")) if _visible(f, p)]
-        elif p.is_file():
-            files.append((p, True))
+        elif p.exists() or _loops(p):
+            files.append((p, True))  # not a regular file: reading it says what it is
         else:
             raise UsageError.at("no such file or folder", p)
     # each cell loaded once, whether it loads or not (plans sharing a broken cell do not
@@ -68,7 +72,7 @@ def validate_paths(paths: list[Path], compile_plans: bool = False) -> list[Resul
     contexts: dict[tuple[Path, str], PlanningContext] = {}
 
     def world_of(cell: Path) -> World:
-        key = cell.resolve()
+        key = real(cell)
         if key not in worlds:
             try:
                 from cellengine.motion.robot import build_cell_model  # pinocchio: when needed
@@ -89,7 +93,7 @@ def validate_paths(paths: list[Path], compile_plans: bool = False) -> list[Resul
         from cellengine.pipeline import compile_loaded
 
         world = loaded.world  # the scene has the containers of the plan's objects
-        key = (world.cell_file.resolve(), world.objects.model_dump_json())
+        key = (real(world.cell_file), world.objects.model_dump_json())
         if key not in contexts:
             contexts[key] = build_context(world)
         compile_loaded(loaded, context=contexts[key])
@@ -97,9 +101,9 @@ def validate_paths(paths: list[Path], compile_plans: bool = False) -> list[Resul
     results = []
     seen: set[Path] = set()
     for f, explicit in files:
-        if f.resolve() in seen:
+        if real(f) in seen:
             continue
-        seen.add(f.resolve())
+        seen.add(real(f))
         result = _validate_file(f, explicit, world_of, compile_one if compile_plans else None)
         if result is not None:
             results.append(result)
@@ -107,9 +111,30 @@ def validate_paths(paths: list[Path], compile_plans: bool = False) -> list[Resul
 
 
 def _visible(f: Path, top: Path) -> bool:
-    return f.suffix in (".yaml", ".yml") and not any(
-        part.startswith(".") for part in f.relative_to(top).parts
+    return (
+        f.suffix in (".yaml", ".yml")
+        and not any(part.startswith(".") for part in f.relative_to(top).parts)
+        and _regular_or_unreadable(f)
     )
+
+
+def _regular_or_unreadable(f: Path) -> bool:
+    """Whether a folder's file is for validation: a regular file, or one that cannot be
+    read (a broken link, a loop of links: reported). A FIFO, a device or a folder named
+    x.yaml holds no cell: never opened (a FIFO would wait for a writer forever)."""
+    try:
+        return stat.S_ISREG(os.stat(f).st_mode)
+    except OSError:
+        return True
+
+
+def _loops(p: Path) -> bool:
+    """Whether ``p`` is a loop of symbolic links (which exists(), like ls, calls missing)."""
+    try:
+        os.stat(p)
+    except OSError as e:
+        return e.errno == errno.ELOOP
+    return False
 
 
 def _validate_file(
@@ -175,7 +200,7 @@ def _text(results: list[Result]) -> None:
 
 
 def _key(p: Problem) -> tuple[object, ...]:
-    return (Path(p.file).resolve() if p.file else None, p.line, p.col, p.message)
+    return (real(Path(p.file)) if p.file else None, p.line, p.col, p.message)
 
 
 def _json(results: list[Result]) -> None:

@@ -6,7 +6,7 @@ from collections.abc import Sequence
 from ipaddress import IPv4Address
 from typing import Annotated, Literal
 
-from pydantic import Field, StringConstraints, model_validator
+from pydantic import Field, StringConstraints, field_validator, model_validator
 
 from cellengine import geometry
 from cellengine.arrays import Mat
@@ -16,6 +16,11 @@ from cellengine.info.units import Angle, Frozen, Length, Mass, Units, Vec3Angle,
 Name = Annotated[str, StringConstraints(pattern=r"^[A-Za-z_][A-Za-z0-9_-]*$")]
 
 BUILTIN_ROBOTS = ("ur3e", "ur5", "ur5e", "ur10e")
+# Robots in one cell. Its tasks take one or two arms, and the collision model checks every
+# link of every arm against every other, with each pair's motion per joint of the cell: that
+# grows with the cube of the count (40 robots: 10 s and 1 GB before a plan is looked at).
+# Refused at loading, before any of it is built.
+MAX_ROBOTS = 8
 # m: the least distance between the arms, and from an arm to what it is not meant to touch
 DEFAULT_CLEARANCE = 0.010
 
@@ -227,7 +232,7 @@ DriverSpec = Annotated[SimDriver | UrRtdeDriver, Field(discriminator="kind")]
 class Cell(Frozen):
     name: Name
     units: Units = Units()
-    robots: dict[Name, Robot] = Field(min_length=1)
+    robots: dict[Name, Robot] = Field(min_length=1, json_schema_extra={"maxProperties": MAX_ROBOTS})
     tools: dict[Name, Tool] = {}
     platforms: dict[Name, PlatformSpec] = {}
     obstacles: dict[Name, Obstacle] = {}
@@ -236,3 +241,14 @@ class Cell(Frozen):
     # every compiled segment keeps the arms this far apart, and from what they do not touch
     # on purpose (the gate refuses a segment passing closer); 0: measured and reported only
     clearance: Length = Field(DEFAULT_CLEARANCE, ge=0)
+
+    @field_validator("robots")
+    @classmethod
+    def _plannable(cls, robots: dict[str, Robot]) -> dict[str, Robot]:
+        if len(robots) > MAX_ROBOTS:
+            raise ValueError(
+                f"{len(robots)} robots, more than the {MAX_ROBOTS} this engine plans for: its "
+                "tasks take one or two arms, and checking every arm against every other grows "
+                "with the cube of the count"
+            )
+        return robots

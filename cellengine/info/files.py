@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import errno
 import os
 import re
+import stat
 from pathlib import Path
 
 from cellengine.errors import InputError
@@ -17,6 +19,9 @@ MAX_BYTES = {
     "urdf": 16 << 20,
     "mesh": 64 << 20,
 }
+
+# Opening a FIFO for reading waits for a writer; without blocking it opens, and is refused.
+_NONBLOCK = getattr(os, "O_NONBLOCK", 0)
 
 _SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*:")
 
@@ -37,23 +42,56 @@ def resolve_inside(
     if "\0" in ref:  # YAML's "\0" escape; no file system takes it
         raise InputError.at(f"file reference {_shown(ref)} contains a NUL character", *where)
     try:
-        base = root.resolve()
-        target = (base / ref).resolve()
+        base = real(root)
+        target = real(base / ref)
         if not target.is_relative_to(base):
             link = Path(os.path.normpath(base / ref)).is_relative_to(base)
             how = "is a link that leads" if link else "points"
             raise InputError.at(
                 f"file reference {_shown(ref)} {how} outside the cell folder", *where
             )
-        if target.is_dir():
-            raise InputError.at(f"file reference {_shown(ref)} is a folder, not a file", *where)
-        if not target.is_file():
-            raise InputError.at(f"file {_shown(ref)} not found (looked for {target})", *where)
+        try:
+            mode = target.stat().st_mode
+        except (FileNotFoundError, NotADirectoryError):
+            raise InputError.at(
+                f"file {_shown(ref)} not found (looked for {target})", *where
+            ) from None
     except OSError as e:  # a name too long for the file system, a loop of links
         raise InputError.at(
-            f"file reference {_shown(ref)} cannot be used: {e.strerror}", *where
+            f"file reference {_shown(ref)} cannot be used: {reason(e)}", *where
         ) from None
+    if stat.S_ISDIR(mode):
+        raise InputError.at(f"file reference {_shown(ref)} is a folder, not a file", *where)
+    if not stat.S_ISREG(mode):
+        raise InputError.at(
+            f"file reference {_shown(ref)} is {special(mode)}, not a regular file", *where
+        )
     return target
+
+
+def real(path: Path) -> Path:
+    """``path`` with its links followed, as ``Path.resolve()``; but a loop of links is left
+    for opening the file to report (as OSError ELOOP), where Python 3.11's resolve raises
+    RuntimeError."""
+    return Path(os.path.realpath(path))
+
+
+def reason(e: OSError) -> str:
+    """Why the system refused a path, in a user's words."""
+    return "a loop of symbolic links" if e.errno == errno.ELOOP else str(e.strerror or e)
+
+
+def special(mode: int) -> str:
+    """What a file that is not a regular file is, for messages."""
+    if stat.S_ISDIR(mode):
+        return "a folder"
+    if stat.S_ISFIFO(mode):
+        return "a named pipe (FIFO)"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "a device"
+    return "a special file"
 
 
 def _shown(ref: str) -> str:
@@ -67,18 +105,29 @@ def read_capped(
     line: int | None = None,
     col: int | None = None,
 ) -> bytes:
-    """Read a whole file, refusing it before reading if it is larger than its kind's cap."""
+    """Read a whole regular file, refusing before reading anything else (a FIFO would block,
+    a device never end) or a file larger than its kind's cap."""
     cap = MAX_BYTES[kind]
+    # at the place that names the file, naming it; else at the file itself
+    where, name = ((file, line, col), f" '{path}'") if file else ((path,), "")
     try:
-        size = path.stat().st_size
+        fd = os.open(path, os.O_RDONLY | _NONBLOCK)
     except OSError as e:
-        raise InputError.at(f"cannot read '{path}': {e.strerror}", file or path, line, col) from e
-    if size > cap:
-        raise InputError.at(
-            f"file is {size} bytes, more than the {cap}-byte limit for {kind} files", path
-        )
-    with path.open("rb") as f:
-        data = f.read(cap + 1)
+        raise InputError.at(f"cannot read{name}: {reason(e)}", *where) from None
+    try:
+        st = os.fstat(fd)  # of what was opened: a file swapped in since cannot slip through
+        if not stat.S_ISREG(st.st_mode):
+            what = f"{special(st.st_mode)}, not a regular file"
+            raise InputError.at(f"'{path}' is {what}" if file else what, *where)
+        if st.st_size > cap:
+            raise InputError.at(
+                f"file is {st.st_size} bytes, more than the {cap}-byte limit for {kind} files",
+                path,
+            )
+        with open(fd, "rb", closefd=False) as f:  # (io.open refuses a folder's fd)
+            data = f.read(cap + 1)
+    finally:
+        os.close(fd)
     if len(data) > cap:  # grew while reading
         raise InputError.at(f"file is more than the {cap}-byte limit for {kind} files", path)
     return data

@@ -28,7 +28,7 @@ from cellengine.errors import CellError, InputError, Problem, display_path, know
 from cellengine.geometry import axis_angle_to_matrix, inverse, rot_x, transform_points
 from cellengine.info import primitives
 from cellengine.info.bounds import MAX_COORDINATE, SCALES, scale_ok
-from cellengine.info.files import read_capped, resolve_inside
+from cellengine.info.files import read_capped, real, resolve_inside
 from cellengine.info.mesh import Mesh
 from cellengine.info.xmlsafe import parse_xml
 
@@ -37,6 +37,10 @@ Element: TypeAlias = etree._Element
 MAX_INLINE_DEPTH = 8
 MAX_NESTING = 200  # keeps recursion far below Python's limit, even through Inlines
 MAX_VISITS = 1_000_000  # elements visited, counting every USE instance
+# Inline instances in one load. A CAD export inlines a part file once per placement: a few
+# hundred. 1000 Inlines of a file of 1000 Inlines is a file built to expand, refused here
+# rather than after minutes of walking a million copies.
+MAX_INLINES = 10_000
 MAX_TRIANGLES = 5_000_000  # and as many vertices, counting every USE instance
 
 GROUPS = ("Anchor", "Collision", "Group", "StaticGroup", "Switch", "Transform")
@@ -129,10 +133,10 @@ def load_x3d(
     """
     if up not in ("y", "z"):
         raise ValueError(f"up must be 'y' or 'z', got {up!r}")
-    loader = _Loader(Path(root).resolve(), meshes, bad_geometry == "skip")
-    top, scene = loader.open(Path(path), ())
+    loader = _Loader(real(Path(root)), meshes, bad_geometry == "skip")
+    top, scene = loader.open(Path(path))
     T = _Y_UP if up == "y" else np.eye(4)
-    ctx = _Ctx(top, T, T[:3, :3].copy(), None, False, 0)
+    ctx = _Ctx(top, T, T[:3, :3].copy(), None, False, 0, (top.real,))
     with np.errstate(over="ignore", invalid="ignore"):  # overflow is checked, and refused
         for child in _children(scene):
             loader.visit(child, ctx)
@@ -151,10 +155,10 @@ class _File:
     order is the k-th start tag.
     """
 
-    def __init__(self, path: Path, root: Element, chain: tuple[Path, ...]) -> None:
+    def __init__(self, path: Path, root: Element) -> None:
         self.name = str(path)  # as reported in errors and in X3DNode.file
         self.path = path
-        self.chain = (*chain, path.resolve())  # the Inline chain down to this file
+        self.real = real(path)  # Inline urls are relative to it; the key of the parsed files
         self.defs: dict[str, Element] = {}  # DEF and id names; a USE looks only in its file
         self._order = {el: i for i, el in enumerate(root.iter(etree.Element))}
         self._lines: IntArray | None = None
@@ -224,6 +228,7 @@ class _Ctx(NamedTuple):
     owner: _Owner | None  # nearest named ancestor
     instancing: bool  # inside a USE: geometry again, but no new names
     depth: int
+    chain: tuple[Path, ...]  # the Inline chain of files down to this one, resolved
 
 
 class _Loader:
@@ -236,14 +241,23 @@ class _Loader:
         self.active: set[Element] = set()  # elements being visited: USE cycles
         self.cache: dict[Element, tuple[Mat, IntArray]] = {}  # geometry, in its own frame
         self.points: dict[Element, Mat] = {}  # Coordinate nodes, often USE'd
+        self.files: dict[Path, tuple[_File, Element]] = {}  # by resolved path
+        self.targets: dict[Element, Path] = {}  # each Inline's file, found once
         self.visits = 0
+        self.inlines = 0
         self.triangles = 0
         self.vertices = 0
 
-    def open(self, path: Path, chain: tuple[Path, ...]) -> tuple[_File, Element]:
-        """The file and its Scene element."""
+    def open(self, path: Path) -> tuple[_File, Element]:
+        """The file and its Scene element, parsed once however often it is Inlined."""
+        key = real(path)
+        if key not in self.files:
+            self.files[key] = self._parse(path)
+        return self.files[key]
+
+    def _parse(self, path: Path) -> tuple[_File, Element]:
         root = parse_xml(path, kind="x3d").getroot()
-        f = _File(path, root, chain)
+        f = _File(path, root)
         if _tag(root) != "X3D":
             raise f.error(root, f"the root element must be X3D, got '{root.tag}'")
         scene = next((c for c in root if _tag(c) == "Scene"), None)
@@ -336,23 +350,30 @@ class _Loader:
         return owner
 
     def _inline(self, el: Element, ctx: _Ctx) -> None:
-        path = self._inline_path(el, ctx.file)
-        if path in ctx.file.chain:
-            loop = " -> ".join(self._rel(p) for p in (*ctx.file.chain, path))
+        self.inlines += 1
+        if self.inlines > MAX_INLINES:
+            raise ctx.file.error(
+                el, f"the scene has more than {MAX_INLINES} Inlines (files Inlined again and again)"
+            )
+        path = self.targets.get(el)
+        if path is None:
+            path = self.targets[el] = self._inline_path(el, ctx.file)
+        if path in ctx.chain:
+            loop = " -> ".join(self._rel(p) for p in (*ctx.chain, path))
             raise ctx.file.error(el, f"Inline '{self._rel(path)}' includes itself ({loop})")
-        if len(ctx.file.chain) > MAX_INLINE_DEPTH:
+        if len(ctx.chain) > MAX_INLINE_DEPTH:
             raise ctx.file.error(
                 el, f"Inline '{self._rel(path)}' nests files more than {MAX_INLINE_DEPTH} deep"
             )
         try:
-            inlined, scene = self.open(path, ctx.file.chain)
+            inlined, scene = self.open(path)
         except CellError as e:  # not X3D at all, perhaps: say which Inline brought it in
             where = f"{display_path(ctx.file.name)}:{ctx.file.line(el)}"
             raise InputError(
                 replace(p, message=f"{p.message} (in the file of the Inline at {where})")
                 for p in e.problems
             ) from None
-        ctx = ctx._replace(file=inlined)
+        ctx = ctx._replace(file=inlined, chain=(*ctx.chain, inlined.real))
         for child in _children(scene):
             self.visit(child, ctx)
 
@@ -374,13 +395,13 @@ class _Loader:
                     f"Inline url '{url}' is a URL; only files inside the cell folder "
                     f"{self.root} are allowed",
                 )
-            target = (f.chain[-1].parent / url).resolve()
+            target = real(f.real.parent / url)
             if not target.is_relative_to(self.root):
                 raise f.error(el, f"Inline url '{url}' points outside the cell folder {self.root}")
             targets.append(target)
         try:  # a name too long for the file system raises rather than "not found"
             found = next((t for t in targets if t.is_file()), targets[0])
-            return resolve_inside(self.root, self._rel(found), f.name, f.line(el))
+            return resolve_inside(self.root, self._rel(found), f.name, *f.position(el))
         except OSError as e:
             raise f.error(
                 el, f"Inline url '{_shown(urls[0])}' cannot be read: {e.strerror}"

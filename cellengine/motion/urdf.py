@@ -45,7 +45,7 @@ from cellengine import geometry as g
 from cellengine.arrays import Mat
 from cellengine.errors import InputError, known
 from cellengine.info.bounds import MAX_COORDINATE, SCALES, scale_ok
-from cellengine.info.files import read_capped, resolve_inside
+from cellengine.info.files import read_capped, real, resolve_inside
 from cellengine.info.xmlsafe import parse_xml
 from cellengine.motion.hull import convex_hull
 
@@ -380,11 +380,14 @@ def resolve_mesh(ref: str, urdf_file: Path, cell_dir: Path, line: int | None = N
         )
     else:
         candidates = [urdf_file.parent / ref]
-    base = cell_dir.resolve()
+    base = real(cell_dir)
     for c in candidates:
         if not Path(os.path.normpath(c.absolute())).is_relative_to(base):
             raise InputError.at(f"mesh '{ref}' points outside the cell folder", *where)
-    found = next((c for c in candidates if c.is_file()), None)
+    # else one that is there but no regular file (a loop of links, a FIFO): refused below
+    found = next((c for c in candidates if c.is_file()), None) or next(
+        (c for c in candidates if os.path.lexists(c)), None
+    )
     if found is None:
         looked = ", ".join(os.path.relpath(c, base) for c in candidates)
         raise InputError.at(f"mesh '{ref}' not found (looked for {looked})", *where)
@@ -399,7 +402,7 @@ def _package_candidates(package: str, rest: str, urdf_dir: Path, cell_dir: Path)
     the folder itself if it is named ``package``, then its sub-folder ``package``."""
     if package in (".", ".."):
         return [urdf_dir / package / rest]  # refused as outside or found, never searched
-    base, folder = cell_dir.resolve(), urdf_dir.resolve()
+    base, folder = real(cell_dir), real(urdf_dir)
     out: list[Path] = []
     while True:
         if folder.name == package:

@@ -3,7 +3,10 @@ validate; every mistake is reported at its file and row, and a failed import wri
 
 from __future__ import annotations
 
+import os
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +15,7 @@ import yaml
 
 from cellengine.cli import main
 from cellengine.commands.import_remodel import schema_line
+from cellengine.info import files
 from cellengine.info.load import load_cell, load_objects, load_world
 from tests.conftest import REMODEL
 
@@ -363,6 +367,77 @@ def test_failed_import_with_force_keeps_the_old_files(src: Path, tmp_path: Path)
     sequence(src, "1;EC;CON1;C2.1-C1.1", "2;RC;CON1;J3.9")  # no guide 9: fails validation
     assert run(src, dest, "--force") == 1
     assert {p: p.read_bytes() for p in dest.rglob("*") if p.is_file()} == before
+    assert leftovers(tmp_path) == []
+
+
+# --- platform files that are no plain files ----------------------------------------------
+
+
+def import_in_subprocess(src: Path, dest: Path) -> subprocess.CompletedProcess[str]:
+    """The import in a fresh process with a timeout: a FIFO or device fails, not hangs."""
+    return subprocess.run(
+        [sys.executable, "-m", "cellengine", "import", "remodel", str(src), str(dest)],
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+
+
+def test_link_leading_outside_src_is_refused_before_anything_is_copied(
+    src: Path, tmp_path: Path
+) -> None:
+    """A link to /dev/zero was copied until the disk was full, before any validation. Here
+    the link leads to a FIFO outside: were it followed, the import would wait, not fill the
+    disk, and time out."""
+    os.mkfifo(tmp_path / "pipe")
+    (src / "platform_cad.x3d").unlink()
+    (src / "platform_cad.x3d").symlink_to(tmp_path / "pipe")
+    dest = tmp_path / "cell"
+    result = import_in_subprocess(src, dest)
+    assert result.stderr.splitlines() == [
+        f"{src}/platform_cad.x3d: is a link that leads outside the REMODEL folder; copy the "
+        "file itself into it"
+    ]
+    assert result.returncode == 1
+    assert not dest.exists()
+    assert leftovers(tmp_path) == []
+
+
+def test_fifo_and_folder_in_src_are_refused(src: Path, tmp_path: Path) -> None:
+    (src / "combs_ids.wri").unlink()
+    os.mkfifo(src / "combs_ids.wri")
+    (src / "platform_cad.x3d").unlink()
+    (src / "platform_cad.x3d").mkdir()
+    result = import_in_subprocess(src, tmp_path / "cell")
+    assert result.stderr.splitlines() == [
+        f"{src}/combs_ids.wri: a named pipe (FIFO), not a regular file",
+        f"{src}/platform_cad.x3d: a folder, not a regular file",
+    ]
+    assert result.returncode == 1
+    assert leftovers(tmp_path) == []
+
+
+def test_link_inside_src_is_copied_as_a_file(src: Path, tmp_path: Path) -> None:
+    (src / "cad").mkdir()
+    (src / "platform_cad.x3d").rename(src / "cad" / "platform.x3d")
+    (src / "platform_cad.x3d").symlink_to("cad/platform.x3d")
+    dest = tmp_path / "cell"
+    assert run(src, dest) == 0
+    copy = dest / "platform" / "platform_cad.x3d"
+    assert not copy.is_symlink()
+    assert copy.read_bytes() == (src / "cad" / "platform.x3d").read_bytes()
+
+
+def test_platform_files_over_the_readers_size_cap_are_refused(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setitem(files.MAX_BYTES, "x3d", 50_000)
+    size = (src / "combs_cad.x3d").stat().st_size
+    assert run(src, tmp_path / "cell") == 1
+    assert errors(capsys) == [
+        f"{src}/combs_cad.x3d: file is {size} bytes, more than the 50000-byte limit for x3d files"
+    ]
     assert leftovers(tmp_path) == []
 
 

@@ -1,9 +1,13 @@
 import json
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
 from cellengine.cli import main
+from tests.conftest import ROOT
 
 CELL = """\
 name: bench
@@ -120,3 +124,73 @@ def test_robot_models_are_built(
     assert capsys.readouterr().out == (
         "cell.yaml:4:40: robots.right.model.tip: unknown link 'l9' in arm.urdf; known: base, l1\n"
     )
+
+
+def validate_in_subprocess(folder: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    """`cellengine validate` in a fresh process with a timeout: a hang fails, not hangs."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    return subprocess.run(
+        [sys.executable, "-m", "cellengine", "validate", "--no-compile", *args],
+        cwd=folder,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+
+
+def test_folder_skips_what_is_not_a_regular_file(cell_dir: Path) -> None:
+    """A FIFO named *.yaml would block the open forever; a folder named x.yaml is no file."""
+    os.mkfifo(cell_dir / "fifo.yaml")
+    (cell_dir / "x.yaml").mkdir()
+    result = validate_in_subprocess(cell_dir, ".")
+    assert result.stdout.splitlines() == [
+        "cell.yaml: ok (cell)",
+        "objects.yaml: ok (objects)",
+        "plan.yaml: ok (plan)",
+    ]
+    assert (result.returncode, result.stderr) == (0, "3 file(s) checked, 0 with problems\n")
+
+
+def test_a_named_fifo_or_device_is_an_error(cell_dir: Path) -> None:
+    os.mkfifo(cell_dir / "fifo.yaml")
+    result = validate_in_subprocess(cell_dir, "fifo.yaml", "/dev/null")
+    assert result.stdout.splitlines() == [
+        "fifo.yaml: a named pipe (FIFO), not a regular file",
+        "/dev/null: a device, not a regular file",
+    ]
+    assert result.returncode == 1
+
+
+def test_symlink_loops_are_errors_at_the_file(
+    cell_dir: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(cell_dir)
+    (cell_dir / "loop1.yaml").symlink_to("loop2.yaml")
+    (cell_dir / "loop2.yaml").symlink_to("loop1.yaml")
+    assert main(["validate", "--no-compile", "."]) == 1
+    assert capsys.readouterr().out.splitlines() == [
+        "cell.yaml: ok (cell)",
+        "loop1.yaml: cannot read: a loop of symbolic links",
+        "loop2.yaml: cannot read: a loop of symbolic links",
+        "objects.yaml: ok (objects)",
+        "plan.yaml: ok (plan)",
+    ]
+    assert main(["validate", "loop1.yaml"]) == 1  # named: an error, not "no such file"
+    assert capsys.readouterr().out == "loop1.yaml: cannot read: a loop of symbolic links\n"
+
+
+def test_references_to_a_symlink_loop_or_a_fifo(cell_dir: Path) -> None:
+    (cell_dir / "loop.yaml").symlink_to("loop.yaml")
+    os.mkfifo(cell_dir / "fifo.yaml")
+    (cell_dir / "plan.yaml").write_text(PLAN.replace("cell.yaml", "loop.yaml"))
+    result = validate_in_subprocess(cell_dir, "plan.yaml")
+    assert result.stdout.splitlines() == [
+        "plan.yaml:1:7: file reference 'loop.yaml' cannot be used: a loop of symbolic links",
+    ]
+    (cell_dir / "plan.yaml").write_text(PLAN.replace("objects.yaml", "fifo.yaml"))
+    result = validate_in_subprocess(cell_dir, "plan.yaml")
+    assert result.stdout.splitlines() == [
+        "plan.yaml:2:10: file reference 'fifo.yaml' is a named pipe (FIFO), not a regular file",
+    ]
+    assert result.returncode == 1

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from cellengine.errors import InputError
+from cellengine.info.cell import MAX_ROBOTS
 from cellengine.info.load import load_cell
 
 CELL = """\
@@ -150,4 +151,16 @@ def test_clearance_in_the_files_length_unit(write) -> None:
 def test_negative_clearance_refused(write) -> None:
     assert errors(write, CELL + "clearance: -1\n") == [
         ":22:12: clearance: must be greater than or equal to 0, got -1"
+    ]
+
+
+def test_robot_count_is_bounded_before_any_robot_is_built(write) -> None:
+    def ring(n: int) -> str:
+        arms = "".join(f"  r{i}: {{model: ur5e, base: {{xyz: [{i}, 0, 0]}}}}\n" for i in range(n))
+        return f"name: ring\nrobots:\n{arms}"
+
+    assert len(load(write, ring(MAX_ROBOTS)).robots) == MAX_ROBOTS
+    assert errors(write, ring(40)) == [
+        ":3:3: robots: 40 robots, more than the 8 this engine plans for: its tasks take one or "
+        "two arms, and checking every arm against every other grows with the cube of the count"
     ]

@@ -3,7 +3,10 @@ comments), not recomputed with the loader's own code."""
 
 from __future__ import annotations
 
+import os
 import socket
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +17,7 @@ from cellengine.info import x3d
 from cellengine.info.x3d import X3DScene, load_x3d
 
 DATA = Path(__file__).parents[1] / "data" / "x3d"
-from tests.conftest import REMODEL  # noqa: E402
+from tests.conftest import REMODEL, ROOT  # noqa: E402
 
 Q = 1.5707963267948966  # pi/2, as an exporter would write it
 
@@ -424,6 +427,63 @@ def test_inline_url_too_long(tmp_path: Path) -> None:
     assert error(tmp_path, f'<Inline url="{url}"/>') == (
         f"Inline url '{url[:57]}...' cannot be read: File name too long",
         4,
+    )
+
+
+def test_inline_symlink_loop(tmp_path: Path) -> None:
+    (tmp_path / "loop.x3d").symlink_to("loop.x3d")
+    message, line = error(tmp_path, '<Group>\n<Inline url="loop.x3d"/>\n</Group>')
+    assert (message, line) == (
+        "file reference 'loop.x3d' cannot be used: a loop of symbolic links",
+        5,
+    )
+
+
+def test_inline_of_a_fifo_is_refused_without_opening_it(tmp_path: Path) -> None:
+    """In a subprocess with a timeout: opening a FIFO waits for a writer forever."""
+    os.mkfifo(tmp_path / "pipe.x3d")
+    path = write(tmp_path, "scene.x3d", '<Inline url="pipe.x3d"/>')
+    code = (
+        "import sys; from pathlib import Path; from cellengine.info.x3d import load_x3d\n"
+        f"load_x3d(Path({str(path)!r}), Path({str(tmp_path)!r}))"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", code],
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert result.stderr.splitlines()[-1] == (
+        f"cellengine.errors.InputError: {path}:4:1: file reference 'pipe.x3d' is a named pipe "
+        "(FIFO), not a regular file"
+    )
+
+
+def test_an_inlined_file_is_parsed_once(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    parsed: list[str] = []
+    parse = x3d.parse_xml
+    monkeypatch.setattr(x3d, "parse_xml", lambda p, **kw: parsed.append(p.name) or parse(p, **kw))
+    write(tmp_path, "leaf.x3d", "<Shape><Box/></Shape>")
+    write(tmp_path, "mid.x3d", '<Inline url="leaf.x3d"/>' * 3)
+    s = load(tmp_path, '<Transform translation="1 0 0"><Inline url="mid.x3d"/></Transform>' * 4)
+    assert sorted(parsed) == ["leaf.x3d", "mid.x3d", "scene.x3d"]
+    assert s.mesh is not None and len(s.mesh.faces) == 4 * 3 * 12  # every instance, boxes
+
+
+def test_inline_instances_are_capped(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(x3d, "MAX_INLINES", 10)
+    write(tmp_path, "leaf.x3d", "<Shape><Box/></Shape>")
+    write(tmp_path, "mid.x3d", '<Inline url="leaf.x3d"/>\n' * 3)
+    with pytest.raises(InputError) as e:
+        load(tmp_path, '<Inline url="mid.x3d"/>\n' * 3)
+    (p,) = e.value.problems
+    # scene: mid (1), leaf x3 (4), mid (5), leaf x3 (8), mid (9), leaf (10), leaf (11): refused
+    assert (p.message, Path(p.file or "").name, p.line, p.col) == (
+        "the scene has more than 10 Inlines (files Inlined again and again)",
+        "mid.x3d",
+        5,
+        1,
     )
 
 

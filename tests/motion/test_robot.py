@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import math
+import os
 import shutil
 from collections.abc import Callable
 from pathlib import Path
@@ -431,6 +432,23 @@ def test_mesh_link_leading_outside_is_refused(mesh_cell: Path) -> None:
         "mesh '../meshes/evil.stl': file reference 'arm_pkg/meshes/evil.stl' is a link that "
         "leads outside the cell folder"
     )
+
+
+@pytest.mark.parametrize(
+    ("make", "what"),
+    [
+        (lambda p: p.symlink_to(p.name), "cannot be used: a loop of symbolic links"),
+        (os.mkfifo, "is a named pipe (FIFO), not a regular file"),  # refused before opening
+        (Path.mkdir, "is a folder, not a file"),
+    ],
+)
+def test_mesh_that_is_no_regular_file_is_refused(
+    mesh_cell: Path, make: Callable[[Path], None], what: str
+) -> None:
+    make(mesh_cell / "arm_pkg" / "meshes" / "odd.stl")
+    p = with_mesh(mesh_cell, "../meshes/odd.stl").problems[0]
+    assert p.message == f"mesh '../meshes/odd.stl': file reference 'arm_pkg/meshes/odd.stl' {what}"
+    assert p.line == LINK1_MESH_LINE
 
 
 @pytest.mark.parametrize(
