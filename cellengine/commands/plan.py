@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -41,9 +42,10 @@ def add_common(p: argparse.ArgumentParser) -> None:
 def compile_from_args(args: argparse.Namespace) -> Compiled:
     from cellengine.pipeline import compile_plan
 
-    if not args.plan.is_file():
+    # a path that is there but not a file (a FIFO, a loop of links) is the loader's to name
+    if not os.path.lexists(args.plan):
         raise UsageError.at("no such plan file", args.plan)
-    if args.cell is not None and not args.cell.is_file():
+    if args.cell is not None and not os.path.lexists(args.cell):
         raise UsageError.at("no such cell file", args.cell)
     progress = None if args.quiet else _progress()
     return compile_plan(args.plan, args.execution, progress=progress, cell=args.cell)

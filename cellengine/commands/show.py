@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +30,7 @@ def run(args: argparse.Namespace) -> int:
     path: Path = args.cell
     if path.is_dir():
         path = path / "cell.yaml"
-    if not path.is_file():
+    if not os.path.lexists(path):  # there but not a file: the loader names what it is
         raise UsageError.at("no such cell file", path)
     world = load_world(path)
     rows = {name: xyz_rpy(T) for name, T in world.keypoints().items()}

@@ -23,6 +23,7 @@ def run_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def test_run_directory_holds_every_file(run_dir: Path) -> None:
     assert sorted(p.name for p in run_dir.iterdir()) == [
+        ".lock",  # the run folder's lock (runfolder.py), kept: removing it would race
         "journal.jsonl",
         "report.html",
         "report.json",

@@ -194,3 +194,20 @@ def test_references_to_a_symlink_loop_or_a_fifo(cell_dir: Path) -> None:
         "plan.yaml:2:10: file reference 'fifo.yaml' is a named pipe (FIFO), not a regular file",
     ]
     assert result.returncode == 1
+
+
+def test_plan_and_show_name_a_fifo_for_what_it_is(cell_dir: Path) -> None:
+    """Not "no such file" (exit 2): the file is there, and is not one."""
+    os.mkfifo(cell_dir / "fifo.yaml")
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    for argv in (["plan", "fifo.yaml", "-q", "--out", "out"], ["show", "fifo.yaml"]):
+        result = subprocess.run(
+            [sys.executable, "-m", "cellengine", *argv],
+            cwd=cell_dir,
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+        assert result.stderr == "fifo.yaml: a named pipe (FIFO), not a regular file\n"
+        assert result.returncode == 1
