@@ -13,7 +13,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
 from cellengine.info.units import Frozen
 
@@ -31,12 +31,27 @@ CableRef = Annotated[str, Ref("cable")]
 ObjectName = Annotated[str, Ref("object")]
 
 
+def _distinct(names: tuple[str, ...]) -> tuple[str, ...]:
+    """A choice between objects names each once: one named twice compares with itself."""
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise ValueError(f"names '{twice[0]}' twice; a choice is between different objects")
+    return names
+
+
+Distinct = Annotated[
+    tuple[ObjectName, ...],
+    Field(min_length=2, json_schema_extra={"uniqueItems": True}),
+    AfterValidator(_distinct),
+]
+
+
 class HeavierOf(Frozen):
-    heavier_of: tuple[ObjectName, ...] = Field(min_length=2)
+    heavier_of: Distinct
 
 
 class LighterOf(Frozen):
-    lighter_of: tuple[ObjectName, ...] = Field(min_length=2)
+    lighter_of: Distinct
 
 
 # An object named directly, or chosen at run time from results (no code in plans).

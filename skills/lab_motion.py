@@ -223,11 +223,12 @@ def unscrew(
     turner: str,
     name: str,
     where: str,
+    turns: float | None = None,
 ) -> None:
     """``turner`` grips the cap of container ``name`` (held still by the other arm) from
-    above and turns it off counter-clockwise, rising by the pitch per turn, in strokes it
-    releases and re-grasps between; then lifts the cap away, holding it (put it down with
-    :func:`put_cap_down` once the other arm has gone)."""
+    above and turns it off counter-clockwise by ``turns`` (default: the cap's), rising by
+    the pitch per turn, in strokes it releases and re-grasps between; then lifts the cap
+    away, holding it (put it down with :func:`put_cap_down` once the other arm has gone)."""
     c = world.container(name)
     if c.cap is None or name not in b.state.capped:
         raise error(f"{where}: '{name}' has no cap on to unscrew")
@@ -247,7 +248,7 @@ def unscrew(
     b.add(f"{where}: grip the cap", [line(turner, lg.approach_of(T0), T0)], contacts=touch)
     rise_per_rad = c.cap.pitch / (2.0 * math.pi)
     cap = f"{name}.cap"
-    strokes = unscrew_strokes(c.cap.turns)
+    strokes = unscrew_strokes(c.cap.turns if turns is None else turns)
     T = T0
     for k, angle in enumerate(strokes):
         last = k == len(strokes) - 1

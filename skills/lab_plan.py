@@ -23,6 +23,7 @@ so no two robots are ever in the shared zone together except when they cooperate
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
@@ -64,6 +65,7 @@ Point = tuple[float, float, float]
 # Rough durations (s) of each primitive for the mission's schedule; the executor times the
 # real motion.
 FREE_RADIUS = 0.05  # m: a place with a container or cap closer than this is taken
+SAME_PLACE = 1e-3  # m: a Pick 'from' this near where the object stands names that place
 CAP_REACH = 0.02  # m: the reach test of a place for a cap, this high over it
 DURATION = {
     "carry": 8.0,
@@ -225,6 +227,7 @@ def _task(
                     "containers, each given where it stands ('at') in objects.yaml"
                 )
             )
+    _check_parameters(world, step, i, names, where)
     loc: Point | AnyOf = (
         where[names[0]] if len(names) == 1 else AnyOf(tuple(where[n] for n in names))
     )
@@ -245,6 +248,37 @@ def _task(
             for n in names:
                 where[n] = _point(world.pose(target)[:3, 3])
     return Task(tid, prims, tuple(sorted(after)), arms, blocked)
+
+
+def _check_parameters(
+    world: World, step: LabSkill, i: int, names: Sequence[str], where: Mapping[str, Point]
+) -> None:
+    """The parameters a step gives are ones it can use: a Pick ``from`` where the object
+    stands at that step, Unscrew ``turns`` that take the cap off and no more than a turn
+    past."""
+    what = f"steps[{i}] {step.skill}"
+    if isinstance(step, Pick) and step.from_ is not None:
+        at = _point(world.pose(step.from_)[:3, 3])
+        for n in names:
+            if math.dist(at, where[n]) > SAME_PLACE:
+                x, y, z = (round(v * 1000.0, 1) for v in where[n])
+                raise InputError(
+                    Problem(
+                        f"{what}: '{n}' stands at ({x}, {y}, {z}) mm at this step, not at "
+                        f"'{step.from_}'; leave 'from' out (it is where the object stands)"
+                    )
+                )
+    if isinstance(step, Unscrew) and step.turns is not None:
+        for n in names:
+            cap = world.container(n).cap
+            if cap is not None and not cap.turns <= step.turns <= cap.turns + 1.0:
+                raise InputError(
+                    Problem(
+                        f"{what}: turns {step.turns:g} for '{n}', whose cap comes off in "
+                        f"{cap.turns:g}: give {cap.turns:g} to {cap.turns + 1.0:g} (fewer "
+                        "leave it on; it is off after one more), or leave turns out"
+                    )
+                )
 
 
 def _blocked(
@@ -388,7 +422,8 @@ def _do(
     elif a.kind == "hold":
         lm.hold(b, reach, arm, at(a.start), where)
     elif a.kind == "turn_cap":
-        lm.unscrew(b, reach, world, arm, name, where)
+        assert isinstance(step, Unscrew)
+        lm.unscrew(b, reach, world, arm, name, where, step.turns)
     elif a.kind == "carry":
         assert isinstance(step, BimanualCarry)
         pair = [x for x in actions if x.kind == "carry"]

@@ -6,6 +6,7 @@ both robots in the shared zone at once except while they cooperate."""
 from __future__ import annotations
 
 import json
+import shutil
 from functools import cache
 from pathlib import Path
 
@@ -263,3 +264,28 @@ def test_every_lab_plan_runs_on_the_simulated_cell(plan: str, cell: str) -> None
         for arm in c.cell.arms:  # every hand empty at the end: these plans put all down
             assert driver.gripper(arm).holds is None
         driver.deactivate()
+
+
+@pytest.mark.parametrize(
+    ("step", "message"),
+    [
+        (
+            "skill: Pick, object: vial4, from: bench.free_s2",
+            "steps[0] Pick: 'vial4' stands at (400.0, 450.0, 6.0) mm at this step, not at "
+            "'bench.free_s2'; leave 'from' out (it is where the object stands)",
+        ),
+        (
+            "skill: Unscrew, object: vial1, turns: 100000",
+            "steps[0] Unscrew: turns 100000 for 'vial1', whose cap comes off in 2.5: give 2.5 "
+            "to 3.5 (fewer leave it on; it is off after one more), or leave turns out",
+        ),
+    ],
+)
+def test_a_parameter_the_step_cannot_use_is_refused(
+    step: str, message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    shutil.copytree(LAB, tmp_path / "lab")
+    plan = tmp_path / "lab" / "plan.yaml"
+    plan.write_text(f"cell: cell.yaml\nobjects: objects.yaml\nsteps:\n  - {{{step}}}\n")
+    assert main(["validate", str(plan)]) == 1
+    assert capsys.readouterr().out == f"{plan}:4:5: {message}\n"

@@ -121,6 +121,15 @@ def test_unscrew_turns_two_and_a_half_turns_in_half_turn_strokes(
         lm.unscrew(b, reach, world, "right", "vial1", "again")
 
 
+def test_unscrew_turns_as_many_turns_as_the_step_gives(world: World, reach: lm.Solver) -> None:
+    b = lm.Builder(_start(world))
+    lm.unscrew(b, reach, world, "right", "vial1", "steps[2] Unscrew vial1", turns=3.0)
+    turns = [s for s in b.segments if "turn the cap" in s.label]
+    assert len(turns) == 6  # half-turn strokes
+    rise = sum(t.paths[0].poses[-1][2, 3] - t.paths[0].poses[0][2, 3] for t in turns)
+    assert rise == pytest.approx(0.006)  # 3 turns of a 2 mm pitch
+
+
 def test_pour_is_refused_while_capped_then_tilts_over_the_target(
     world: World, reach: lm.Solver
 ) -> None:
