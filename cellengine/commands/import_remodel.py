@@ -23,7 +23,15 @@ from typing import Any, TypeVar
 
 import yaml
 
-from cellengine.errors import EXIT_OK, InputError, Problem, UsageError, display_path, known
+from cellengine.errors import (
+    EXIT_OK,
+    InputError,
+    Problem,
+    UsageError,
+    display_path,
+    known,
+    printable,
+)
 from cellengine.info.cell import UrdfModel
 from cellengine.info.load import load_cell, load_plan, load_world
 from cellengine.info.remodel import load_ids
@@ -752,9 +760,11 @@ def run(args: argparse.Namespace) -> int:
         check_staged(tmp, dest, inputs, steps)
         move_into_place(tmp, dest)
     print(
-        f"{display_path(dest)}: cell.yaml (platforms {', '.join(source.platforms)}), "
-        f"objects.yaml ({_count(len(inputs.components.cables), 'cable')}), "
-        f"plan.yaml ({_count(len(steps), 'step')})"
+        printable(
+            f"{display_path(dest)}: cell.yaml (platforms {', '.join(source.platforms)}), "
+            f"objects.yaml ({_count(len(inputs.components.cables), 'cable')}), "
+            f"plan.yaml ({_count(len(steps), 'step')})"
+        )
     )
     return EXIT_OK
 

@@ -13,7 +13,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
-from cellengine.errors import InputError, Problem, display_path
+from cellengine.errors import InputError, Problem, display_path, printable
 from cellengine.journal import JOURNAL, Entry, append
 from cellengine.runner.driver import DriverOptions, confirm, open_driver
 from cellengine.runner.move import move_to
@@ -64,7 +64,7 @@ def resume_run(
     progress = read_progress(journal_path)
     if progress.ended:
         if not quiet:
-            print(f"the run in {display_path(run_dir)} is complete: nothing to do")
+            print(f"the run in {printable(display_path(run_dir))} is complete: nothing to do")
         return
     compiled = _resumable(compile_plan(), progress, run_dir)
     write_plan_outputs(compiled, run_dir)
@@ -78,7 +78,7 @@ def resume_run(
         _drive(compiled, driver, journal, run_dir, quiet, progress, q0)
     if not quiet:
         done = len(compiled.program.segments) - progress.done
-        print(f"resumed at segment {progress.done} ('{nxt}'): ran {done} more")
+        print(f"resumed at segment {progress.done} ('{printable(nxt)}'): ran {done} more")
 
 
 def _drive(
