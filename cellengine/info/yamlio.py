@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import re
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -89,9 +90,12 @@ def _scalar(loader: yaml.SafeLoader, node: yaml.Node, pattern: re.Pattern[str], 
 
 def _int(loader: yaml.SafeLoader, node: yaml.Node) -> int:
     text = _scalar(loader, node, _INT, "an integer")
-    if text[:2] in ("0o", "0x"):
-        return int(text[2:], 8 if text[1] == "o" else 16)
-    return int(text)  # '017' is 17: a leading 0 is not octal in YAML 1.2
+    base = {"0o": 8, "0x": 16}.get(text[:2])
+    # '017' is 17: a leading 0 is not octal in YAML 1.2
+    value = int(text) if base is None else int(text[2:], base)
+    if abs(value) > sys.float_info.max:  # no quantity is; pydantic would say "not a number"
+        raise _BadScalar(_too_large(text))
+    return value
 
 
 def _float(loader: yaml.SafeLoader, node: yaml.Node) -> float:
@@ -100,8 +104,12 @@ def _float(loader: yaml.SafeLoader, node: yaml.Node) -> float:
         return float(text.replace(".", ""))  # Python spells them inf and nan
     value = float(text)
     if math.isinf(value):  # 1e999: Python rounds it to inf, which was not written
-        raise _BadScalar(f"the number {_shown(text)} is beyond the largest float (1.8e308)")
+        raise _BadScalar(_too_large(text))
     return value
+
+
+def _too_large(text: str) -> str:
+    return f"the number {_shown(text)} is beyond the largest float (1.8e308)"
 
 
 def _bool(loader: yaml.SafeLoader, node: yaml.Node) -> bool:

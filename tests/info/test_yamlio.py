@@ -149,3 +149,11 @@ def test_a_float_beyond_the_largest_is_refused() -> None:
 def test_pyyaml_loaders_keep_yaml_1_1() -> None:
     """Our resolvers are our loader's own: other users of PyYAML are not changed."""
     assert yaml.safe_load("a: yes\nb: 1e30\n") == {"a": True, "b": "1e30"}
+
+
+def test_an_integer_beyond_the_largest_float_is_refused() -> None:
+    assert err("a: 0x" + "f" * 300 + "\n") == (
+        "f.yaml:1:4: bad YAML value: the number 0xfffffffffffffffffffffffffffffffffff... is "
+        "beyond the largest float (1.8e308)"
+    )
+    assert parse_yaml(f"a: {10**300}\n", F).data["a"] == 10**300  # as large as a float may be
