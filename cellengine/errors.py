@@ -7,6 +7,7 @@ the code of the error class (DESIGN section 4).
 from __future__ import annotations
 
 import os
+import re
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -29,6 +30,28 @@ def display_path(path: str | Path) -> str:
     return str(p) if rel.startswith("..") else rel
 
 
+# C0 and C1 controls (ESC, CSI, newlines), DEL, line and paragraph separators, bidi
+# overrides and isolates, and lone surrogates (which no terminal can be sent)
+_UNPRINTABLE = re.compile(
+    r"[\x00-\x1f\x7f-\x9f\u2028\u2029\u200e\u200f\u202a-\u202e\u2066-\u2069\ud800-\udfff]"
+)
+_NAMED = {"\n": "\\n", "\r": "\\r", "\t": "\\t"}
+
+
+def printable(text: str) -> str:
+    """``text`` with every control character escaped as Python writes it (``\\n``,
+    ``\\x1b``, ``\\u202e``): a name from an input file must not colour or clear a terminal,
+    start a new line (a GitHub workflow command such as ``::error::`` in a CI log) or
+    reorder what is shown. Escaped text has none left, so escaping twice changes nothing."""
+    return _UNPRINTABLE.sub(_escaped, text)
+
+
+def _escaped(m: re.Match[str]) -> str:
+    c = m.group()
+    n = ord(c)
+    return _NAMED.get(c) or (f"\\x{n:02x}" if n < 0x100 else f"\\u{n:04x}")
+
+
 @dataclass(frozen=True)
 class Problem:
     """One thing wrong with one input: where (file, line, col; CSV uses line = row) and what."""
@@ -47,7 +70,8 @@ class Problem:
         return ":".join(parts)
 
     def __str__(self) -> str:
-        return f"{self.location()}: {self.message}"
+        """The problem on one line, as printed: names from files are escaped there."""
+        return printable(f"{self.location()}: {self.message}")
 
 
 class CellError(Exception):

@@ -8,20 +8,25 @@ The journal is append-only, one JSON object per line, on disk at each entry (:cl
 ``sent`` and ``finished`` (with the arms' q and grippers after it), ``measured`` (a load
 cell), ``replanned``, ``fault`` (what stopped the run), ``timing`` (the servo loop's), ``end``.
 A run killed at any moment leaves whole lines and at most one torn last line, which is
-ignored; any other line that is not a JSON object is an error at its line.
+ignored; any other line that is not a JSON object is an error at its line. So is every value
+``--resume`` would act on that is not what the runner writes (a journal can be edited or
+damaged): a resumed run must not start from a NaN joint or weigh with a mass of 1e308.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import StrEnum
 from pathlib import Path
 from typing import IO, Any
 
-from cellengine.errors import InputError, Problem
+from cellengine.errors import InputError, Problem, known
+from cellengine.info.bounds import MAX_MASS
 
 JOURNAL = "journal.jsonl"  # in the run directory
 
@@ -95,21 +100,149 @@ def refuse_unfinished(folder: Path) -> None:
 def read_progress(path: Path) -> Progress:
     if not path.is_file():
         raise InputError(Problem("no journal.jsonl here: is this a run directory?", str(path)))
-    lines = path.read_text(encoding="utf-8").split("\n")
+    lines = path.read_bytes().split(b"\n")
     entries: list[dict[str, Any]] = []
     for n, line in enumerate(lines, 1):
         if not line.strip():
             continue
         try:
-            entry = json.loads(line)
-        except json.JSONDecodeError:
-            if n == len(lines):
+            entry = _entry(line)
+        except _Bad as e:
+            if n == len(lines) and e.torn:
                 break  # the last line, torn by a kill (no newline yet): it never happened
-            raise InputError(Problem("not a journal entry (JSON)", str(path), n)) from None
-        if not isinstance(entry, dict) or "entry" not in entry:
-            raise InputError(Problem("not a journal entry (no 'entry')", str(path), n))
+            raise InputError(Problem(str(e), str(path), n)) from None
         entries.append(entry)
     return _progress(entries)
+
+
+class _Bad(Exception):
+    """A journal line that cannot be trusted; ``torn``: what a kill mid-write leaves."""
+
+    def __init__(self, message: str, torn: bool = False) -> None:
+        super().__init__(message)
+        self.torn = torn
+
+
+def _entry(line: bytes) -> dict[str, Any]:
+    """One line's entry, its values checked as the runner writes them."""
+    try:
+        entry = json.loads(line.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise _Bad("not a journal entry (not UTF-8 text)", torn=True) from None
+    except ValueError:  # not JSON, or an integer of thousands of digits
+        raise _Bad("not a journal entry (JSON)", torn=True) from None
+    except RecursionError:
+        raise _Bad("not a journal entry (JSON nested too deeply)", torn=True) from None
+    if not isinstance(entry, dict) or "entry" not in entry:
+        raise _Bad("not a journal entry (no 'entry')")
+    kind = entry["entry"]
+    if not isinstance(kind, str) or kind not in _KINDS:
+        raise _Bad(f"unknown journal entry {_shown(kind)}" + known(_KINDS))
+    check = _CHECKS.get(kind)
+    if check is not None:
+        check(entry)
+    return entry
+
+
+_KINDS = {str(k) for k in Entry}
+MAX_JOINT = 100.0  # rad (m for a prismatic joint): no arm turns a joint 16 times
+
+
+def _field(entry: dict[str, Any], name: str) -> Any:
+    if name not in entry:
+        raise _Bad(f"'{name}' is missing from this '{entry['entry']}' entry")
+    return entry[name]
+
+
+def _shown(value: Any) -> str:
+    """A value as the journal writes it (floats as Python does: nan, inf)."""
+    text = repr(value) if isinstance(value, float) else json.dumps(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def _index(value: Any, name: str) -> int:
+    if not isinstance(value, int) or isinstance(value, bool) or value < 0:
+        raise _Bad(f"'{name}' must be a segment index (an integer from 0), got {_shown(value)}")
+    return value
+
+
+def _text(value: Any, name: str) -> str:
+    if not isinstance(value, str):
+        raise _Bad(f"'{name}' must be a string, got {_shown(value)}")
+    return value
+
+
+def _joints(value: Any, name: str) -> None:
+    if not isinstance(value, list) or not value:
+        raise _Bad(f"'{name}' must be a list of joint values, got {_shown(value)}")
+    for i, v in enumerate(value):
+        if not _number(v) or not math.isfinite(v) or abs(v) > MAX_JOINT:
+            raise _Bad(
+                f"'{name}[{i}]' must be a finite joint value (rad or m, at most "
+                f"{MAX_JOINT:g} either way), got {_shown(v)}"
+            )
+
+
+def _gripper(value: Any, name: str) -> None:
+    """[mode, holds]: a jaw mode and the object held, each a name or null."""
+    if not (
+        isinstance(value, list)
+        and len(value) == 2
+        and all(v is None or isinstance(v, str) for v in value)
+    ):
+        raise _Bad(f"'{name}' must be [mode, holds] (each a name or null), got {_shown(value)}")
+
+
+def _finished(entry: dict[str, Any]) -> None:
+    _index(_field(entry, "segment"), "segment")
+    _text(_field(entry, "label"), "label")
+    _joints(_field(entry, "q"), "q")
+    grippers = _field(entry, "grippers")
+    if not isinstance(grippers, dict):
+        raise _Bad(f"'grippers' must map each arm to [mode, holds], got {_shown(grippers)}")
+    for arm, state in grippers.items():
+        _gripper(state, f"grippers.{arm}")
+
+
+def _measured(entry: dict[str, Any]) -> None:
+    _text(_field(entry, "object"), "object")
+    mass = _field(entry, "mass_kg")
+    if not _number(mass) or not math.isfinite(mass) or not 0 < mass <= MAX_MASS:
+        raise _Bad(f"'mass_kg' must be a finite mass in kg (0 to {MAX_MASS:g}), got {_shown(mass)}")
+
+
+def _fault(entry: dict[str, Any]) -> None:
+    """Where the fault stopped the arms and grippers: resume starts there."""
+    fault = entry.get("fault")
+    if fault is None:
+        return
+    if not isinstance(fault, dict):
+        raise _Bad(f"'fault' must be a mapping, got {_shown(fault)}")
+    if "q" in fault:
+        _joints(fault["q"], "fault.q")
+    grippers = fault.get("grippers", [])
+    if not isinstance(grippers, list):
+        raise _Bad(f"'fault.grippers' must be a list, got {_shown(grippers)}")
+    for i, g in enumerate(grippers):
+        name = f"fault.grippers[{i}]"
+        if not isinstance(g, dict):
+            raise _Bad(f"'{name}' must be a mapping of arm, mode, holds, got {_shown(g)}")
+        _text(g.get("arm"), f"{name}.arm")
+        for key in ("mode", "holds"):
+            if g.get(key) is not None:
+                _text(g[key], f"{name}.{key}")
+
+
+# the entries whose values resume reads
+_CHECKS: dict[str, Callable[[dict[str, Any]], None]] = {
+    Entry.FINISHED: _finished,
+    Entry.MEASURED: _measured,
+    Entry.FAULT: _fault,
+}
 
 
 def _progress(entries: list[dict[str, Any]]) -> Progress:

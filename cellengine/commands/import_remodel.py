@@ -24,7 +24,15 @@ from typing import Any, TypeVar
 
 import yaml
 
-from cellengine.errors import EXIT_OK, InputError, Problem, UsageError, display_path, known
+from cellengine.errors import (
+    EXIT_OK,
+    InputError,
+    Problem,
+    UsageError,
+    display_path,
+    known,
+    printable,
+)
 from cellengine.info.cell import UrdfModel
 from cellengine.info.files import read_capped, real
 from cellengine.info.load import load_cell, load_plan, load_world
@@ -779,9 +787,11 @@ def run(args: argparse.Namespace) -> int:
         check_staged(tmp, dest, inputs, steps)
         move_into_place(tmp, dest)
     print(
-        f"{display_path(dest)}: cell.yaml (platforms {', '.join(source.platforms)}), "
-        f"objects.yaml ({_count(len(inputs.components.cables), 'cable')}), "
-        f"plan.yaml ({_count(len(steps), 'step')})"
+        printable(
+            f"{display_path(dest)}: cell.yaml (platforms {', '.join(source.platforms)}), "
+            f"objects.yaml ({_count(len(inputs.components.cables), 'cable')}), "
+            f"plan.yaml ({_count(len(steps), 'step')})"
+        )
     )
     return EXIT_OK
 

@@ -9,7 +9,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from cellengine.errors import EXIT_OK, UsageError
+from cellengine.errors import EXIT_OK, UsageError, printable
 from cellengine.geometry import xyz_rpy
 from cellengine.info.load import load_world
 
@@ -41,7 +41,8 @@ def run(args: argparse.Namespace) -> int:
         }
         print(json.dumps({"keypoints": out}, indent=2))
         return EXIT_OK
-    width = max([len("keypoint"), *map(len, rows)])
+    shown = {name: printable(name) for name in rows}  # names from files; JSON escapes its own
+    width = max([len("keypoint"), *map(len, shown.values())])
     head = ["x mm", "y mm", "z mm", "roll deg", "pitch deg", "yaw deg"]
     print(f"{'keypoint':<{width}}  " + "  ".join(f"{h:>9}" for h in head))
     for name, (xyz, rpy) in rows.items():
@@ -49,5 +50,5 @@ def run(args: argparse.Namespace) -> int:
         degrees = [180.0 if round(d, 2) == -180.0 else d for d in degrees]  # one way to say it
         values = [*(v * 1000.0 for v in xyz), *degrees]
         # round, then + 0.0 turns -0.0 into 0.0: the table never shows "-0.00"
-        print(f"{name:<{width}}  " + "  ".join(f"{round(v, 2) + 0.0:9.2f}" for v in values))
+        print(f"{shown[name]:<{width}}  " + "  ".join(f"{round(v, 2) + 0.0:9.2f}" for v in values))
     return EXIT_OK

@@ -13,7 +13,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from cellengine.errors import EXIT_INVALID, EXIT_OK, InputError, Problem, UsageError, display_path
+from cellengine.errors import (
+    EXIT_INVALID,
+    EXIT_OK,
+    InputError,
+    Problem,
+    UsageError,
+    display_path,
+    printable,
+)
 from cellengine.info.files import real
 from cellengine.info.load import LoadedPlan, load_objects, load_plan, load_world
 from cellengine.info.yamlio import load_yaml
@@ -193,9 +201,10 @@ def _text(results: list[Result]) -> None:
             for p in new:
                 print(p)
             if not new:
-                print(f"{display_path(r.file)}: not checked: it uses files with problems above")
+                where = printable(display_path(r.file))
+                print(f"{where}: not checked: it uses files with problems above")
         else:
-            print(f"{display_path(r.file)}: ok ({r.kind})")
+            print(f"{printable(display_path(r.file))}: ok ({r.kind})")
     print(f"{len(results)} file(s) checked, {bad} with problems", file=sys.stderr)
 
 
@@ -239,9 +248,9 @@ def _github(results: list[Result]) -> None:
             if _key(p) in shown:
                 continue
             shown.add(_key(p))
-            props = [f"file={_escape(display_path(p.file or r.file), True)}"]
+            props = [f"file={_escape(printable(display_path(p.file or r.file)), True)}"]
             if p.line is not None:
                 props.append(f"line={p.line}")
                 if p.col is not None:
                     props.append(f"col={p.col}")
-            print(f"::error {','.join(props)}::{_escape(p.message)}")
+            print(f"::error {','.join(props)}::{_escape(printable(p.message))}")

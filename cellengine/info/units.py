@@ -19,6 +19,8 @@ from pydantic import (
     ValidationInfo,
 )
 
+from cellengine.info.bounds import MAX_COORDINATE, MAX_MASS
+
 LENGTH = {"m": 1.0, "cm": 1e-2, "mm": 1e-3}
 ANGLE = {"rad": 1.0, "deg": math.pi / 180.0}
 MASS = {"kg": 1.0, "g": 1e-3}
@@ -47,6 +49,34 @@ def _scaler(kind: str) -> AfterValidator:
     return AfterValidator(scale)
 
 
+def _unit(table: dict[str, float], factor: float) -> str:
+    return next(name for name, f in table.items() if f == factor)
+
+
+def _within(v: float, info: ValidationInfo) -> float:
+    """A length within MAX_COORDINATE either way: past it a file's unit is wrong (mm read as
+    m) or the number is hostile (1e300 overflows the geometry downstream)."""
+    factor = float((info.context or {}).get("length", 1.0))
+    limit = MAX_COORDINATE / factor  # in the file's unit: no rounding at the limit itself
+    if abs(v) > limit:
+        unit = _unit(LENGTH, factor)
+        metres = f" ({MAX_COORDINATE:g} m)" if unit != "m" else ""
+        raise ValueError(f"must be between {-limit:g} and {limit:g} {unit}{metres}")
+    return v
+
+
+def _at_most_max_mass(v: float, info: ValidationInfo) -> float:
+    """A mass a dual-arm cell can hold or weigh (masses are never negative: each field
+    says so)."""
+    factor = float((info.context or {}).get("mass", 1.0))
+    limit = MAX_MASS / factor
+    if v > limit:
+        unit = _unit(MASS, factor)
+        kg = f" ({MAX_MASS:g} kg)" if unit != "kg" else ""
+        raise ValueError(f"must be at most {limit:g} {unit}{kg}")
+    return v
+
+
 def count(n: int, what: str) -> BeforeValidator:
     """Check a list's length up front so the message says what was expected."""
 
@@ -60,8 +90,10 @@ def count(n: int, what: str) -> BeforeValidator:
 
 # ints welcome; strings, booleans and YAML's .nan and .inf are not numbers
 Number = Annotated[float, Strict(), AllowInfNan(False)]
-Length = Annotated[float, Strict(), AllowInfNan(False), _scaler("length")]
+Length = Annotated[float, Strict(), AllowInfNan(False), AfterValidator(_within), _scaler("length")]
 Angle = Annotated[float, Strict(), AllowInfNan(False), _scaler("angle")]
-Mass = Annotated[float, Strict(), AllowInfNan(False), _scaler("mass")]
+Mass = Annotated[
+    float, Strict(), AllowInfNan(False), AfterValidator(_at_most_max_mass), _scaler("mass")
+]
 Vec3Length = Annotated[tuple[Length, Length, Length], count(3, "numbers [x, y, z]")]
 Vec3Angle = Annotated[tuple[Angle, Angle, Angle], count(3, "numbers [roll, pitch, yaw]")]

@@ -3,11 +3,17 @@
 PyYAML's composer gives nodes with marks; we build plain dicts/lists ourselves so that
 every value and key keeps its line and column, standard tags only are accepted, duplicate
 keys are errors, and an alias bomb is refused from its node graph before it is expanded.
+
+Plain scalars resolve as YAML 1.2's core schema does (what the JSON Schemas and most other
+tools assume), not as PyYAML's YAML 1.1: ``1e30`` is a number, ``1:20`` and ``yes`` are
+strings, ``017`` is seventeen.
 """
 
 from __future__ import annotations
 
+import math
 import re
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -30,10 +36,17 @@ class _TooDeep(Exception):
         self.mark = mark
 
 
-class _Loader(yaml.SafeLoader):
-    """The safe loader, refusing deep nesting before Python's recursion limit is near, so
-    the error and its place do not depend on how deep the caller's stack is."""
+class _BadScalar(ValueError):
+    """A scalar tagged as a number or boolean that YAML 1.2 does not read as one."""
 
+
+class _Loader(yaml.SafeLoader):
+    """The safe loader with YAML 1.2 core scalars, refusing deep nesting before Python's
+    recursion limit is near, so the error and its place do not depend on how deep the
+    caller's stack is."""
+
+    # our own table, so PyYAML's YAML 1.1 resolvers (shared by SafeLoader) are not inherited
+    yaml_implicit_resolvers: dict[Any, list[tuple[str, re.Pattern[str]]]] = {}
     depth = 0
 
     def compose_node(self, parent: yaml.Node | None, index: int) -> yaml.Node | None:
@@ -47,6 +60,66 @@ class _Loader(yaml.SafeLoader):
 
 
 _STD = "tag:yaml.org,2002:"
+
+# YAML 1.2.2, 10.3.2 (core schema). Underscores, sexagesimals and signed hex/octal are 1.1.
+_NULL = re.compile(r"^(?:~|null|Null|NULL|)$")
+_BOOL = re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$")
+_INT = re.compile(r"^(?:[-+]?[0-9]+|0o[0-7]+|0x[0-9a-fA-F]+)$")
+_FLOAT = re.compile(
+    r"^(?:[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)?"
+    r"|[-+]?\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN))$"
+)
+for _tag, _regexp, _first in (
+    ("null", _NULL, ["~", "n", "N", ""]),
+    ("bool", _BOOL, list("tTfF")),
+    ("int", _INT, list("-+0123456789")),  # before float: '1' is an int
+    ("float", _FLOAT, list("-+.0123456789")),
+    ("merge", re.compile(r"^<<$"), ["<"]),  # not 1.2, but merge keys are documented
+):
+    _Loader.add_implicit_resolver(_STD + _tag, _regexp, _first)
+
+
+def _scalar(loader: yaml.SafeLoader, node: yaml.Node, pattern: re.Pattern[str], kind: str) -> str:
+    """The text of ``node``; it must be ``kind`` as YAML 1.2 writes it (an explicit tag such
+    as ``!!int 1_000`` skips the resolver)."""
+    text = str(loader.construct_scalar(node))  # type: ignore[arg-type]
+    if not pattern.match(text):
+        raise _BadScalar(f"'{_shown(text)}' is not {kind} in YAML 1.2")
+    return text
+
+
+def _int(loader: yaml.SafeLoader, node: yaml.Node) -> int:
+    text = _scalar(loader, node, _INT, "an integer")
+    base = {"0o": 8, "0x": 16}.get(text[:2])
+    # '017' is 17: a leading 0 is not octal in YAML 1.2
+    value = int(text) if base is None else int(text[2:], base)
+    if abs(value) > sys.float_info.max:  # no quantity is; pydantic would say "not a number"
+        raise _BadScalar(_too_large(text))
+    return value
+
+
+def _float(loader: yaml.SafeLoader, node: yaml.Node) -> float:
+    text = _scalar(loader, node, _FLOAT, "a number")
+    if text.lstrip("+-").lower() in (".inf", ".nan"):
+        return float(text.replace(".", ""))  # Python spells them inf and nan
+    value = float(text)
+    if math.isinf(value):  # 1e999: Python rounds it to inf, which was not written
+        raise _BadScalar(_too_large(text))
+    return value
+
+
+def _too_large(text: str) -> str:
+    return f"the number {_shown(text)} is beyond the largest float (1.8e308)"
+
+
+def _bool(loader: yaml.SafeLoader, node: yaml.Node) -> bool:
+    return _scalar(loader, node, _BOOL, "true or false").lower() == "true"
+
+
+_Loader.add_constructor(_STD + "int", _int)
+_Loader.add_constructor(_STD + "float", _float)
+_Loader.add_constructor(_STD + "bool", _bool)
+
 _ALLOWED_TAGS = {_STD + t for t in ("str", "int", "float", "bool", "null", "map", "seq")}
 
 
@@ -216,6 +289,8 @@ class _Builder:
         try:
             value = self.loader.construct_object(node, deep=True)
         except yaml.YAMLError as e:
+            raise self._fail(f"bad YAML value: {e}", node) from None
+        except _BadScalar as e:
             raise self._fail(f"bad YAML value: {e}", node) from None
         except ValueError:  # an integer of thousands of digits
             raise self._fail(

@@ -13,7 +13,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
-from cellengine.errors import InputError, Problem, display_path
+from cellengine.errors import InputError, Problem, display_path, known, printable
 from cellengine.journal import JOURNAL, Entry, append, refuse_unfinished
 from cellengine.runfolder import open_append, using
 from cellengine.runner.driver import DriverOptions, confirm, open_driver
@@ -69,9 +69,10 @@ def resume_run(
         progress = read_progress(journal_path)
         if progress.ended:
             if not quiet:
-                print(f"the run in {display_path(run_dir)} is complete: nothing to do")
+                print(f"the run in {printable(display_path(run_dir))} is complete: nothing to do")
             return
         compiled = _resumable(compile_plan(), progress, run_dir)
+        _fits_cell(progress, compiled, journal_path)
         write_plan_outputs(compiled, run_dir)
         q0, grippers = _where_left(progress)
         driver = open_driver(compiled, driver_options, q0=q0, grippers=grippers)
@@ -83,7 +84,7 @@ def resume_run(
             _drive(compiled, driver, journal, run_dir, quiet, progress, q0)
     if not quiet:
         done = len(compiled.program.segments) - progress.done
-        print(f"resumed at segment {progress.done} ('{nxt}'): ran {done} more")
+        print(f"resumed at segment {progress.done} ('{printable(nxt)}'): ran {done} more")
 
 
 def _drive(
@@ -162,6 +163,38 @@ def _same_run(compiled: Compiled, progress: Progress, run_dir: Path) -> None:
                 str(compiled.loaded.plan.file),
             )
         )
+
+
+def _fits_cell(progress: Progress, compiled: Compiled, journal: Path) -> None:
+    """The joints, arms, jaw modes and objects the journal gives are the cell's: the
+    simulated cell starts where the journal left the arms, and the plan weighs with its
+    masses."""
+    cell, objects = compiled.world.cell, compiled.world.objects.names()
+    joints = len(compiled.cell.joint_names)
+    fault = progress.fault or {}
+    problems: list[str] = []
+    for where, q in (("finished", progress.q), ("fault", fault.get("q"))):
+        if q is not None and len(q) != joints:
+            problems.append(
+                f"the last '{where}' entry gives {len(q)} joint values; the cell has {joints}"
+            )
+    states = [(arm, mode, holds) for arm, (mode, holds) in progress.grippers.items()]
+    states += [(g["arm"], g.get("mode"), g.get("holds")) for g in fault.get("grippers", [])]
+    for arm, mode, holds in states:
+        robot = cell.robots.get(arm)
+        tool = cell.tools.get(robot.tool) if robot is not None and robot.tool else None
+        modes = list(tool.jaw) if tool is not None else []
+        if robot is None:
+            problems.append(f"unknown arm '{arm}'" + known(cell.robots))
+        elif mode is not None and mode not in modes:
+            problems.append(f"arm '{arm}': unknown jaw mode '{mode}'" + known(modes))
+        elif holds is not None and holds not in objects:
+            problems.append(f"arm '{arm}' holds unknown object '{holds}'" + known(objects))
+    for name in progress.measured:
+        if name not in objects:
+            problems.append(f"a mass measured for unknown object '{name}'" + known(objects))
+    if problems:
+        raise InputError(Problem(p, str(journal)) for p in dict.fromkeys(problems))
 
 
 def _where_left(progress: Progress) -> tuple[Any, dict[str, Any] | None]:

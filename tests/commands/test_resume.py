@@ -177,3 +177,35 @@ def test_a_new_run_or_plan_into_a_folder_with_an_unfinished_run_is_refused(
         )
     after = {p.name: p.read_bytes() for p in tmp_path.iterdir() if p.name != ".lock"}
     assert after == before
+
+
+def test_a_corrupted_journal_is_refused_with_its_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Values the run would start from are checked: in range as the journal is read (at
+    the line), and against the cell once the plan is compiled (the journal named)."""
+    c = _faulted_run(tmp_path)
+    path = tmp_path / "journal.jsonl"
+    lines = path.read_text().splitlines()
+    n = max(i for i, line in enumerate(lines) if '"finished"' in line)
+    finished = json.loads(lines[n])
+
+    def resume_with(**changes: object) -> str:
+        lines[n] = json.dumps({**finished, **changes})
+        path.write_text("\n".join(lines) + "\n")
+        assert main(["run", str(PLAN), "--resume", str(tmp_path), "-q"]) == 1
+        return capsys.readouterr().err.replace(str(tmp_path), "<run>")
+
+    nan_q = [float("nan"), *finished["q"][1:]]
+    assert resume_with(q=nan_q) == (
+        f"<run>/journal.jsonl:{n + 1}: 'q[0]' must be a finite joint value (rad or m, at most "
+        "100 either way), got nan\n"
+    )
+    assert resume_with(q=finished["q"][:3]) == (
+        f"<run>/journal.jsonl: the last 'finished' entry gives 3 joint values; the cell has "
+        f"{len(c.cell.joint_names)}\n"
+    )
+    assert resume_with(grippers={"left": ["wide", "ghost"], "middle": ["open", None]}) == (
+        "<run>/journal.jsonl: arm 'left': unknown jaw mode 'wide'; known: grasp, open, slide\n"
+        "<run>/journal.jsonl: unknown arm 'middle'; known: left, right\n"
+    )

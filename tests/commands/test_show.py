@@ -1,5 +1,7 @@
 import json
 import math
+import shutil
+from pathlib import Path
 
 import pytest
 
@@ -50,3 +52,27 @@ def test_table_in_mm_and_degrees(capsys: pytest.CaptureFixture[str]) -> None:
 def test_missing_cell_is_usage_error(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["show", "no/such/cell.yaml"]) == 2
     assert capsys.readouterr().err == "no/such/cell.yaml: no such cell file\n"
+
+
+def test_names_from_files_are_escaped(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    cell = tmp_path / "cell"
+    shutil.copytree(CELLS / "cable_routing", cell)
+    csv = cell / "routing" / "map.csv"
+    csv.write_text(csv.read_text().replace(",connector\n", ",conn\x1b[31m\n"))
+    assert main(["show", str(cell)]) == 0
+    rows = [ln for ln in capsys.readouterr().out.splitlines() if "conn" in ln]
+    assert [r.split()[0] for r in rows] == [
+        "routing.conn\\x1b[31m.slot",
+        "routing.conn\\x1b[31m.exit",
+    ]
+
+
+def test_errors_are_escaped(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    (tmp_path / "cell.yaml").write_text('name: "a\\e[2J\\n::error::x"\nrobots: {}\n')
+    assert main(["show", str(tmp_path)]) == 1
+    err = capsys.readouterr().err.replace(str(tmp_path), "<dir>")
+    assert err.splitlines() == [
+        "<dir>/cell.yaml:1:7: name: 'a\\x1b[2J\\n::error::x' is not a valid name: use letters, "
+        "digits, '_' and '-', starting with a letter or '_'",
+        "<dir>/cell.yaml:2:9: robots: must have at least 1 item, got 0",
+    ]

@@ -211,3 +211,34 @@ def test_plan_and_show_name_a_fifo_for_what_it_is(cell_dir: Path) -> None:
         )
         assert result.stderr == "fifo.yaml: a named pipe (FIFO), not a regular file\n"
         assert result.returncode == 1
+
+
+def test_control_characters_from_files_are_escaped(
+    cell_dir: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A key can carry ESC (terminal colours) and a newline starting a GitHub workflow
+    command: every message shows them escaped, one problem per line."""
+    monkeypatch.chdir(cell_dir)
+    (cell_dir / "cell.yaml").write_text(CELL + '"\\e[31mred\\n::error::x": 1\n')
+    assert main(["validate", "--no-compile", "cell.yaml"]) == 1
+    assert capsys.readouterr().out == (
+        "cell.yaml:5:1: unknown key '\\x1b[31mred\\n::error::x'; known: clearance, driver, "
+        "name, obstacles, platforms, robots, tools, units, zones\n"
+    )
+    assert main(["validate", "--no-compile", "cell.yaml", "--format", "github"]) == 1
+    assert capsys.readouterr().out == (
+        "::error file=cell.yaml,line=5,col=1::unknown key '\\x1b[31mred\\n::error::x'; known: "
+        "clearance, driver, name, obstacles, platforms, robots, tools, units, zones\n"
+    )
+    assert main(["validate", "--no-compile", "cell.yaml", "--format", "json"]) == 1
+    problem = json.loads(capsys.readouterr().out)["files"][0]["problems"][0]
+    assert problem["message"].startswith("unknown key '\x1b[31mred\n::error::x'")  # the data
+
+
+def test_file_names_are_escaped(
+    cell_dir: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(cell_dir)
+    (cell_dir / "cell.yaml").rename(cell_dir / "cell\x1b[2J\n::error::x.yaml")
+    assert main(["validate", "--no-compile", "cell\x1b[2J\n::error::x.yaml"]) == 0
+    assert capsys.readouterr().out == "cell\\x1b[2J\\n::error::x.yaml: ok (cell)\n"

@@ -144,6 +144,8 @@ def test_clearance_in_the_files_length_unit(write) -> None:
     metres = metres.replace("[1400, 1400, 20]", "[1.4, 1.4, 0.02]").replace(
         "500, 0, -10", "0.5, 0, -0.01"
     )
+    metres = metres.replace("350", "0.35").replace("[0, 0, 200]", "[0, 0, 0.2]")
+    metres = metres.replace("20\n", "0.02\n").replace("{open: 60, slide: 7, grasp: 4}", "{}")
     assert load(write, metres + "clearance: 0.02\n").clearance == pytest.approx(0.02)
     assert load(write, CELL + "clearance: 0\n").clearance == 0.0
 
@@ -163,4 +165,38 @@ def test_robot_count_is_bounded_before_any_robot_is_built(write) -> None:
     assert errors(write, ring(40)) == [
         ":3:3: robots: 40 robots, more than the 8 this engine plans for: its tasks take one or "
         "two arms, and checking every arm against every other grows with the cube of the count"
+    ]
+
+
+def test_huge_numbers_reach_the_range_checks(write) -> None:
+    """YAML 1.2 reads 1e30 as a number (YAML 1.1 read a string): it gets the bound."""
+    text = CELL.replace("finger_width: 20", "finger_width: 1e30")
+    assert errors(write, text) == [
+        ":17:19: tools.gripper.finger_width: must be between -100000 and 100000 mm (100 m), "
+        "got 1e+30"
+    ]
+    text = CELL.replace("xyz: [0, -350, 0]", "xyz: [0, -1e300, 0]")
+    assert errors(write, text) == [
+        ":11:21: robots.right.base.xyz[1]: must be between -100000 and 100000 mm (100 m), "
+        "got -1e+300"
+    ]
+
+
+def test_lengths_bounded_in_the_files_unit(write) -> None:
+    at_limit = CELL.replace("xyz: [0, -350, 0]", "xyz: [0, -100000, 0]")
+    assert load(write, at_limit).robots["right"].base.xyz == pytest.approx((0, -100, 0))
+    metres = CELL.replace("length: mm", "length: m").replace("[0, -350, 0]", "[0, -101, 0]")
+    assert ":11:21: robots.right.base.xyz[1]: must be between -100 and 100 m, got -101" in (
+        errors(write, metres)
+    )
+
+
+def test_masses_bounded(write) -> None:
+    text = CELL.replace("finger_width: 20", "finger_width: 20\n    mass: 1e308")
+    assert errors(write, text) == [
+        ":18:11: tools.gripper.mass: must be at most 1000 kg, got 1e+308"
+    ]
+    grams = text.replace("{length: mm, angle: deg}", "{length: mm, angle: deg, mass: g}")
+    assert errors(write, grams.replace("1e308", "1000001")) == [
+        ":18:11: tools.gripper.mass: must be at most 1e+06 g (1000 kg), got 1000001"
     ]

@@ -1,6 +1,8 @@
+import math
 from pathlib import Path
 
 import pytest
+import yaml
 
 from cellengine.errors import InputError
 from cellengine.info import yamlio
@@ -74,3 +76,84 @@ def test_size_cap(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
 
 def test_empty_document() -> None:
     assert parse_yaml("# nothing\n", F).data is None
+
+
+@pytest.mark.parametrize(
+    ("text", "value"),
+    [
+        ("1e30", 1e30),
+        ("5e-324", 5e-324),
+        ("-1.5E-3", -1.5e-3),
+        ("+.5e+3", 500.0),
+        ("1.", 1.0),
+        ("17", 17),
+        ("017", 17),  # a leading 0 is decimal in YAML 1.2
+        ("0o17", 15),
+        ("0x1F", 31),
+        ("-0", 0),
+        (".inf", math.inf),
+        ("-.Inf", -math.inf),
+        ("+.INF", math.inf),
+        ("true", True),
+        ("True", True),
+        ("FALSE", False),
+        ("~", None),
+        ("Null", None),
+        # strings in YAML 1.2, numbers or booleans in PyYAML's YAML 1.1
+        ("1:20", "1:20"),
+        ("1_000", "1_000"),
+        ("0b101", "0b101"),
+        ("-0x1F", "-0x1F"),
+        ("yes", "yes"),
+        ("no", "no"),
+        ("on", "on"),
+        ("Off", "Off"),
+        ("2024-01-01", "2024-01-01"),
+        ("=", "="),
+        ("NaN", "NaN"),
+    ],
+)
+def test_scalars_resolve_as_yaml_1_2_core(text: str, value: object) -> None:
+    got = parse_yaml(f"a: {text}\n", F).data["a"]
+    assert got == value and type(got) is type(value)
+
+
+def test_nan_as_yaml_1_2_writes_it() -> None:
+    for text in (".nan", ".NaN", ".NAN"):
+        assert math.isnan(parse_yaml(f"a: {text}\n", F).data["a"])
+
+
+def test_keys_stay_as_written() -> None:
+    assert parse_yaml("on: 1\n017: 2\n", F).data == {"on": 1, "017": 2}
+
+
+def test_explicit_tags_need_yaml_1_2_numbers() -> None:
+    assert parse_yaml('a: !!int "12"\nb: !!float 3\n', F).data == {"a": 12, "b": 3.0}
+    assert err("a: !!int 1_000\n") == (
+        "f.yaml:1:4: bad YAML value: '1_000' is not an integer in YAML 1.2"
+    )
+    assert (
+        err("a: !!float 1:20\n") == "f.yaml:1:4: bad YAML value: '1:20' is not a number in YAML 1.2"
+    )
+    assert err("a: !!bool yes\n") == (
+        "f.yaml:1:4: bad YAML value: 'yes' is not true or false in YAML 1.2"
+    )
+
+
+def test_a_float_beyond_the_largest_is_refused() -> None:
+    assert err("a: [1, -1e999]\n") == (
+        "f.yaml:1:8: bad YAML value: the number -1e999 is beyond the largest float (1.8e308)"
+    )
+
+
+def test_pyyaml_loaders_keep_yaml_1_1() -> None:
+    """Our resolvers are our loader's own: other users of PyYAML are not changed."""
+    assert yaml.safe_load("a: yes\nb: 1e30\n") == {"a": True, "b": "1e30"}
+
+
+def test_an_integer_beyond_the_largest_float_is_refused() -> None:
+    assert err("a: 0x" + "f" * 300 + "\n") == (
+        "f.yaml:1:4: bad YAML value: the number 0xfffffffffffffffffffffffffffffffffff... is "
+        "beyond the largest float (1.8e308)"
+    )
+    assert parse_yaml(f"a: {10**300}\n", F).data["a"] == 10**300  # as large as a float may be

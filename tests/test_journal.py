@@ -1,0 +1,140 @@
+"""The journal read back for ``--resume``: every value it would act on is checked, and a
+damaged or edited entry is an error at its line, naming the field."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from cellengine.errors import InputError
+from cellengine.journal import read_progress
+
+START = {"entry": "start", "plan": "plan.yaml", "driver": "SimDriver"}
+FINISHED = {
+    "entry": "finished",
+    "step": 0,
+    "segment": 0,
+    "label": "s0 PickCable",
+    "q": [0.0, -1.57, 1.57, -1.57, -1.57, 0.0],
+    "grippers": {"left": ["open", None], "right": ["grasp", "cable1"]},
+}
+MEASURED = {"entry": "measured", "step": 1, "object": "vial1", "arm": "left", "mass_kg": 0.03}
+
+
+def _write(tmp_path: Path, *entries: dict[str, Any] | bytes) -> Path:
+    path = tmp_path / "journal.jsonl"
+    lines = [e if isinstance(e, bytes) else json.dumps(e).encode() for e in entries]
+    path.write_bytes(b"".join(line + b"\n" for line in lines))
+    return path
+
+
+def error(tmp_path: Path, *entries: dict[str, Any] | bytes) -> str:
+    path = _write(tmp_path, *entries)
+    with pytest.raises(InputError) as e:
+        read_progress(path)
+    return str(e.value).replace(str(path), "journal.jsonl")
+
+
+def test_a_good_journal_is_read(tmp_path: Path) -> None:
+    progress = read_progress(_write(tmp_path, START, FINISHED, MEASURED))
+    assert progress.labels == ("s0 PickCable",)
+    assert progress.grippers == {"left": ("open", None), "right": ("grasp", "cable1")}
+    assert progress.measured == {"vial1": 0.03}
+
+
+def test_missing_field(tmp_path: Path) -> None:
+    finished = {k: v for k, v in FINISHED.items() if k != "q"}
+    assert error(tmp_path, START, finished) == (
+        "journal.jsonl:2: 'q' is missing from this 'finished' entry"
+    )
+
+
+def test_wrong_types(tmp_path: Path) -> None:
+    assert error(tmp_path, START, {**FINISHED, "segment": "0"}) == (
+        "journal.jsonl:2: 'segment' must be a segment index (an integer from 0), got \"0\""
+    )
+    assert error(tmp_path, START, {**FINISHED, "segment": -1}) == (
+        "journal.jsonl:2: 'segment' must be a segment index (an integer from 0), got -1"
+    )
+    assert error(tmp_path, START, {**FINISHED, "label": 5}) == (
+        "journal.jsonl:2: 'label' must be a string, got 5"
+    )
+    assert error(tmp_path, START, {**FINISHED, "q": {"a": 1}}) == (
+        "journal.jsonl:2: 'q' must be a list of joint values, got {\"a\": 1}"
+    )
+    assert error(tmp_path, START, {**FINISHED, "grippers": {"left": "open"}}) == (
+        "journal.jsonl:2: 'grippers.left' must be [mode, holds] (each a name or null), got \"open\""
+    )
+    assert error(tmp_path, START, {**FINISHED, "grippers": [1]}) == (
+        "journal.jsonl:2: 'grippers' must map each arm to [mode, holds], got [1]"
+    )
+    assert error(tmp_path, START, {**MEASURED, "object": None}) == (
+        "journal.jsonl:2: 'object' must be a string, got null"
+    )
+    assert error(tmp_path, START, {"entry": "fault", "fault": "tracking"}) == (
+        "journal.jsonl:2: 'fault' must be a mapping, got \"tracking\""
+    )
+
+
+@pytest.mark.parametrize(
+    ("mass", "shown"),
+    [("NaN", "nan"), ("-0.5", "-0.5"), ("0", "0"), ("1e308", "1e+308"), ("1e999", "inf")],
+)
+def test_masses_finite_and_in_range(tmp_path: Path, mass: str, shown: str) -> None:
+    line = json.dumps({**MEASURED, "mass_kg": 0.25}).replace("0.25", mass).encode()
+    assert error(tmp_path, START, FINISHED, line) == (
+        f"journal.jsonl:3: 'mass_kg' must be a finite mass in kg (0 to 1000), got {shown}"
+    )
+
+
+def test_joint_values_finite(tmp_path: Path) -> None:
+    line = json.dumps(FINISHED).replace("-1.57, 1.57", "-1.57, NaN").encode()
+    assert error(tmp_path, START, line) == (
+        "journal.jsonl:2: 'q[2]' must be a finite joint value (rad or m, at most 100 either "
+        "way), got nan"
+    )
+    assert error(tmp_path, START, {**FINISHED, "q": [0.0, 1e300]}) == (
+        "journal.jsonl:2: 'q[1]' must be a finite joint value (rad or m, at most 100 either "
+        "way), got 1e+300"
+    )
+    assert error(tmp_path, START, {"entry": "fault", "fault": {"q": [0.0, True]}}) == (
+        "journal.jsonl:2: 'fault.q[1]' must be a finite joint value (rad or m, at most 100 "
+        "either way), got true"
+    )
+
+
+def test_fault_grippers(tmp_path: Path) -> None:
+    fault = {"entry": "fault", "fault": {"q": [0.0], "grippers": [{"mode": "open"}]}}
+    assert error(tmp_path, START, fault) == (
+        "journal.jsonl:2: 'fault.grippers[0].arm' must be a string, got null"
+    )
+
+
+def test_invalid_utf8_line(tmp_path: Path) -> None:
+    assert error(tmp_path, START, b'{"entry": "end", "x": "\xff\xfe"}', FINISHED) == (
+        "journal.jsonl:2: not a journal entry (not UTF-8 text)"
+    )
+
+
+def test_deep_nesting(tmp_path: Path) -> None:
+    deep = b'{"entry": "end", "x": ' + b"[" * 10000 + b"]" * 10000 + b"}"
+    assert error(tmp_path, START, deep) == (
+        "journal.jsonl:2: not a journal entry (JSON nested too deeply)"
+    )
+
+
+def test_unknown_entry(tmp_path: Path) -> None:
+    assert error(tmp_path, START, {"entry": ["finished"]}) == (
+        'journal.jsonl:2: unknown journal entry ["finished"]; known: end, fault, finished, '
+        "measured, recovery, replanned, resume, sent, start, timing"
+    )
+
+
+def test_a_torn_last_line_is_ignored_even_mid_character(tmp_path: Path) -> None:
+    path = _write(tmp_path, START, FINISHED)
+    with path.open("ab") as f:
+        f.write(b'{"entry": "sent", "label": "caf\xc3')  # killed inside a character
+    assert read_progress(path).labels == ("s0 PickCable",)
