@@ -102,7 +102,7 @@ class PickCable(Skill):
         where = f"steps[{state.step}] PickCable {self.cable}"
         arms = _two_arms(world, where)
         for arm in arms:
-            _check_jaw(world, arm, where)
+            _check_jaw(world, arm, where, self.cable)
         conn_ref, free_ref = self.from_
         chosen = state.connector_arm or _nearest_arm(world, arms, conn_ref)
         c_arms: tuple[str, ...] = (chosen,)
@@ -300,8 +300,9 @@ class RouteCable(Skill):
         """(routing arm, other arm), checked to hold the cable with the jaw modes needed."""
         where = f"steps[{state.step}] RouteCable"
         r_arm, o_arm = _routing_arms(ctx.world, state, self.cable, where)
-        _check_jaw(ctx.world, r_arm, where)
-        _check_jaw(ctx.world, o_arm, where)
+        _check_jaw(ctx.world, r_arm, where, self.cable)
+        _check_jaw(ctx.world, o_arm, where, self.cable)
+        _check_gaps(ctx.world, self.guides, self.cable, where)
         return r_arm, o_arm
 
     def ways(
@@ -1995,7 +1996,10 @@ def _hand(world: World, arm: str) -> cg.Hand:
     return cg.Hand.from_tool(world.cell.tools[robot.tool], robot.tool)
 
 
-def _check_jaw(world: World, arm: str, where: str) -> None:
+def _check_jaw(world: World, arm: str, where: str, cable: str) -> None:
+    """The tool has the jaw modes the method uses, each wide enough for what it does to
+    ``cable``: open around the connector (across its thinner side) and the cable, slide
+    along the cable, grasp it tighter than it is thick."""
     robot = world.cell.robots[arm]
     _hand(world, arm)
     assert robot.tool is not None
@@ -2008,6 +2012,33 @@ def _check_jaw(world: World, arm: str, where: str) -> None:
             + " (the method opens, slides and grasps)"
             + known(jaw)
         )
+    c = world.cable(cable)
+    d = c.diameter
+    across = min(c.connector.width, c.connector.height) if c.connector else d
+    wrong = [
+        (OPEN, "open around", "the connector" if c.connector else "the cable", across, "wider")
+        if jaw[OPEN] <= across
+        else None,
+        (SLIDE, "slide along", "the cable", d, "wider") if jaw[SLIDE] <= d else None,
+        (GRASP, "hold", "the cable", d, "narrower") if jaw[GRASP] >= d else None,
+    ]
+    for mode, does, what, size, must in filter(None, wrong):
+        raise _error(
+            f"{where}: tool '{robot.tool}' of arm '{arm}': jaw '{mode}' is {_mm(jaw[mode])} mm; "
+            f"to {does} {what} of '{cable}' ({_mm(size)} mm) it must be {must}"
+        )
+
+
+def _check_gaps(world: World, guides: Sequence[str], cable: str, where: str) -> None:
+    """Each guide's slot takes the cable: its gap is wider than the cable is thick."""
+    d = world.cable(cable).diameter
+    for ref in guides:
+        gap = cg.GuideDims.of(world, ref, where).gap
+        if gap <= d:
+            raise _error(
+                f"{where}: guide '{ref}' has a {_mm(gap)} mm slot (its gap); '{cable}' is "
+                f"{_mm(d)} mm thick: it does not fit"
+            )
 
 
 def _require_hold(state: CableState, arm: str, cable: str, where: str, what: str) -> None:

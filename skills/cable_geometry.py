@@ -337,7 +337,14 @@ class GuideDims:
                 )
             )
         assert width is not None
-        return cls(dims["length"], width, dims["height"], dims["gap"])
+        out = cls(dims["length"], width, dims["height"], dims["gap"])
+        bad = [f"{k} {v * 1000:g} mm" for k, v in vars(out).items() if not v > 0.0]
+        if bad:
+            what = ", ".join(bad)
+            raise InputError(
+                Problem(f"{where}: guide '{ref}' has {what}; a guide's sizes are positive")
+            )
+        return out
 
 
 def _width(dims: Mapping[str, float]) -> float | None:

@@ -27,6 +27,7 @@ from lxml import etree
 
 from cellengine.errors import CellError, InputError, Problem
 from cellengine.geometry import pose
+from cellengine.info.bounds import MAX_COORDINATE
 from cellengine.info.files import read_capped
 from cellengine.info.platform import Keypoint, Source, frozen_array
 from cellengine.info.xmlsafe import parse_xml
@@ -76,9 +77,27 @@ def _model(el: Any, length: float, angle: float, path: Path) -> ElementModel:
         if child.tag == "dimension":
             _unique(name, "dimension", child, first_dim, path)
             dims[name] = _numbers(child, "value", path)[0] * length
+            if not 0.0 < dims[name] <= MAX_COORDINATE:  # a size, in a cell of metres
+                text = child.get("value")
+                raise _error(
+                    f"dimension '{name}': {text} is not a size (more than 0, at most "
+                    f"{MAX_COORDINATE:g} m)",
+                    child,
+                    path,
+                    "value",
+                )
         else:
             _unique(name, "keypoint", child, first_kp, path)
             xyz = [v * length for v in _numbers(child, "xyz", path)]
+            if max(map(abs, xyz)) > MAX_COORDINATE:
+                text = child.get("xyz")
+                raise _error(
+                    f"keypoint '{name}': xyz '{text}' is beyond {MAX_COORDINATE:g} m of its "
+                    "element",
+                    child,
+                    path,
+                    "xyz",
+                )
             rpy = [v * angle for v in _numbers(child, "rpy", path)]
             kps[name] = Keypoint(name, frozen_array(pose(xyz, rpy)))
     return ElementModel(

@@ -53,12 +53,34 @@ def test_rpy_is_optional_and_defaults_are_metres_and_radians(tmp_path: Path) -> 
         tmp_path,
         '<elements><element model="m">'
         '<keypoint name="a" xyz="1 2 3"/><keypoint name="b" xyz="0 0 0" rpy="1.5 0 0"/>'
-        '<dimension name="d" value="-2.5e-1"/></element></elements>',
+        '<dimension name="d" value="2.5e-1"/></element></elements>',
     )
     m = load_models(p)["m"]
     np.testing.assert_allclose(m.keypoints["a"].T_element_keypoint[:3, 3], [1, 2, 3])
     np.testing.assert_allclose(m.keypoints["b"].T_element_keypoint[:3, :3], rot_x(1.5))
-    assert m.dimensions["d"] == -0.25
+    assert m.dimensions["d"] == 0.25
+
+
+@pytest.mark.parametrize(
+    ("child", "message"),
+    [
+        ('<dimension name="gap" value="0"/>', "dimension 'gap': 0 is not a size (more than 0, "
+         "at most 100 m)"),
+        ('<dimension name="gap" value="-10"/>', "dimension 'gap': -10 is not a size (more than "
+         "0, at most 100 m)"),
+        ('<dimension name="gap" value="1e300"/>', "dimension 'gap': 1e300 is not a size (more "
+         "than 0, at most 100 m)"),
+        ('<keypoint name="k" xyz="0 0 1e6"/>', "keypoint 'k': xyz '0 0 1e6' is beyond 100 m of "
+         "its element"),
+    ],
+)  # fmt: skip
+def test_sizes_are_positive_and_everything_within_100_m(
+    tmp_path: Path, child: str, message: str
+) -> None:
+    p = write(tmp_path, f'<elements><element model="m">{child}</element></elements>')
+    with pytest.raises(InputError) as e:
+        load_models(p)
+    assert e.value.problems[0].message == message
 
 
 def test_centimetres(tmp_path: Path) -> None:

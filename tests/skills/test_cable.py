@@ -660,6 +660,51 @@ def test_route_cable_needs_a_placed_connector() -> None:
     )
 
 
+@pytest.mark.parametrize(
+    ("jaw", "message"),
+    [
+        (
+            {"open": 1.0},
+            "jaw 'open' is 1.0 mm; to open around the connector of 'cable1' (16.0 mm) it must "
+            "be wider",
+        ),
+        (
+            {"slide": 5.0},
+            "jaw 'slide' is 5.0 mm; to slide along the cable of 'cable1' (6.0 mm) it must be wider",
+        ),
+        (
+            {"grasp": 6.0},
+            "jaw 'grasp' is 6.0 mm; to hold the cable of 'cable1' (6.0 mm) it must be narrower",
+        ),
+    ],
+)
+def test_jaw_widths_are_checked_against_the_cable_and_connector(
+    jaw: dict[str, float], message: str
+) -> None:
+    world, steps = _world()
+    tool = world.cell.tools["cable_gripper"]
+    widths = {k: v / 1000.0 for k, v in jaw.items()}
+    tool = tool.model_copy(update={"jaw": {**tool.jaw, **widths}})
+    cell = world.cell.model_copy(update={"tools": {"cable_gripper": tool}})
+    assert _fails(replace(world, cell=cell), steps) == (
+        f"steps[0] PickCable cable1: tool 'cable_gripper' of arm 'left': {message}"
+    )
+
+
+@pytest.mark.parametrize(
+    ("gap", "message"),
+    [
+        (0.006, "guide 'routing.guide2' has a 6.0 mm slot (its gap); 'cable1' is 6.0 mm thick: "
+         "it does not fit"),
+        (-0.01, "guide 'routing.guide2' has gap -10 mm; a guide's sizes are positive"),
+    ],
+)  # fmt: skip
+def test_a_guide_slot_the_cable_does_not_fit_is_refused(gap: float, message: str) -> None:
+    world, steps = _world()
+    world = _with_element(world, "routing.guide2", gap=gap)
+    assert _fails(world, steps) == f"steps[2] RouteCable: {message}"
+
+
 def test_place_connector_arm_both_is_refused() -> None:
     world, steps = _world()
     place = steps[1].model_copy(update={"arm": "both"})
