@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from cellengine.info.cell import Name
 from cellengine.info.units import Frozen, Length, Mass, Number, Units
@@ -41,6 +41,22 @@ class Container(Frozen):
     # where it stands at the start: a keypoint (platform.element[.keypoint]) at the centre
     # of its base, z up
     at: str | None = None
+
+    @model_validator(mode="after")
+    def _sized(self) -> Container:
+        """A box by its size, anything else by its diameter and height: each given for its
+        kind (the skills need them) and nothing given that its kind does not use."""
+        uses = ("size",) if self.kind == "box" else ("diameter", "height")
+        missing = [k for k in uses if getattr(self, k) is None]
+        unused = [k for k in ("size", "diameter", "height") if k not in uses and getattr(self, k)]
+        sized = f"a {self.kind} is sized by {' and '.join(uses)}"
+        if missing:
+            raise ValueError(f"{sized}: give {' and '.join(missing)}")
+        if unused:
+            raise ValueError(f"{sized}: remove {' and '.join(unused)}")
+        if self.size is not None and min(self.size) <= 0:
+            raise ValueError("box sizes must be greater than 0")
+        return self
 
     @property
     def full_height(self) -> float | None:
