@@ -9,7 +9,7 @@ from collections.abc import Iterator, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
-from cellengine.errors import InputError, at_step
+from cellengine.errors import InputError, Problem, StepError, at_step
 from cellengine.family import Candidate
 from cellengine.program import Segment
 from cellengine.skill import Skill
@@ -31,7 +31,21 @@ class CableFamily:
     skills: tuple[type[Skill], ...] = (PickCable, PlaceConnector, RouteCable)
 
     def plan(self, ctx: PlanningContext, steps: Sequence[Skill]) -> Iterator[Candidate]:
+        _picked_once(steps)
         return _from(ctx, steps, 0, CableState.at_home(ctx), {})
+
+
+def _picked_once(steps: Sequence[Skill]) -> None:
+    """A cable is picked from its combs once: a second PickCable would take it from where it
+    no longer lies."""
+    first: dict[str, int] = {}
+    for i, step in enumerate(steps):
+        if isinstance(step, PickCable):
+            if step.cable in first:
+                before = f"steps[{first[step.cable]}]"
+                message = f"steps[{i}] PickCable: '{step.cable}' was picked by {before}"
+                raise StepError(Problem(message + "; a cable is picked from its combs once"), i)
+            first[step.cable] = i
 
 
 # A guide no way of which can be routed from a state, by (step, guide, CableState.key()):

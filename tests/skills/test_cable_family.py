@@ -7,15 +7,18 @@ around its base (the tool meets the shoulder on some branches, tests/execute).""
 from __future__ import annotations
 
 import math
+import shutil
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from cellengine import geometry as g
 from cellengine.context import build_context
-from cellengine.errors import StepError
+from cellengine.errors import InputError, StepError
 from cellengine.info.load import load_plan, load_world
+from cellengine.pipeline import compile_plan
 from cellengine.program import ArmPath, Segment
 from cellengine.skills import cable_family
 from cellengine.skills.cable_family import _narrowed
@@ -82,4 +85,17 @@ def test_a_step_whose_every_way_strands_an_arm_says_so(monkeypatch: pytest.Monke
         "steps[0] PickCable: every way of doing it leaves an arm (left) on no inverse "
         "kinematics branch that follows its Cartesian paths within reach and clear of itself "
         "from where the steps before left it"
+    )
+
+
+def test_a_cable_picked_twice_is_refused_at_the_second_pick(tmp_path: Path) -> None:
+    shutil.copytree(CELLS / "cable_routing", tmp_path / "cell")
+    plan = tmp_path / "cell" / "plan.yaml"
+    pick = "  - {skill: PickCable, cable: cable1, from: [holder.comb_a, holder.comb_b]}\n"
+    plan.write_text("cell: cell.yaml\nobjects: objects.yaml\nsteps:\n" + pick * 2)
+    with pytest.raises(InputError) as e:
+        compile_plan(plan)
+    assert str(e.value) == (
+        f"{plan}:5:5: steps[1] PickCable: 'cable1' was picked by steps[0]; a cable is picked "
+        "from its combs once"
     )
