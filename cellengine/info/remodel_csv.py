@@ -53,7 +53,7 @@ SEQUENCE_COLUMNS = ("Order", "Type of operation", "Label", "Spot")
 
 # Names become YAML keys and parts of dotted plan references (see cellengine.info.cell).
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_-]*$")
-_INT = re.compile(r"^[+-]?\d+$")
+_INT = re.compile(r"^[+-]?\d{1,9}$")  # an Order: a sequence is never a billion rows long
 
 
 # --- reading ;-separated tables ----------------------------------------------------------
@@ -298,7 +298,10 @@ def _operation(table: Table, cells: Sequence[str], row: int) -> Operation:
     path = table.file
     order_text = table.cell(cells, "order")
     if not _INT.match(order_text):
-        raise InputError.at(f"Order '{order_text}' is not a whole number", path, row)
+        shown = order_text if len(order_text) <= 20 else order_text[:20] + "..."
+        raise InputError.at(
+            f"Order '{shown}' is not a whole number (of at most 9 digits)", path, row
+        )
     kind = table.cell(cells, "type of operation")
     if kind.upper() not in OPERATIONS:
         raise InputError.at(f"unknown operation '{kind}'" + known(OPERATIONS), path, row)

@@ -190,7 +190,10 @@ def test_operations_sorted_by_order_lowercase_accepted_and_arm_r(tmp_path: Path)
 def test_order_must_be_unique_whole_numbers(tmp_path: Path) -> None:
     text = SEQUENCE_HEAD + "1;EC;CON1;C2.1-C1.1\n1;PC;CON1;J8.1.L\nthree;RC;CON1;J3.1\n"
     p = write(tmp_path, "s.csv", text)
-    assert problems(load_sequence, p) == [("Order 'three' is not a whole number", 4)]
+    whole = "is not a whole number (of at most 9 digits)"
+    assert problems(load_sequence, p) == [(f"Order 'three' {whole}", 4)]
+    p = write(tmp_path, "s.csv", text.replace("three", "9" * 5000))  # int() refuses 4300+
+    assert problems(load_sequence, p) == [(f"Order '{'9' * 20}...' {whole}", 4)]
     p = write(tmp_path, "s.csv", text.replace("three", "3"))
     assert problems(load_sequence, p) == [("duplicate Order 1 (first used in row 2)", 3)]
 
