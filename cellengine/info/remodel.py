@@ -262,7 +262,7 @@ def _body_box(dims: Mapping[str, float]) -> tuple[CollisionBox, ...]:
 def _guide(doc: _Doc, el: Any) -> tuple[Keypoint, CollisionBox | None]:
     _only_attributes(doc, el, ("couple",))
     couple = el.get("couple")
-    if couple is None or not re.fullmatch(r"\s*\d+\s*", couple) or int(couple) < 1:
+    if couple is None or not re.fullmatch(r"\s*\d{1,9}\s*", couple) or int(couple) < 1:
         raise doc.error(
             f"<guide> attribute 'couple' is {_shown(couple)}; expected its index 1, 2, ...",
             el,
@@ -446,4 +446,6 @@ def _children(el: Any) -> list[Any]:
 
 
 def _shown(value: str | None) -> str:
-    return "missing" if value is None else f"'{value}'"
+    if value is None:
+        return "missing"
+    return f"'{value}'" if len(value) <= 40 else f"'{value[:40]}...'"

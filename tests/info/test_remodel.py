@@ -391,6 +391,13 @@ def jigs(tmp_path: Path, body: str) -> Path:
             23,
         ),
         (
+            f'<jig model="a"><guide couple="{"9" * 5000}"><key length="1" gap="1" height="1">'
+            f"{POSE}</key></guide></jig>",
+            f"<guide> attribute 'couple' is '{'9' * 40}...'; expected its index 1, 2, ...",
+            3,
+            23,
+        ),
+        (
             f'<jig model="a">\n<guide couple="1"><key length="1" gap="1" height="1">{POSE}'
             f'</key></guide>\n<guide couple="1"><key length="1" gap="1" height="1">{POSE}'
             "</key></guide></jig>",
