@@ -304,7 +304,7 @@ def build_arm(
         T_cell_base=T_cell_base,
         T_flange_tcp=T_flange_tcp,
         dh=dh,
-        home=_home(robot, name, len(joint_names), cell_file, model, units),
+        home=_home(robot, name, joint_names, cell_file, model, units, limits),
         fingers=fingers,
     )
 
@@ -379,9 +379,18 @@ def _limits(urdf: Urdf, tip: str, robot: Robot) -> Limits:
     return Limits(np.array(lower), np.array(upper), np.array(velocity), np.array(acceleration))
 
 
-def _home(robot: Robot, name: str, n: int, cell_file: Path, model: Any, units: Units) -> Vec | None:
+def _home(
+    robot: Robot,
+    name: str,
+    joints: Sequence[str],
+    cell_file: Path,
+    model: Any,
+    units: Units,
+    limits: Limits,
+) -> Vec | None:
     if robot.home is None:
         return None
+    n = len(joints)
     if len(robot.home) != n:
         raise _cell_error(
             cell_file,
@@ -392,9 +401,22 @@ def _home(robot: Robot, name: str, n: int, cell_file: Path, model: Any, units: U
     # cell.yaml converts home with the angle unit, before joint types are known; a prismatic
     # axis's value is a length: undo the angle factor and apply the length factor.
     ctx = units.context()
+    factor = np.full(n, ctx["angle"])  # the file's unit -> rad or m, per joint
     for i, joint in enumerate(list(model.joints)[1:]):
         if "Prismatic" in joint.shortname() or joint.shortname().startswith("JointModelP"):
             home[i] *= ctx["length"] / ctx["angle"]
+            factor[i] = ctx["length"]
+    # an arm that starts outside its limits cannot move at all (radians in a degree file)
+    out = np.flatnonzero((home < limits.lower - 1e-9) | (home > limits.upper + 1e-9))
+    if len(out):
+        i = int(out[0])
+        lo, hi = limits.lower[i] / factor[i], limits.upper[i] / factor[i]
+        raise _cell_error(
+            cell_file,
+            f"robots.{name}.home[{i}]: {joints[i]} at {home[i] / factor[i]:.6g} is outside "
+            f"its limits [{lo:.6g}, {hi:.6g}] (in the file's units)",
+            ("robots", name, "home", i),
+        )
     home.setflags(write=False)
     return home
 
