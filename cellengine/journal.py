@@ -102,17 +102,37 @@ def read_progress(path: Path) -> Progress:
         raise InputError(Problem("no journal.jsonl here: is this a run directory?", str(path)))
     lines = path.read_bytes().split(b"\n")
     entries: list[dict[str, Any]] = []
+    done = 0  # the segments the current run finished, in order
     for n, line in enumerate(lines, 1):
         if not line.strip():
             continue
         try:
             entry = _entry(line)
+            done = _in_order(entry, done)
         except _Bad as e:
             if n == len(lines) and e.torn:
                 break  # the last line, torn by a kill (no newline yet): it never happened
             raise InputError(Problem(str(e), str(path), n)) from None
         entries.append(entry)
     return _progress(entries)
+
+
+def _in_order(entry: dict[str, Any], done: int) -> int:
+    """How many segments are finished after ``entry``: a segment finishes after every one
+    before it (a replanned or resumed run may finish one again, never skip one)."""
+    if entry["entry"] == Entry.START:
+        return 0
+    if entry["entry"] != Entry.FINISHED:
+        return done
+    segment = int(entry["segment"])
+    if segment > done:
+        raise _Bad(
+            f"segment {segment} finished, but the run's journal has segments finished up to "
+            f"{done - 1} only"
+            if done
+            else f"segment {segment} finished before segment 0"
+        )
+    return segment + 1
 
 
 class _Bad(Exception):

@@ -138,3 +138,17 @@ def test_a_torn_last_line_is_ignored_even_mid_character(tmp_path: Path) -> None:
     with path.open("ab") as f:
         f.write(b'{"entry": "sent", "label": "caf\xc3')  # killed inside a character
     assert read_progress(path).labels == ("s0 PickCable",)
+
+
+def test_a_segment_finished_out_of_order_is_refused(tmp_path: Path) -> None:
+    """Skipping ahead would resume after segments that never ran; going back is a replanned
+    or resumed run finishing one again."""
+    again = [START, FINISHED, {**FINISHED, "segment": 1}, FINISHED]
+    assert read_progress(_write(tmp_path, *again)).done == 1
+    assert error(tmp_path, START, FINISHED, {**FINISHED, "segment": 7}) == (
+        "journal.jsonl:3: segment 7 finished, but the run's journal has segments finished up to "
+        "0 only"
+    )
+    assert error(tmp_path, START, {**FINISHED, "segment": 2}) == (
+        "journal.jsonl:2: segment 2 finished before segment 0"
+    )
