@@ -35,6 +35,7 @@ from cellengine.drivers.layout import CellLayout
 from cellengine.drivers.lifecycle import Lifecycle, LifecycleError, State
 from cellengine.drivers.record import FaultRecord, Played, Recorder, Sent, Transition
 from cellengine.errors import known
+from cellengine.info.bounds import MAX_MASS
 from cellengine.info.cell import Cell
 from cellengine.info.objects import Objects
 from cellengine.program import CompiledSegment, TimedEvent
@@ -160,11 +161,24 @@ class Driver(ABC):
         self._check_arm(arm)
         return self._guarded(lambda: self._read_gripper(arm))
 
-    def read_mass(self, arm: str) -> float:
-        """What ``arm`` 's load cell reads (kg), where the driver has one."""
+    def read_mass(self, arm: str, of: str | None = None) -> float:
+        """What ``arm`` 's load cell reads (kg), where the driver has one; ``of``: the object
+        it weighs, whose reading must be a mass (it goes in the journal, and a runtime choice
+        such as ``heavier_of`` follows it): else a fault."""
         self._life.check_operation("read_mass")
         self._check_arm(arm)
-        return self._guarded(lambda: self._read_mass(arm))
+        return self._guarded(lambda: self._a_mass(arm, of, self._read_mass(arm)))
+
+    def _a_mass(self, arm: str, of: str | None, kg: float) -> float:
+        low = 0.0 if of is not None else -MAX_MASS  # empty, a load cell reads noise about 0
+        if not (math.isfinite(kg) and low < kg <= MAX_MASS):
+            what = f" weighing '{of}'" if of is not None else ""
+            message = (
+                f"the load cell of '{arm}' read {kg!r} kg{what}, which is no mass (more than "
+                f"0, at most {MAX_MASS:g} kg); both arms stopped"
+            )
+            raise DriverFault(self.kind, Fault("load_cell", message, arm=arm, value=kg))
+        return kg
 
     def timing(self) -> dict[str, Any] | None:
         """How a real-time loop kept its period (servo_timing.py), where the driver has one."""

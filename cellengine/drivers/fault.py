@@ -22,7 +22,8 @@ from cellengine.errors import DriverError, Problem
 
 # tracking: a joint deviates from its command; gripper: a mode not reached; connection: lost;
 # protective_stop, emergency_stop: reported by a controller; overrun: a segment took longer
-# than allowed; interrupted: the user stopped it; internal: a bug (the exception's text)
+# than allowed; interrupted: the user stopped it; internal: a bug (the exception's text);
+# load_cell: a reading that is no mass
 FaultKind = Literal[
     "tracking",
     "gripper",
@@ -32,6 +33,7 @@ FaultKind = Literal[
     "overrun",
     "interrupted",
     "internal",
+    "load_cell",
 ]
 
 

@@ -82,7 +82,7 @@ def _weigh(driver: Driver, journal: IO[str], seg: Segment, measured: dict[str, f
     journaled. Whether anything was measured."""
     measures = [a for a in seg.annotations if isinstance(a, Measure)]
     for m in measures:
-        measured[m.object] = driver.read_mass(m.arm)
+        measured[m.object] = driver.read_mass(m.arm, of=m.object)
         mass = measured[m.object]
         append(journal, Entry.MEASURED, step=seg.step, object=m.object, arm=m.arm, mass_kg=mass)
     return bool(measures)

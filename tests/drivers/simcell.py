@@ -42,7 +42,9 @@ def objects() -> Objects:
     return Objects.model_validate(
         {
             "cables": {"cable1": {"length": 0.65, "diameter": 0.006, "mass": 0.04}},
-            "containers": {"vial1": {"kind": "vial", "diameter": 0.028, "mass": 0.012}},
+            "containers": {
+                "vial1": {"kind": "vial", "diameter": 0.028, "height": 0.06, "mass": 0.012}
+            },
         }
     )
 

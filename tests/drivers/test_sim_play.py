@@ -19,6 +19,7 @@ from cellengine.drivers import (
     play,
     segment_events,
 )
+from cellengine.drivers.fault import DriverFault
 from cellengine.drivers.record import Played, Sent, Transition
 from cellengine.drivers.sim import servo_ticks
 from cellengine.errors import EXIT_DRIVER
@@ -284,6 +285,23 @@ def test_read_mass_is_the_held_object_plus_seeded_noise() -> None:
     assert reads[0] == reads[1]  # same seed, same readings
     assert abs(np.mean(reads[0]) - 0.012) < 4 * 0.001 / np.sqrt(400)
     assert 0.0007 < np.std(reads[0]) < 0.0013
+
+
+@pytest.mark.parametrize("reading", [0.0, -0.002, float("nan"), 1e308])
+def test_a_weighing_that_reads_no_mass_is_a_fault(reading: float) -> None:
+    """What a weighing reads goes in the journal and decides heavier_of: a broken load cell's
+    reading stops the run rather than being trusted (an empty hand may read noise about 0)."""
+    d = active(grippers={"left": GripperState("grasp", "vial1")})
+    d._read_mass = lambda arm: reading  # type: ignore[method-assign]
+    if reading <= 0.0:  # no object named: an empty load cell reads noise about 0
+        assert d.read_mass("left") == reading
+    with pytest.raises(DriverFault) as e:
+        d.read_mass("left", of="vial1")
+    assert e.value.fault.kind == "load_cell" and d.state is State.ERROR
+    assert e.value.fault.message == (
+        f"the load cell of 'left' read {reading!r} kg weighing 'vial1', which is no mass (more "
+        "than 0, at most 1000 kg); both arms stopped"
+    )
 
 
 def test_read_mass_of_an_object_without_mass_is_refused() -> None:
