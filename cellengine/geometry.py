@@ -218,6 +218,18 @@ def inverse(T: Mat) -> Mat:
     return transform(R.T, -R.T @ t)
 
 
+def rigid(T: Mat) -> Mat:
+    """``T`` with its rotation replaced by the nearest rotation (polar decomposition).
+    Products of rigid transforms leave SO(3) by round-off, and :func:`inverse` (a transpose)
+    multiplies that: a pose composed with a grasp and its inverse again and again (a vial
+    set down, picked up, set down...) must be brought back each time."""
+    U, _, Vt = np.linalg.svd(np.asarray(T, dtype=float)[:3, :3])
+    R = U @ Vt
+    if np.linalg.det(R) < 0.0:  # a reflection is no nearer rotation than its negation
+        R = U @ np.diag([1.0, 1.0, -1.0]) @ Vt
+    return transform(R, np.asarray(T, dtype=float)[:3, 3])
+
+
 def transform_points(T: Mat, points: ArrayLike) -> Vec:
     """Points (k, 3) given in T's child frame, in its parent frame: ``p @ R^T + t`` (any
     affine 4x4 ``T``)."""

@@ -8,16 +8,16 @@ from __future__ import annotations
 
 import os
 import tempfile
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 from cellengine.errors import InputError, Problem
 from cellengine.runfolder import check
 
 
-def write_files(out_dir: Path, files: Mapping[str, str]) -> dict[str, Path]:
-    """Write ``files`` (file name -> UTF-8 text) into ``out_dir`` (made if needed); return
-    each name's path."""
+def write_files(out_dir: Path, files: Mapping[str, str | Iterable[str]]) -> dict[str, Path]:
+    """Write ``files`` (file name -> UTF-8 text, or its pieces: a long text need not be
+    whole in memory) into ``out_dir`` (made if needed); return each name's path."""
     check(out_dir)
     staged: list[tuple[Path, Path]] = []
     try:
@@ -25,7 +25,7 @@ def write_files(out_dir: Path, files: Mapping[str, str]) -> dict[str, Path]:
             fd, tmp_name = tempfile.mkstemp(prefix=f".{name}.", suffix=".tmp", dir=out_dir)
             staged.append((Path(tmp_name), out_dir / name))
             with os.fdopen(fd, "w", encoding="utf-8") as f:
-                f.write(text)
+                f.writelines([text] if isinstance(text, str) else text)
                 f.flush()
                 os.fsync(f.fileno())
         for tmp, final in staged:

@@ -8,8 +8,9 @@ the next candidate where one cannot run) into a Program.
 
 from __future__ import annotations
 
+import itertools
 import json
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar
@@ -149,6 +150,7 @@ def _in_plan(plan: Plan, make: Callable[[], T]) -> T:
 # (and knots are >= 0.5 ms apart), and half the text and the writing time of full precision.
 TRAJECTORY_DECIMALS = 9
 TRAJECTORY_JSON = "trajectory.json"
+TEXT_KNOTS = 4096  # knots turned to text at a time
 
 
 def trajectory_json(program: Program) -> dict[str, Any]:
@@ -157,7 +159,31 @@ def trajectory_json(program: Program) -> dict[str, Any]:
 
     traj = concatenate([s.trajectory for s in program.segments])
     out = traj.to_json(decimals=TRAJECTORY_DECIMALS)
-    out["events"] = [
+    out["events"] = _events_json(program)
+    return out
+
+
+def trajectory_text(program: Program, knots: int = TEXT_KNOTS) -> str:
+    """``json.dumps(trajectory_json(program))``."""
+    return "".join(trajectory_chunks(program, knots))
+
+
+def trajectory_chunks(program: Program, knots: int = TEXT_KNOTS) -> Iterator[str]:
+    """:func:`trajectory_text` in pieces, the points turned to text ``knots`` at a time, for
+    a writer: the whole body as Python lists took ~7 times the text, and the text itself
+    need never be whole (issue 19: 420 MB at the end of a 100-step compile)."""
+    from cellengine.motion.trajectory import concatenate
+
+    traj = concatenate([s.trajectory for s in program.segments])
+    yield f'{{"joint_names": {json.dumps(list(traj.joint_names))}, "points": ['
+    for k in range(0, len(traj.t), knots):
+        points = json.dumps(traj.points_json(TRAJECTORY_DECIMALS, k, k + knots))[1:-1]
+        yield (", " if k else "") + points
+    yield f'], "events": {json.dumps(_events_json(program))}}}'
+
+
+def _events_json(program: Program) -> list[dict[str, Any]]:
+    return [
         {
             "time_from_start": e.time,
             "arm": e.event.arm,
@@ -167,7 +193,6 @@ def trajectory_json(program: Program) -> dict[str, Any]:
         }
         for e in program.events
     ]
-    return out
 
 
 def step_label(step: Skill) -> str:
@@ -207,7 +232,7 @@ def write_plan_outputs(compiled: Compiled, out: Path) -> dict[str, Path]:
     extra.update(compiled.report)
     labels = {i: step_label(step) for i, step in enumerate(plan.steps)}
     texts = {
-        TRAJECTORY_JSON: json.dumps(trajectory_json(compiled.program)) + "\n",
+        TRAJECTORY_JSON: itertools.chain(trajectory_chunks(compiled.program), ["\n"]),
         **report_texts(
             compiled.program,
             compiled.world,

@@ -24,6 +24,7 @@ so no two robots are ever in the shared zone together except when they cooperate
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
@@ -67,6 +68,7 @@ Point = tuple[float, float, float]
 FREE_RADIUS = 0.05  # m: a place with a container or cap closer than this is taken
 SAME_PLACE = 1e-3  # m: a Pick 'from' this near where the object stands names that place
 CAP_REACH = 0.02  # m: the reach test of a place for a cap, this high over it
+KEPT_ARRANGEMENTS = 8  # reach checkers kept (_Reach): each is MBs
 DURATION = {
     "carry": 8.0,
     "pick": 3.0,
@@ -479,14 +481,16 @@ def _cap_place(world: World, b: lm.Builder, reach: lm.Solver, arm: str) -> Mat:
 class _Reach:
     """Reach tests (lm.Solver) in the scene as it is now: the containers standing where the
     plan has put them so far (``where()``), the held ones and those ignored left out; the
-    other arms at home. Checkers are kept per arrangement."""
+    other arms at home. Checkers are kept for the latest KEPT_ARRANGEMENTS arrangements (a
+    plan comes back to a few again and again; all of a long plan's would grow its memory
+    with its steps)."""
 
     def __init__(self, ctx: PlanningContext, where: Callable[[], Mapping[str, Mat]]) -> None:
         self.world, self.cell, self.where = ctx.world, ctx.cell, where
         self.iks = ctx.iks
         self.home = ctx.home
         self.scene = ctx.scene
-        self.checkers: dict[tuple[object, ...], CollisionChecker] = {}
+        self.checkers: OrderedDict[tuple[object, ...], CollisionChecker] = OrderedDict()
 
     def __call__(self, arm: str, T_cell_tcp: Mat, ignore: Sequence[str] = ()) -> bool:
         checker = self._checker(ignore)
@@ -500,12 +504,16 @@ class _Reach:
     def _checker(self, ignore: Sequence[str]) -> CollisionChecker:
         standing = {n: T for n, T in self.where().items() if n not in ignore}
         key = tuple(sorted((n, tuple(np.round(T[:3, 3], 6))) for n, T in standing.items()))
-        if key not in self.checkers:
+        checker = self.checkers.pop(key, None)
+        if checker is None:
             containers = self.world.objects.containers
             statics = [s for s in self.scene.statics if s.name not in containers]
             statics += [standing_container(self.world, n, T) for n, T in sorted(standing.items())]
-            self.checkers[key] = CollisionChecker(rearranged(self.scene, statics, {}, {}))
-        return self.checkers[key]
+            checker = CollisionChecker(rearranged(self.scene, statics, {}, {}))
+        self.checkers[key] = checker
+        while len(self.checkers) > KEPT_ARRANGEMENTS:
+            self.checkers.popitem(last=False)
+        return checker
 
 
 def _point_reach(world: World, arm: str, reach: lm.Solver) -> Callable[[Point], bool]:

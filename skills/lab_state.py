@@ -11,15 +11,16 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 
-import numpy as np
-
 from cellengine import geometry as g
 from cellengine.arrays import Mat
 from cellengine.world import World
 
 
 def _frozen(T: Mat) -> Mat:
-    a = np.array(T, dtype=float)
+    """A read-only rigid copy: every pose here is composed with grasps and their inverses
+    at each pick and set-down, so its rotation is kept a rotation (issue 19: the round-off
+    tripled at each set-down of one vial until it leant over)."""
+    a = g.rigid(T)
     a.setflags(write=False)
     return a
 

@@ -54,14 +54,14 @@ from cellengine.world import World
 @dataclass(frozen=True)
 class Mark:
     """A compiler's state between two segments (q and the held-object state are never
-    changed in place, so keeping them is enough)."""
+    changed in place, so keeping them is enough; not the checker, which a search keeping a
+    mark per segment would keep alive for every held state of the plan)."""
 
     q: Vec
     t: float
     segments: int
     events: int
     held: Held
-    checker: CollisionChecker
 
 
 class Compiler:
@@ -137,7 +137,6 @@ class Compiler:
             len(self.segments),
             len(self.events),
             self.holding.state,
-            self.holding.checker,
         )
 
     def restore(self, mark: Mark) -> None:
@@ -148,7 +147,7 @@ class Compiler:
         self.q, self.t = mark.q, mark.t
         del self.segments[mark.segments :]
         del self.events[mark.events :]
-        self.holding.restore(mark.held, mark.checker)
+        self.holding.restore(mark.held)
 
     @property
     def transit_clearance(self) -> float:

@@ -19,6 +19,7 @@ guides are made with. The arms themselves are still checked against every elemen
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, replace
 
@@ -43,6 +44,11 @@ from cellengine.motion.scene import (
 from cellengine.world import RefError, World
 
 DEFAULT_SIZE = 0.01  # m: the cube for an object the world gives no size for
+# Held states whose checker (and scene) are kept, the latest used: a grasp-release cycle
+# comes back to the same few states, while every state a long plan passes through (each
+# checker with its margin and clearance models is tens of MB) would make a compile's memory
+# grow with its steps (issue 19: 68 MB per Weigh step).
+KEPT_STATES = 8
 
 
 def held_name(arm: str, obj: str) -> str:
@@ -121,17 +127,20 @@ class Holding:
             {n: _rows(world.pose(c.at)) for n, c in containers.items() if c.at is not None},
         )
         self.checker = CollisionChecker(scene)
-        # scenes and their checkers per held state: a grasp-release cycle comes back to the
-        # same states (checkers are never changed after they are built)
-        self.scenes: dict[tuple[object, ...], CollisionScene] = {}
-        self.checkers: dict[tuple[object, ...], CollisionChecker] = {}
+        # the checkers of the latest KEPT_STATES held states, the latest last (a checker is
+        # never changed after it is built; its scene is checker.scene)
+        self.kept: OrderedDict[tuple[object, ...], CollisionChecker] = OrderedDict(
+            [(self.state.key(), self.checker)]
+        )
 
     @property
     def by_arm(self) -> Mapping[str, str]:
         return self.state.by_arm
 
-    def restore(self, state: Held, checker: CollisionChecker) -> None:
-        self.state, self.checker = state, checker
+    def restore(self, state: Held) -> None:
+        """Back to ``state`` (a compiler's mark): its checker again, built again if it was
+        dropped."""
+        self._use(state)
 
     def set(
         self, arm: str, obj: str | None, T_cell_tcp: Mat | None = None, mode: str | None = None
@@ -172,12 +181,13 @@ class Holding:
 
     def _use(self, state: Held) -> None:
         key = state.key()
-        if key not in self.scenes:
-            self.scenes[key] = self._scene(state)
-        if key not in self.checkers:
-            self.checkers[key] = CollisionChecker(self.scenes[key])
-        self.state = state
-        self.checker = self.checkers[key]
+        checker = self.kept.pop(key, None)
+        if checker is None:
+            checker = CollisionChecker(self._scene(state))
+        self.kept[key] = checker
+        while len(self.kept) > KEPT_STATES:
+            self.kept.popitem(last=False)
+        self.state, self.checker = state, checker
 
     def _scene(self, state: Held) -> CollisionScene:
         base = with_jaw(self.base, state.jaw) if state.jaw else self.base

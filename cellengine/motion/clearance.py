@@ -117,36 +117,42 @@ def measure(
     """The clearance of the states Q (n, nq) at times t (the gate's 1 ms samples); ``near``:
     pairs (object names, :func:`pair_key` order) the motion works closer than the clearance
     on purpose, left out."""
-    model = _model(scene, near)
-    return model.measure(np.asarray(t, dtype=float), np.asarray(Q, dtype=float))
+    model = _model(scene)
+    return model.measure(np.asarray(t, dtype=float), np.asarray(Q, dtype=float), near)
 
 
-def _model(scene: CollisionScene, near: frozenset[Pair]) -> ClearanceModel:
-    """One model per scene and pairs left out, kept on the scene (a compile comes back to the
-    same held states again and again)."""
-    models = scene.clearance_model
-    if not isinstance(models, dict):
-        models = {}
-        object.__setattr__(scene, "clearance_model", models)
-    if near not in models:
-        models[near] = ClearanceModel(scene, near)
-    model: ClearanceModel = models[near]
-    return model
+def _model(scene: CollisionScene) -> ClearanceModel:
+    """One model per scene, kept on the scene (a compile comes back to the same held states
+    again and again); the pairs left out are switched off in it for each measurement. (A
+    model per set of pairs left out was ~17 KB per pair each: 1.4 GB of models on a board
+    of 200 guides, issue 19.)"""
+    model = scene.clearance_model
+    if model is None:
+        model = ClearanceModel(scene)
+        object.__setattr__(scene, "clearance_model", model)
+    out: ClearanceModel = model
+    return out
 
 
 class ClearanceModel:
     """The measured pairs of one scene, one :class:`_Pairs` per kind."""
 
-    def __init__(self, scene: CollisionScene, near: frozenset[Pair] = frozenset()) -> None:
-        pairs, kinds = measured_pairs(scene, near)
+    def __init__(self, scene: CollisionScene) -> None:
+        pairs, kinds = measured_pairs(scene)
         self.kinds = {
             k: _Pairs(scene, [p for p, x in zip(pairs, kinds, strict=True) if x == k])
             for k in KINDS
         }
 
-    def measure(self, t: Vec, Q: Vec) -> Clearance:
+    def measure(self, t: Vec, Q: Vec, near: frozenset[Pair] = frozenset()) -> Clearance:
+        """The least distances of the states Q at times t, the pairs ``near`` left out."""
         coarse = np.unique(np.append(np.arange(0, len(Q), MEASURE_EVERY), len(Q) - 1))
-        return Clearance(*(self.kinds[k].closest(t, Q, coarse) for k in KINDS))
+        out = []
+        for k in KINDS:
+            pairs = self.kinds[k]
+            pairs.leave_out(near)
+            out.append(pairs.closest(t, Q, coarse))
+        return Clearance(*out)
 
 
 class _Pairs:
@@ -165,11 +171,25 @@ class _Pairs:
         self.geometry, self.bounds = (_with_pairs(m, pairs) for m in (scene.geometry, scene.bounds))
         self.gdata, self.bdata = pin.GeometryData(self.geometry), pin.GeometryData(self.bounds)
         self.within = _Checked(self.model, self.geometry)  # margins: the least distance so far
+        self.names = [pair_key(self.objects[i].name, self.objects[j].name) for i, j in pairs]
+        self.active = np.ones(len(pairs), dtype=bool)  # measured now (leave_out)
+
+    def leave_out(self, near: frozenset[Pair]) -> None:
+        """Measure every pair but those named in ``near`` from now on: pinocchio skips an
+        inactive pair in the broad phase's check and in computeDistances."""
+        active = np.array([n not in near for n in self.names], dtype=bool)
+        for p in map(int, np.flatnonzero(active != self.active)):
+            for data in (self.within.data, self.bdata):
+                if active[p]:
+                    data.activateCollisionPair(p)
+                else:
+                    data.deactivateCollisionPair(p)
+        self.active = active
 
     def closest(self, t: Vec, Q: Vec, coarse: NDArray[np.intp]) -> Closest | None:
         """The least distance at the coarse states, then at the 1 ms states between the
         closest one's neighbours for its pair."""
-        if not self.pairs:
+        if not self.active.any():
             return None
         d, p, i = self._least(Q, coarse)
         k = int(np.searchsorted(coarse, i))
@@ -209,6 +229,7 @@ class _Pairs:
         if self.exact[k]:
             return float(results[k].min_distance), k
         bounds = np.fromiter((r.min_distance for r in results), float, len(self.pairs))
+        bounds[~self.active] = math.inf  # inactive pairs keep stale results
         pin.updateGeometryPlacements(self.model, self.data, self.geometry, self.gdata)
         best = (math.inf, k)
         for p in map(int, np.argsort(bounds, kind="stable")):

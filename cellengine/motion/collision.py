@@ -86,10 +86,11 @@ class CollisionChecker:
         model = scene.cell.model
         self._model, self._data = model, model.createData()
         self._nq = int(model.nq)
-        # exact: margins 0; inflated: per-pair margins for segments; bounds: distances
+        # exact: margins 0; inflated: per-pair margins for segments, and the bounds'
+        # distances there, built on the first segment check (each is MBs on a cell of a few
+        # hundred pairs, and a checker of states only, a skill's reach tests, needs neither)
         self._exact = _Checked(model, scene.geometry)
-        self._inflated = _Checked(model, scene.geometry)
-        self._segment_bounds = pin.GeometryData(scene.bounds)
+        self._segments: tuple[_Checked, Any] | None = None
         self._selections: dict[tuple[str, ...] | None, tuple[Any, NDArray[np.bool_]]] = {}
         self._apart: dict[tuple[tuple[str, ...], float], _Checked] = {}
         self._n_pairs = len(scene.pairs)
@@ -237,7 +238,7 @@ class CollisionChecker:
         dq = qb - qa
         motion = self._scene.motion @ np.abs(dq)  # (P,) m over the whole segment
         keep = np.zeros(self._n_pairs) if margins is None else np.asarray(margins, dtype=float)
-        inflated = self._inflated
+        inflated = self._for_segments()[0]
         t, h = 0.0, 1.0
         while t < 1.0:
             h = min(h, 1.0 - t)
@@ -267,13 +268,21 @@ class CollisionChecker:
         """Pair p's distance at the state of the last check: its convex bound's, or, when
         that is within ``clearance`` and the pair has a mesh, the exact one."""
         scene = self._scene
-        pin.updateGeometryPlacements(self._model, self._data, scene.bounds, self._segment_bounds)
-        d = float(pin.computeDistance(scene.bounds, self._segment_bounds, p).min_distance)
+        bounds = self._for_segments()[1]
+        pin.updateGeometryPlacements(self._model, self._data, scene.bounds, bounds)
+        d = float(pin.computeDistance(scene.bounds, bounds, p).min_distance)
         if d > clearance or scene.exact_bounds[p]:
             return d
         exact = self._exact
         pin.updateGeometryPlacements(self._model, self._data, scene.geometry, exact.data)
         return exact.distance(p)
+
+    def _for_segments(self) -> tuple[_Checked, Any]:
+        """The inflated check and the bounds' GeometryData of segment checks."""
+        if self._segments is None:
+            scene = self._scene
+            self._segments = (_Checked(self._model, scene.geometry), pin.GeometryData(scene.bounds))
+        return self._segments
 
     # ------------------------------------------------------------------------------ helpers
 

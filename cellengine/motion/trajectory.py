@@ -282,24 +282,25 @@ class Trajectory:
         one point per knot with positions, velocities, accelerations and time_from_start,
         rounded to ``decimals`` when given (shorter numbers: a file written and read faster).
         Events are not the trajectory's business; the writer adds them."""
+        return {"joint_names": list(self.joint_names), "points": self.points_json(decimals)}
+
+    def points_json(
+        self, decimals: int | None = None, start: int = 0, stop: int | None = None
+    ) -> list[dict[str, Any]]:
+        """:meth:`to_json`'s points of the knots ``start:stop`` (a writer can take a long
+        trajectory a slice at a time: as Python lists it is ~7 times its text)."""
+        part = slice(start, stop)
 
         def out(a: FloatArray) -> list[Any]:
+            a = a[part]
             return (a if decimals is None else np.round(a, decimals)).tolist()  # type: ignore[no-any-return]
 
-        return {
-            "joint_names": list(self.joint_names),
-            "points": [
-                {
-                    "positions": q,
-                    "velocities": qd,
-                    "accelerations": qdd,
-                    "time_from_start": t,
-                }
-                for t, q, qd, qdd in zip(
-                    out(self.t), out(self.q), out(self.qd), out(self.qdd), strict=True
-                )
-            ],
-        }
+        return [
+            {"positions": q, "velocities": qd, "accelerations": qdd, "time_from_start": t}
+            for t, q, qd, qdd in zip(
+                out(self.t), out(self.q), out(self.qd), out(self.qdd), strict=True
+            )
+        ]
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> Trajectory:

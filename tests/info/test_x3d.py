@@ -661,3 +661,69 @@ def test_not_x3d(tmp_path: Path) -> None:
         "X3D has no Scene element",
         1,
     )
+
+
+def _grid_mesh(path: Path, side: int, prolog: str = "", nested: int = 0) -> None:
+    """A flat side x side grid of vertices (mm) in one IndexedFaceSet, two triangles per
+    square, after ``prolog`` (a DOCTYPE), then ``nested`` Groups one in another."""
+    i = np.arange(side * side).reshape(side, side)
+    a, b, c, d = i[:-1, :-1].ravel(), i[:-1, 1:].ravel(), i[1:, 1:].ravel(), i[1:, :-1].ravel()
+    minus = np.full_like(a, -1)
+    index = np.column_stack([a, b, c, minus, a, c, d, minus]).ravel()
+    y, x = np.divmod(np.arange(side * side), side)
+    points = np.column_stack([x, y, np.zeros_like(x)]).ravel()
+    with path.open("w") as f:
+        f.write(f'{prolog}<X3D><Scene><Transform scale="0.001 0.001 0.001">')
+        f.write('<Shape><IndexedFaceSet coordIndex="')
+        f.write(" ".join(map(str, index.tolist())))
+        f.write('"><Coordinate point="')
+        f.write(" ".join(map(str, points.tolist())))
+        f.write('"/></IndexedFaceSet></Shape></Transform>')
+        f.write(f"{'<Group>' * nested}{'</Group>' * nested}</Scene></X3D>\n")
+
+
+def test_a_mesh_over_libxml2s_10_mb_text_limit_loads(tmp_path: Path) -> None:
+    """Issue 19: a 56 MB X3D (under the 64 MB cap) of one 980k-vertex IndexedFaceSet was
+    refused with libxml2's 'Buffer size limit exceeded': its coordIndex is ~37 MB of text.
+    ~6 s (half of it writing the file)."""
+    path = tmp_path / "big.x3d"
+    _grid_mesh(path, 990)
+    assert 10e6 < path.stat().st_size < 64 * 2**20
+    mesh = load_x3d(path, tmp_path, "z").mesh
+    assert mesh is not None
+    assert len(mesh.vertices) == 990 * 990
+    assert len(mesh.faces) == 2 * 989 * 989
+    assert np.allclose(mesh.vertices.max(axis=0), [0.989, 0.989, 0.0])
+
+
+@pytest.mark.parametrize(
+    ("prolog", "nested", "message"),
+    [
+        (
+            '<!DOCTYPE X3D [<!ENTITY e "x">]>',
+            0,
+            "XML entity declarations are not allowed (found 'e'); remove the DOCTYPE's "
+            "internal subset",
+        ),
+        (
+            '<!DOCTYPE X3D [<!ATTLIST Transform translation CDATA "9 9 9">]>',
+            0,
+            "XML internal DTD subsets are not allowed (their declarations change what the "
+            "elements say); remove the part of the DOCTYPE in [ ]",
+        ),
+        ("", 300, "XML syntax error: elements nest more than 256 deep"),
+    ],
+)
+def test_a_large_text_lifts_no_other_limit(
+    tmp_path: Path, prolog: str, nested: int, message: str
+) -> None:
+    """Parsed with libxml2's size limits lifted (XML_PARSE_HUGE, which also lifts its
+    nesting limit and entity checks), a file is still refused an internal DTD subset and
+    nesting deeper than 256."""
+    path = tmp_path / "big.x3d"
+    _grid_mesh(path, 700, prolog, nested)  # a coordIndex of ~17 MB, before the nesting
+    with pytest.raises(InputError) as e:
+        load_x3d(path, tmp_path, "z")
+    (p,) = e.value.problems
+    assert p.message == message
+    assert p.line == 1

@@ -207,3 +207,21 @@ def test_peaks_are_tight_on_smooth_motion() -> None:
     for bound, worst in zip(traj.peaks(), _dense_worst(traj), strict=True):
         assert np.all(worst <= bound + 1e-9)
         assert np.all(bound <= worst * (1 + 1e-3) + 1e-9)
+
+
+@pytest.mark.parametrize("knots", [1, 2, 3, 7, 4096])
+def test_trajectory_text_is_the_json_of_the_whole_body(knots: int) -> None:
+    """Issue 19: trajectory.json is turned to text a slice of knots at a time (the body as
+    Python lists took ~7 times the text); the text is the same."""
+    from cellengine.pipeline import trajectory_json, trajectory_text
+    from cellengine.program import CompiledSegment, GripperEvent, Program, Segment, TimedEvent
+
+    traj = _poly_traj(np.linspace(0.0, 2.0, 7))
+    program = Program(
+        ("a", "b"),
+        (CompiledSegment(Segment(0, "s"), "split", traj, {}),),
+        (TimedEvent(1.0, GripperEvent("left", "grasp", "vial1")),),
+    )
+    text = trajectory_text(program, knots)
+    assert text == json.dumps(trajectory_json(program))
+    assert len(json.loads(text)["points"]) == 7

@@ -171,6 +171,25 @@ def test_weigh_tells_the_runner_what_to_read(world: World, reach: lm.Solver) -> 
     assert dict(b.segments[-1].facts) == {"measure": "mass", "object": "vial1", "arm": "right"}
 
 
+@pytest.mark.parametrize("grasp", ["top", "side"])
+def test_a_vial_weighed_again_and_again_stands_as_it_stood(
+    world: World, reach: lm.Solver, grasp: lg.Grasp
+) -> None:
+    """Issue 19: each set-down composed the grasp with its inverse (a transpose), which
+    tripled the round-off off a rotation each time: after ~30 weighings the vial leant and
+    slid until it could not be set down."""
+    b = lm.Builder(_start(world))
+    T0 = b.state.where["vial1"]
+    for _ in range(12):
+        lm.pick(b, reach, world, "right", "vial1", grasp, "w")
+        lm.weigh(b, "right", "vial1", "w")
+        lm.place(b, reach, "right", T0, "w")
+    T = b.state.where["vial1"]
+    assert g.rotation_angle(T0, T) < 1e-9
+    assert np.allclose(T[:3, :3] @ T[:3, :3].T, np.eye(3), atol=1e-12)
+    assert np.allclose(T[:3, 3], T0[:3, 3], atol=1e-12)
+
+
 def test_an_unreachable_grasp_is_refused_in_plan_terms(world: World) -> None:
     b = lm.Builder(_start(world))
     with pytest.raises(InputError) as e:
