@@ -372,6 +372,19 @@ def test_meshes_by_package_and_relative_paths() -> None:
     np.testing.assert_allclose(extent("arm/link1#2"), [0.05, 0.05, 0.05])
 
 
+def test_a_one_joint_cell_builds_its_scene() -> None:
+    """pinocchio gives a one-joint model's Jacobian as a 1-D array: found by the fuzz target
+    (an IndexError from `cellengine plan` in a cell of one one-joint arm)."""
+    from cellengine.context import build_context
+    from cellengine.motion.numeric_ik import NumericIK
+
+    context = build_context(load_world(URDF_DATA / "meshes" / "cell.yaml"))
+    arm = context.cell.arms["arm"]
+    assert arm.jacobian([0.3]).shape == (6, 1)
+    assert context.scene.names  # built: its objects are named
+    assert NumericIK(arm.model, arm.tcp).solve(arm.fk([0.3]), [0.0]).success
+
+
 @pytest.fixture
 def mesh_cell(tmp_path: Path) -> Path:
     """A copy of the mesh cell in tmp_path/cell, with tmp_path/outside.stl beside it."""
