@@ -479,10 +479,16 @@ def test_mesh_that_is_no_regular_file_is_refused(
         ),
         ("flat.stl", None, "mesh '../meshes/flat.stl' is flat: its convex hull has no volume"),
         ("junk.obj", "v 1 2\nf 1 2 3\n", "mesh '../meshes/junk.obj' cannot be read: "),
+        (  # its count says 1000 triangles: read as text, which it is not (found by the fuzz target)
+            "liar.stl",
+            b" " * 80 + (1000).to_bytes(4, "little") + bytes(50),
+            "mesh '../meshes/liar.stl' cannot be read: not UTF-8 text, nor a binary STL whose "
+            "size matches its triangle count",
+        ),
     ],
 )
 def test_mesh_format_and_content_errors(
-    mesh_cell: Path, name: str, content: str | None, message: str
+    mesh_cell: Path, name: str, content: str | bytes | None, message: str
 ) -> None:
     path = mesh_cell / "arm_pkg" / "meshes" / name
     if content is None:  # a single triangle: a hull of no volume
@@ -490,7 +496,7 @@ def test_mesh_format_and_content_errors(
         content = (
             f"solid flat\nfacet normal 0 0 1\nouter loop\n{tri}\nendloop\nendfacet\nendsolid flat\n"
         )
-    path.write_text(content)
+    path.write_bytes(content if isinstance(content, bytes) else content.encode())
     p = with_mesh(mesh_cell, f"../meshes/{name}").problems[0]
     assert p.message.startswith(message), p.message
     assert p.line == LINK1_MESH_LINE
