@@ -241,8 +241,10 @@ def _fault(entry: dict[str, Any]) -> None:
         if not isinstance(g, dict):
             raise _Bad(f"'{name}' must be a mapping of arm, mode, holds, got {_shown(g)}")
         _text(g.get("arm"), f"{name}.arm")
-        for key in ("mode", "holds"):
-            if g.get(key) is not None:
+        for key in ("mode", "holds"):  # the runner writes both, null when there is none
+            if key not in g:
+                raise _Bad(f"'{name}.{key}' is missing from this 'fault' entry")
+            if g[key] is not None:
                 _text(g[key], f"{name}.{key}")
 
 

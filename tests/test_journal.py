@@ -124,6 +124,11 @@ def test_fault_grippers(tmp_path: Path) -> None:
     assert error(tmp_path, START, fault) == (
         "journal.jsonl:2: 'fault.grippers[0].arm' must be a string, got null"
     )
+    # resume reads both (a KeyError traceback from `run --resume`: found by the fuzz target)
+    fault = {"entry": "fault", "fault": {"grippers": [{"arm": "left", "mode": "open"}]}}
+    assert error(tmp_path, START, fault) == (
+        "journal.jsonl:2: 'fault.grippers[0].holds' is missing from this 'fault' entry"
+    )
 
 
 def test_invalid_utf8_line(tmp_path: Path) -> None:
