@@ -124,7 +124,7 @@ def test_fault_grippers(tmp_path: Path) -> None:
     assert error(tmp_path, START, fault) == (
         "journal.jsonl:2: 'fault.grippers[0].arm' must be a string, got null"
     )
-    # resume reads both (a KeyError traceback from `run --resume`: found by the fuzz target)
+    # resume reads both (it ended in a KeyError traceback from `run --resume`)
     fault = {"entry": "fault", "fault": {"grippers": [{"arm": "left", "mode": "open"}]}}
     assert error(tmp_path, START, fault) == (
         "journal.jsonl:2: 'fault.grippers[0].holds' is missing from this 'fault' entry"

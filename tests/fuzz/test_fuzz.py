@@ -43,10 +43,16 @@ settings.register_profile(
 )
 _LONG = os.environ.get("CELLENGINE_FUZZ") == "long"
 _EXAMPLES = os.environ.get("CELLENGINE_FUZZ_EXAMPLES")
-FUZZ = settings(
-    settings.get_profile("fuzz-long" if _LONG else "fuzz-ci"),
-    **({"max_examples": int(_EXAMPLES)} if _EXAMPLES else {}),
-)
+
+
+def fuzz(ci_examples: int) -> settings:
+    """The profile of this run: in CI ``ci_examples`` (a load costs about 1 s, a resume 3),
+    else the long profile's; CELLENGINE_FUZZ_EXAMPLES overrides either."""
+    count = int(_EXAMPLES) if _EXAMPLES else None if _LONG else ci_examples
+    profile = settings.get_profile("fuzz-long" if _LONG else "fuzz-ci")
+    return settings(profile, max_examples=count) if count else profile
+
+
 TIMEOUT = 60.0  # s: a load takes about 1 s; a shared CI machine may be slow, a hang is not
 RESUME_TIMEOUT = 120.0  # s: a resume compiles the plan (3 s) and runs what is left
 
@@ -107,7 +113,7 @@ def fresh(scratch: Path, source: Path) -> Path:
     return target
 
 
-@FUZZ
+@fuzz(20)
 @given(x3d=x3d_documents())
 def test_x3d_transforms_and_geometry(scratch: Path, x3d: str) -> None:
     cell = fresh(scratch, X3D_CASE)
@@ -122,7 +128,7 @@ MESH_CELL = DATA / "urdf" / "meshes"  # one arm whose link1 has a mesh by a rela
 LINK1_MESH = 'filename="../meshes/cube_mm.stl" scale="0.001 0.002 0.003"'
 
 
-@FUZZ
+@fuzz(20)
 @given(stl=stl_files, scale=st.none() | scales)
 def test_urdf_meshes(scratch: Path, stl: bytes, scale: str | None) -> None:
     cell = fresh(scratch, MESH_CELL)
@@ -150,7 +156,7 @@ def genuine_journal(scratch: Path) -> list[bytes]:
     return (out / "journal.jsonl").read_bytes().splitlines()
 
 
-@FUZZ
+@fuzz(10)
 @given(cut=st.integers(1, 10**6), edits=journal_edits(), torn=st.booleans())
 def test_resume_from_an_edited_journal(
     scratch: Path, genuine_journal: list[bytes], cut: int, edits: list, torn: bool
