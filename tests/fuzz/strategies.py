@@ -355,13 +355,14 @@ def apply_edits(lines: list[bytes], edits: list[tuple[str, int, Any]]) -> list[b
     """``lines`` (each a JSON object) with ``edits`` applied, in order."""
     out = list(lines)
     for what, where, value in edits:
-        i = where % (len(out) + (what in ("insert", "raw")))
+        n = len(out) + (what in ("insert", "raw"))  # an insertion may go after the last line
+        if n == 0:
+            continue
+        i = where % n
         if what == "insert":
             out.insert(i, _dumps(value))
         elif what == "raw":
             out.insert(i, value)
-        elif not out:
-            continue
         elif what == "duplicate":
             out.insert(i, out[i])
         elif what == "delete":

@@ -14,6 +14,7 @@ import shutil
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 from hypothesis import HealthCheck, Phase, given, settings
@@ -159,7 +160,11 @@ def genuine_journal(scratch: Path) -> list[bytes]:
 @fuzz(10)
 @given(cut=st.integers(1, 10**6), edits=journal_edits(), torn=st.booleans())
 def test_resume_from_an_edited_journal(
-    scratch: Path, genuine_journal: list[bytes], cut: int, edits: list, torn: bool
+    scratch: Path,
+    genuine_journal: list[bytes],
+    cut: int,
+    edits: list[tuple[str, int, Any]],
+    torn: bool,
 ) -> None:
     """A run stopped after ``cut`` lines (never its end), its journal edited, resumed."""
     lines = genuine_journal[: 1 + cut % (len(genuine_journal) - 1)]
