@@ -10,6 +10,7 @@ in .hypothesis/ to try first next time. CELLENGINE_FUZZ_EXAMPLES=N sets the coun
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import tempfile
 from collections.abc import Iterator
@@ -17,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from hypothesis import HealthCheck, Phase, given, settings
+from hypothesis import HealthCheck, Phase, event, given, settings
 from hypothesis import strategies as st
 
 from tests.conftest import CELLS, DATA
@@ -30,7 +31,7 @@ from tests.fuzz.strategies import (
     transform_fields,
     x3d_geometry,
 )
-from tests.fuzz.target import assert_clean, cellengine, load_cell
+from tests.fuzz.target import Outcome, assert_clean, cellengine, load_cell
 
 _SLOW_OK = [HealthCheck.too_slow, HealthCheck.data_too_large, HealthCheck.large_base_example]
 # CI: the same examples every run, a failure reported as found (shrinking a subprocess's
@@ -56,6 +57,20 @@ def fuzz(ci_examples: int) -> settings:
 
 TIMEOUT = 60.0  # s: a load takes about 1 s; a shared CI machine may be slow, a hang is not
 RESUME_TIMEOUT = 120.0  # s: a resume compiles the plan (3 s) and runs what is left
+
+
+def judged(outcome: Outcome, shown_input: str) -> None:
+    """Assert a clean end; count exit codes (pytest --hypothesis-show-statistics shows how
+    many inputs got past the loaders: exit 0)."""
+    event(f"exit {outcome.code}: {_gist(outcome)}")
+    assert_clean(outcome, shown_input)
+
+
+def _gist(outcome: Outcome) -> str:
+    """The first problem printed, without its place, names and numbers."""
+    lines = [ln for ln in (outcome.stdout + outcome.stderr).splitlines() if ln.strip()]
+    first = lines[0].split(": ", 1)[-1] if lines else ""
+    return re.sub(r"'[^']*'|\"[^\"]*\"|[-+]?\d[\w.+-]*", "_", first)[:70]
 
 
 def shown(data: bytes | str, limit: int = 4000) -> str:
@@ -119,7 +134,7 @@ def fresh(scratch: Path, source: Path) -> Path:
 def test_x3d_transforms_and_geometry(scratch: Path, x3d: str) -> None:
     cell = fresh(scratch, X3D_CASE)
     (cell / "routing" / "routing.x3d").write_text(x3d)
-    assert_clean(load_cell(cell / "cell.yaml", TIMEOUT), shown(x3d))
+    judged(load_cell(cell / "cell.yaml", TIMEOUT), shown(x3d))
     shutil.rmtree(cell.parent)
 
 
@@ -140,7 +155,7 @@ def test_urdf_meshes(scratch: Path, stl: bytes, scale: str | None) -> None:
         mesh = f'filename="../meshes/cube_mm.stl"{transform_attributes({"scale": scale})}'
         urdf.write_text(text.replace(LINK1_MESH, mesh))
     (cell / "arm_pkg" / "meshes" / "cube_mm.stl").write_bytes(stl)
-    assert_clean(load_cell(cell / "cell.yaml", TIMEOUT), f"scale: {scale!r}\n{shown(stl)}")
+    judged(load_cell(cell / "cell.yaml", TIMEOUT), f"scale: {scale!r}\n{shown(stl)}")
     shutil.rmtree(cell.parent)
 
 
@@ -172,7 +187,5 @@ def test_resume_from_an_edited_journal(
     run_dir = Path(tempfile.mkdtemp(dir=scratch))
     (run_dir / "journal.jsonl").write_bytes(data)
     outcome = cellengine(["run", str(PLAN), "--resume", str(run_dir), "-q"], RESUME_TIMEOUT)
-    assert_clean(
-        outcome, f"edits: {shown(repr(edits), 2000)}\njournal (its end):\n{shown(data[-4000:])}"
-    )
+    judged(outcome, f"edits: {shown(repr(edits), 2000)}\njournal (its end):\n{shown(data[-4000:])}")
     shutil.rmtree(run_dir)
