@@ -248,8 +248,21 @@ def _fault(entry: dict[str, Any]) -> None:
                 _text(g[key], f"{name}.{key}")
 
 
+def _start(entry: dict[str, Any]) -> None:
+    """The run's identity, if any (an older journal has none: resume refuses that itself)."""
+    run = entry.get("run")
+    if run is not None and not (
+        isinstance(run, dict) and all(isinstance(v, str) for v in run.values())
+    ):
+        raise _Bad(
+            "'run' must map plan, cell, objects, execution and version to strings, got "
+            + _shown(run)
+        )
+
+
 # the entries whose values resume reads
 _CHECKS: dict[str, Callable[[dict[str, Any]], None]] = {
+    Entry.START: _start,
     Entry.FINISHED: _finished,
     Entry.MEASURED: _measured,
     Entry.FAULT: _fault,

@@ -119,6 +119,19 @@ def test_integers_too_large_for_a_float(tmp_path: Path) -> None:
     )
 
 
+def test_run_identity_is_a_mapping_of_strings(tmp_path: Path) -> None:
+    """resume compares it with the files (an AttributeError traceback after compiling a
+    journal whose 'run' was a list: found by the fuzz target)."""
+    assert error(tmp_path, {**START, "run": []}, FINISHED) == (
+        "journal.jsonl:1: 'run' must map plan, cell, objects, execution and version to "
+        "strings, got []"
+    )
+    assert error(tmp_path, {**START, "run": {"plan": 7}}, FINISHED) == (
+        "journal.jsonl:1: 'run' must map plan, cell, objects, execution and version to "
+        'strings, got {"plan": 7}'
+    )
+
+
 def test_fault_grippers(tmp_path: Path) -> None:
     fault = {"entry": "fault", "fault": {"q": [0.0], "grippers": [{"mode": "open"}]}}
     assert error(tmp_path, START, fault) == (
