@@ -2,7 +2,7 @@ PY ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 
-.PHONY: run test browser lint bench clean
+.PHONY: run test fuzz browser lint bench clean
 
 $(BIN)/python:
 	$(PY) -m venv $(VENV)
@@ -27,6 +27,11 @@ browser:
 
 test: $(VENV)/.installed-test browser
 	$(BIN)/python -m pytest
+
+# nightly-style: the fuzz target (tests/fuzz/) with 500 random examples per input kind instead of
+# CI's few fixed ones, about 40 minutes; FUZZ_EXAMPLES=N for another count
+fuzz: $(VENV)/.installed-test
+	CELLENGINE_FUZZ=long $(if $(FUZZ_EXAMPLES),CELLENGINE_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES)) $(BIN)/python -m pytest tests/fuzz
 
 # report.html's scripts are checked with ESLint from npm, installed under .venv (git-ignored; the
 # config is .ci/eslint.config.mjs); pinned so that a fresh clone lints as CI does

@@ -184,6 +184,15 @@ def _number(value: Any) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool)
 
 
+def _finite(value: Any) -> bool:
+    """A number that is a finite float: JSON's integers have any number of digits, and one
+    of 400 is no float (math.isfinite raises OverflowError on it)."""
+    try:
+        return _number(value) and math.isfinite(value)
+    except OverflowError:
+        return False
+
+
 def _index(value: Any, name: str) -> int:
     if not isinstance(value, int) or isinstance(value, bool) or value < 0:
         raise _Bad(f"'{name}' must be a segment index (an integer from 0), got {_shown(value)}")
@@ -200,7 +209,7 @@ def _joints(value: Any, name: str) -> None:
     if not isinstance(value, list) or not value:
         raise _Bad(f"'{name}' must be a list of joint values, got {_shown(value)}")
     for i, v in enumerate(value):
-        if not _number(v) or not math.isfinite(v) or abs(v) > MAX_JOINT:
+        if not _finite(v) or abs(v) > MAX_JOINT:
             raise _Bad(
                 f"'{name}[{i}]' must be a finite joint value (rad or m, at most "
                 f"{MAX_JOINT:g} either way), got {_shown(v)}"
@@ -231,7 +240,7 @@ def _finished(entry: dict[str, Any]) -> None:
 def _measured(entry: dict[str, Any]) -> None:
     _text(_field(entry, "object"), "object")
     mass = _field(entry, "mass_kg")
-    if not _number(mass) or not math.isfinite(mass) or not 0 < mass <= MAX_MASS:
+    if not _finite(mass) or not 0 < mass <= MAX_MASS:
         raise _Bad(f"'mass_kg' must be a finite mass in kg (0 to {MAX_MASS:g}), got {_shown(mass)}")
 
 
@@ -252,13 +261,28 @@ def _fault(entry: dict[str, Any]) -> None:
         if not isinstance(g, dict):
             raise _Bad(f"'{name}' must be a mapping of arm, mode, holds, got {_shown(g)}")
         _text(g.get("arm"), f"{name}.arm")
-        for key in ("mode", "holds"):
-            if g.get(key) is not None:
+        for key in ("mode", "holds"):  # the runner writes both, null when there is none
+            if key not in g:
+                raise _Bad(f"'{name}.{key}' is missing from this 'fault' entry")
+            if g[key] is not None:
                 _text(g[key], f"{name}.{key}")
+
+
+def _start(entry: dict[str, Any]) -> None:
+    """The run's identity, if any (an older journal has none: resume refuses that itself)."""
+    run = entry.get("run")
+    if run is not None and not (
+        isinstance(run, dict) and all(isinstance(v, str) for v in run.values())
+    ):
+        raise _Bad(
+            "'run' must map plan, cell, objects, execution and version to strings, got "
+            + _shown(run)
+        )
 
 
 # the entries whose values resume reads
 _CHECKS: dict[str, Callable[[dict[str, Any]], None]] = {
+    Entry.START: _start,
     Entry.FINISHED: _finished,
     Entry.MEASURED: _measured,
     Entry.FAULT: _fault,

@@ -106,10 +106,41 @@ def test_joint_values_finite(tmp_path: Path) -> None:
     )
 
 
+def test_integers_too_large_for_a_float(tmp_path: Path) -> None:
+    """JSON integers have any number of digits (found by the fuzz target: OverflowError)."""
+    digits = "1" + "0" * 399
+    shown = digits[:37] + "..."
+    assert error(tmp_path, START, {**FINISHED, "q": [0.0, 10**399]}) == (
+        "journal.jsonl:2: 'q[1]' must be a finite joint value (rad or m, at most 100 either "
+        f"way), got {shown}"
+    )
+    assert error(tmp_path, START, {**MEASURED, "mass_kg": -(10**399)}) == (
+        f"journal.jsonl:2: 'mass_kg' must be a finite mass in kg (0 to 1000), got -{shown[:-4]}..."
+    )
+
+
+def test_run_identity_is_a_mapping_of_strings(tmp_path: Path) -> None:
+    """resume compares it with the files (an AttributeError traceback after compiling a
+    journal whose 'run' was a list: found by the fuzz target)."""
+    assert error(tmp_path, {**START, "run": []}, FINISHED) == (
+        "journal.jsonl:1: 'run' must map plan, cell, objects, execution and version to "
+        "strings, got []"
+    )
+    assert error(tmp_path, {**START, "run": {"plan": 7}}, FINISHED) == (
+        "journal.jsonl:1: 'run' must map plan, cell, objects, execution and version to "
+        'strings, got {"plan": 7}'
+    )
+
+
 def test_fault_grippers(tmp_path: Path) -> None:
     fault = {"entry": "fault", "fault": {"q": [0.0], "grippers": [{"mode": "open"}]}}
     assert error(tmp_path, START, fault) == (
         "journal.jsonl:2: 'fault.grippers[0].arm' must be a string, got null"
+    )
+    # resume reads both (it ended in a KeyError traceback from `run --resume`)
+    fault = {"entry": "fault", "fault": {"grippers": [{"arm": "left", "mode": "open"}]}}
+    assert error(tmp_path, START, fault) == (
+        "journal.jsonl:2: 'fault.grippers[0].holds' is missing from this 'fault' entry"
     )
 
 

@@ -177,6 +177,7 @@ class NumericIK:
             history.append(e2)
             far = e2 > NEAR
             J = pin.getFrameJacobian(model, data, fid, pin.LOCAL)
+            J = np.reshape(J, (6, -1))  # 1-D for a one-joint arm
             if cols is not None:
                 J = J[:, cols]
             if far:  # d err / dq = -Jlog6(iMd^-1) J; near the target Jlog6 = I + O(|err|),

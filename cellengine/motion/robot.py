@@ -145,7 +145,7 @@ class Arm:
         J = pin.computeFrameJacobian(
             self.model, self._data, self._q(q), frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
         )
-        return np.array(J)
+        return np.array(J).reshape(6, -1)  # pinocchio gives a one-joint arm's as 1-D
 
     def _placement(self, q: ArrayLike, frame_id: int) -> Mat:
         pin.forwardKinematics(self.model, self._data, self._q(q))

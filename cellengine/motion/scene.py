@@ -708,7 +708,8 @@ def _joint_axes(model: Any) -> tuple[Vec, list[bool]]:
     pin.computeJointJacobians(model, data, pin.neutral(model))
     axes, prismatic = np.zeros((model.njoints, 3)), [False] * model.njoints
     for j in range(1, model.njoints):
-        J = pin.getJointJacobian(model, data, j, pin.ReferenceFrame.LOCAL)
+        # (6, nv): pinocchio hands a one-joint model's 6x1 Jacobian back as a 1-D array
+        J = np.reshape(pin.getJointJacobian(model, data, j, pin.ReferenceFrame.LOCAL), (6, -1))
         col = J[:, model.joints[j].idx_v]
         prismatic[j] = bool(np.linalg.norm(col[3:]) < 1e-12)
         axes[j] = col[:3] if prismatic[j] else col[3:]
@@ -989,6 +990,7 @@ def _distance_gradient(
         if joint == 0:
             continue
         J = pin.getJointJacobian(model, data, joint, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        J = np.reshape(J, (6, -1))  # 1-D for a one-joint model
         lever = points[side] - data.oMi[joint].translation
         velocity[side] = normal @ (J[:3] - g.skew(lever) @ J[3:])
     return float(result.min_distance), velocity[1] - velocity[0]

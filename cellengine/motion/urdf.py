@@ -429,6 +429,11 @@ def mesh_hull(path: Path, ref: str, scale: Sequence[float], urdf: Path, line: in
     try:  # from bytes, so trimesh can open no other file (textures, materials)
         mesh: Any = trimesh.load(io.BytesIO(data), file_type=ext, force="mesh")
         vertices = np.asarray(mesh.vertices, dtype=float) * np.asarray(scale, dtype=float)
+    except ImportError:  # text not UTF-8: trimesh guesses its encoding with a module we lack
+        binary = ", nor a binary STL whose size matches its triangle count" if ext == "stl" else ""
+        raise InputError.at(
+            f"mesh '{ref}' cannot be read: not UTF-8 text{binary}", urdf, line
+        ) from None
     except Exception as e:  # trimesh's readers raise many kinds; all mean "not a mesh"
         raise InputError.at(f"mesh '{ref}' cannot be read: {_one_line(e)}", urdf, line) from None
     if len(vertices) == 0 or len(mesh.faces) == 0:

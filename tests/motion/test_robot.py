@@ -372,6 +372,19 @@ def test_meshes_by_package_and_relative_paths() -> None:
     np.testing.assert_allclose(extent("arm/link1#2"), [0.05, 0.05, 0.05])
 
 
+def test_a_one_joint_cell_builds_its_scene() -> None:
+    """pinocchio gives a one-joint model's Jacobian as a 1-D array: found by the fuzz target
+    (an IndexError from `cellengine plan` in a cell of one one-joint arm)."""
+    from cellengine.context import build_context
+    from cellengine.motion.numeric_ik import NumericIK
+
+    context = build_context(load_world(URDF_DATA / "meshes" / "cell.yaml"))
+    arm = context.cell.arms["arm"]
+    assert arm.jacobian([0.3]).shape == (6, 1)
+    assert context.scene.names  # built: its objects are named
+    assert NumericIK(arm.model, arm.tcp).solve(arm.fk([0.3]), [0.0]).success
+
+
 @pytest.fixture
 def mesh_cell(tmp_path: Path) -> Path:
     """A copy of the mesh cell in tmp_path/cell, with tmp_path/outside.stl beside it."""
@@ -466,10 +479,16 @@ def test_mesh_that_is_no_regular_file_is_refused(
         ),
         ("flat.stl", None, "mesh '../meshes/flat.stl' is flat: its convex hull has no volume"),
         ("junk.obj", "v 1 2\nf 1 2 3\n", "mesh '../meshes/junk.obj' cannot be read: "),
+        (  # its count says 1000 triangles: read as text, which it is not (found by the fuzz target)
+            "liar.stl",
+            b" " * 80 + (1000).to_bytes(4, "little") + bytes(50),
+            "mesh '../meshes/liar.stl' cannot be read: not UTF-8 text, nor a binary STL whose "
+            "size matches its triangle count",
+        ),
     ],
 )
 def test_mesh_format_and_content_errors(
-    mesh_cell: Path, name: str, content: str | None, message: str
+    mesh_cell: Path, name: str, content: str | bytes | None, message: str
 ) -> None:
     path = mesh_cell / "arm_pkg" / "meshes" / name
     if content is None:  # a single triangle: a hull of no volume
@@ -477,7 +496,7 @@ def test_mesh_format_and_content_errors(
         content = (
             f"solid flat\nfacet normal 0 0 1\nouter loop\n{tri}\nendloop\nendfacet\nendsolid flat\n"
         )
-    path.write_text(content)
+    path.write_bytes(content if isinstance(content, bytes) else content.encode())
     p = with_mesh(mesh_cell, f"../meshes/{name}").problems[0]
     assert p.message.startswith(message), p.message
     assert p.line == LINK1_MESH_LINE
