@@ -426,6 +426,13 @@ def mesh_hull(path: Path, ref: str, scale: Sequence[float], urdf: Path, line: in
     data = read_capped(path, "mesh", urdf, line)
     import trimesh  # here: importing it costs half a second, and only mesh files need it
 
+    if ext == "stl" and not _stl_readable(data):  # trimesh's guess depends on what is installed
+        raise InputError.at(
+            f"mesh '{ref}' cannot be read: not UTF-8 text, nor a binary STL whose size matches "
+            "its triangle count",
+            urdf,
+            line,
+        )
     try:  # from bytes, so trimesh can open no other file (textures, materials)
         mesh: Any = trimesh.load(io.BytesIO(data), file_type=ext, force="mesh")
         vertices = np.asarray(mesh.vertices, dtype=float) * np.asarray(scale, dtype=float)
@@ -452,6 +459,17 @@ def mesh_hull(path: Path, ref: str, scale: Sequence[float], urdf: Path, line: in
     if hull is None:
         raise InputError.at(f"mesh '{ref}' is flat: its convex hull has no volume", urdf, line)
     return hull
+
+
+def _stl_readable(data: bytes) -> bool:
+    """A binary STL (84-byte header and count, 50 bytes a triangle) or UTF-8 text."""
+    if len(data) >= 84 and len(data) == 84 + 50 * int.from_bytes(data[80:84], "little"):
+        return True
+    try:
+        data.decode("utf-8")
+    except UnicodeDecodeError:
+        return False
+    return True
 
 
 def _one_line(e: Exception) -> str:
