@@ -25,7 +25,7 @@ from enum import StrEnum
 from pathlib import Path
 from typing import IO, Any
 
-from cellengine.errors import InputError, Problem, known
+from cellengine.errors import InputError, Problem, display_path, known
 from cellengine.info.bounds import MAX_MASS
 
 JOURNAL = "journal.jsonl"  # in the run directory
@@ -83,11 +83,14 @@ def drop_torn_tail(path: Path) -> None:
             f.truncate(data.rfind(b"\n") + 1)
 
 
-def refuse_unfinished(folder: Path) -> None:
+def refuse_unfinished(folder: Path) -> str | None:
     """An error when ``folder``'s journal holds a run that did not end: a new program written
-    there would leave that run nothing to resume."""
+    there would leave that run nothing to resume. A run that ended is replaced: what to say
+    about it (None: no earlier run)."""
     path = folder / JOURNAL
-    if path.is_file() and not (progress := read_progress(path)).ended and progress.started:
+    if not path.is_file() or not (progress := read_progress(path)).started:
+        return None
+    if not progress.ended:
         raise InputError(
             Problem(
                 "the run folder holds an unfinished run: go on with it with `cellengine run "
@@ -95,6 +98,10 @@ def refuse_unfinished(folder: Path) -> None:
                 str(path),
             )
         )
+    return (
+        f"{display_path(folder)}: replacing the trajectory and report of the run that ended "
+        f"there ({JOURNAL} keeps its record)"
+    )
 
 
 def read_progress(path: Path) -> Progress:

@@ -9,7 +9,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from cellengine.errors import EXIT_OK, UsageError, display_path
+from cellengine.errors import EXIT_OK, UsageError, display_path, printable
 
 if TYPE_CHECKING:  # the motion stack is imported when a command runs, not by `--help`
     from cellengine.pipeline import Compiled, Progress
@@ -67,7 +67,8 @@ def run(args: argparse.Namespace) -> int:
 
     compiled = compile_from_args(args)
     with using(args.out):
-        refuse_unfinished(args.out)
+        if (replaced := refuse_unfinished(args.out)) is not None:
+            print(printable(replaced), file=sys.stderr)
         paths = write_plan_outputs(compiled, args.out)
     if not args.quiet:
         print(

@@ -9,6 +9,7 @@ trajectory and report are the program's.
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
@@ -35,7 +36,8 @@ def run_plan(
     from cellengine.pipeline import write_plan_outputs
 
     with using(out):
-        refuse_unfinished(out)
+        if (replaced := refuse_unfinished(out)) is not None:
+            print(printable(replaced), file=sys.stderr)
         paths = write_plan_outputs(compiled, out)
         driver = open_driver(compiled, driver_options)
         confirm(driver, yes)

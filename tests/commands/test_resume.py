@@ -209,3 +209,16 @@ def test_a_corrupted_journal_is_refused_with_its_line(
         "<run>/journal.jsonl: arm 'left': unknown jaw mode 'wide'; known: grasp, open, slide\n"
         "<run>/journal.jsonl: unknown arm 'middle'; known: left, right\n"
     )
+
+
+def test_a_run_that_ended_is_replaced_with_a_word(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "out"
+    assert main(["run", str(PLAN), "--out", str(out), "-q"]) == 0
+    assert capsys.readouterr().err == ""
+    assert main(["plan", str(PLAN), "--out", str(out), "-q"]) == 0
+    assert capsys.readouterr().err == (
+        f"{out}: replacing the trajectory and report of the run that ended there "
+        "(journal.jsonl keeps its record)\n"
+    )
