@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -98,28 +99,33 @@ def _check_graph(doc: YamlDoc, steps: list[Skill]) -> list[Problem]:
     cycle = _find_cycle({s.id: s.after for s in steps if s.id is not None})
     if cycle:
         i = first[cycle[0]]
-        msg = f"steps[{i}].after: steps wait for each other in a cycle: " + " -> ".join(cycle)
+        shown = (
+            cycle if len(cycle) <= 12 else [*cycle[:6], f"... ({len(cycle) - 9} more)", *cycle[-3:]]
+        )
+        msg = f"steps[{i}].after: steps wait for each other in a cycle: " + " -> ".join(shown)
         out.append(doc.error(msg, ("steps", i, "after")).problems[0])
     return out
 
 
 def _find_cycle(graph: dict[str, tuple[str, ...]]) -> list[str] | None:
-    state: dict[str, int] = {}  # 1 on the stack, 2 done
-    stack: list[str] = []
-
-    def visit(n: str) -> list[str] | None:
-        state[n] = 1
-        stack.append(n)
-        for m in graph.get(n, ()):
-            if state.get(m) == 1:
-                return [*stack[stack.index(m) :], m]
-            if m not in state and (found := visit(m)):
-                return found
-        stack.pop()
-        state[n] = 2
-        return None
-
-    for n in graph:
-        if n not in state and (found := visit(n)):
-            return found
+    """A cycle of ``after`` (ids from the one waited on first), or None; depth-first with a
+    stack of its own (a chain of thousands of steps is deeper than Python recurses)."""
+    state: dict[str, int] = {}  # 1 on the path, 2 done
+    for root in graph:
+        if root in state:
+            continue
+        path: list[str] = [root]
+        todo: list[Iterator[str]] = [iter(graph.get(root, ()))]
+        state[root] = 1
+        while todo:
+            m = next(todo[-1], None)
+            if m is None:
+                state[path.pop()] = 2
+                todo.pop()
+            elif state.get(m) == 1:
+                return [*path[path.index(m) :], m]
+            elif m not in state:
+                state[m] = 1
+                path.append(m)
+                todo.append(iter(graph.get(m, ())))
     return None

@@ -97,6 +97,22 @@ steps:
     ]
 
 
+def test_a_chain_of_thousands_of_steps_listed_last_first() -> None:
+    """Each step waits for the one listed after it: the search for a cycle goes 3000 deep
+    (it recursed, and Python stopped at 1000), and finds none; closed, it finds it."""
+    n = 3000
+    steps = "".join(
+        f"  - {{id: s{i}, skill: Weigh, object: vial1, after: [s{i + 1}]}}\n" for i in range(n - 1)
+    )
+    text = "steps:\n" + steps + f"  - {{id: s{n - 1}, skill: Weigh, object: vial1}}\n"
+    assert errors(text) == []
+    closed = text.replace("object: vial1}\n", "object: vial1, after: [s0]}\n")
+    assert errors(closed) == [
+        "plan.yaml:2:50: steps[0].after: steps wait for each other in a cycle: s0 -> s1 -> s2 "
+        "-> s3 -> s4 -> s5 -> ... (2992 more) -> s2998 -> s2999 -> s0"
+    ]
+
+
 def test_object_choice_and_plan_units() -> None:
     text = """\
 units: {angle: deg}
