@@ -302,6 +302,7 @@ def plan_yaml(board: Board) -> str:
 def map_csv(board: Board) -> str:
     rows = ["cad_name,model,name", "Conn_Holder,connector_guide,connector"]
     rows += [f"Guide_U_{i:03d},{g.name}_u,{g.name}" for i, g in enumerate(board.guides)]
+    rows.append("Routing_Plate,obstacle,plate")  # the plate: an obstacle, as it was unmapped
     return "\n".join(rows) + "\n"
 
 

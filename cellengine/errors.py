@@ -73,6 +73,10 @@ class Problem:
         """The problem on one line, as printed: names from files are escaped there."""
         return printable(f"{self.location()}: {self.message}")
 
+    def warning(self) -> str:
+        """As :meth:`__str__`, for what the files allow but a user should know."""
+        return printable(f"{self.location()}: warning: {self.message}")
+
 
 class CellError(Exception):
     """Base of every error meant for a user. Carries one or more problems."""

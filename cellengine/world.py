@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from cellengine.arrays import Mat
-from cellengine.errors import known
+from cellengine.errors import Problem, known
 from cellengine.info.cell import Cell
 from cellengine.info.objects import Cable, Container, Objects
 from cellengine.info.platform import Element, Keypoint, Platform
@@ -31,6 +31,11 @@ class World:
     platforms: Mapping[str, Platform]
     objects: Objects
 
+    @property
+    def warnings(self) -> tuple[Problem, ...]:
+        """What the files allow but a user should know (each platform's)."""
+        return tuple(w for p in self.platforms.values() for w in p.warnings)
+
     def resolve(self, ref: str, kind: str = "keypoint") -> tuple[Platform, Element, Keypoint]:
         """``platform.element[.keypoint]``; without a keypoint, the element's first."""
         parts = ref.split(".", 2)
@@ -42,7 +47,8 @@ class World:
         element = platform.elements.get(parts[1])
         if element is None:
             what = "guide" if kind == "guide" else "element"
-            raise RefError(f"unknown {what} '{parts[0]}.{parts[1]}'" + known(platform.elements))
+            names = [n for n, e in platform.elements.items() if e.model != "obstacle"]
+            raise RefError(f"unknown {what} '{parts[0]}.{parts[1]}'" + known(names))
         if not element.keypoints:
             why = f": {element.note}" if element.note else ""
             raise RefError(f"element '{parts[0]}.{parts[1]}' has no keypoints{why}")

@@ -48,7 +48,10 @@ def compile_from_args(args: argparse.Namespace) -> Compiled:
     if args.cell is not None and not os.path.lexists(args.cell):
         raise UsageError.at("no such cell file", args.cell)
     progress = None if args.quiet else _progress()
-    return compile_plan(args.plan, args.execution, progress=progress, cell=args.cell)
+    compiled = compile_plan(args.plan, args.execution, progress=progress, cell=args.cell)
+    for w in compiled.world.warnings:
+        print(w.warning(), file=sys.stderr)
+    return compiled
 
 
 def _progress() -> Progress:

@@ -55,6 +55,7 @@ class Result:
     file: Path
     kind: str | None
     problems: list[Problem] = field(default_factory=list)
+    warnings: list[Problem] = field(default_factory=list)  # the file is still ok
 
 
 def run(args: argparse.Namespace) -> int:
@@ -163,11 +164,12 @@ def _validate_file(
     result = Result(f, kind)
     try:
         if kind == "cell":
-            world_of(f)
+            result.warnings = list(world_of(f).warnings)
         elif kind == "objects":
             load_objects(f)
         else:
             loaded = load_plan(f, world_of)
+            result.warnings = list(loaded.world.warnings)
             if compile_one is not None:
                 compile_one(loaded)
     except InputError as e:
@@ -194,6 +196,10 @@ def _text(results: list[Result]) -> None:
     bad = 0
     shown: set[tuple[object, ...]] = set()  # a plan repeats its cell's problems: print once
     for r in results:
+        for w in r.warnings:  # a plan repeats its cell's: printed once
+            if (key := ("warning", *_key(w))) not in shown:
+                shown.add(key)
+                print(w.warning())
         if r.problems:
             bad += 1
             new = [p for p in r.problems if _key(p) not in shown]
@@ -220,20 +226,22 @@ def _json(results: list[Result]) -> None:
                 "file": display_path(r.file),
                 "kind": r.kind,
                 "ok": not r.problems,
-                "problems": [
-                    {
-                        "file": display_path(p.file) if p.file else None,
-                        "line": p.line,
-                        "col": p.col,
-                        "message": p.message,
-                    }
-                    for p in r.problems
-                ],
+                "problems": [_problem_json(p) for p in r.problems],
+                "warnings": [_problem_json(p) for p in r.warnings],
             }
             for r in results
         ],
     }
     print(json.dumps(out, indent=2))
+
+
+def _problem_json(p: Problem) -> dict[str, Any]:
+    return {
+        "file": display_path(p.file) if p.file else None,
+        "line": p.line,
+        "col": p.col,
+        "message": p.message,
+    }
 
 
 def _escape(text: str, prop: bool = False) -> str:
@@ -244,13 +252,14 @@ def _escape(text: str, prop: bool = False) -> str:
 def _github(results: list[Result]) -> None:
     shown: set[tuple[object, ...]] = set()
     for r in results:
-        for p in r.problems:
-            if _key(p) in shown:
-                continue
-            shown.add(_key(p))
-            props = [f"file={_escape(printable(display_path(p.file or r.file)), True)}"]
-            if p.line is not None:
-                props.append(f"line={p.line}")
-                if p.col is not None:
-                    props.append(f"col={p.col}")
-            print(f"::error {','.join(props)}::{_escape(printable(p.message))}")
+        for level, problems in (("warning", r.warnings), ("error", r.problems)):
+            for p in problems:
+                if (level, *_key(p)) in shown:
+                    continue
+                shown.add((level, *_key(p)))
+                props = [f"file={_escape(printable(display_path(p.file or r.file)), True)}"]
+                if p.line is not None:
+                    props.append(f"line={p.line}")
+                    if p.col is not None:
+                        props.append(f"col={p.col}")
+                print(f"::{level} {','.join(props)}::{_escape(printable(p.message))}")

@@ -4,6 +4,8 @@ element model and gives the element the name plans use.
 ```
 cad_name,model,name
 ID0004,guide_u,guide1
+Plate,obstacle,plate
+Label,ignore,label
 ```
 
 Rows are CSV line numbers (the header is row 1), so errors point where an editor does.
@@ -20,6 +22,8 @@ from cellengine.info.csvrows import records
 from cellengine.info.files import read_capped
 
 HEADER = ("cad_name", "model", "name")
+# models that are words of the map (native.py): the part is an obstacle, or not one
+OBSTACLE, IGNORE = "obstacle", "ignore"
 
 
 @dataclass(frozen=True)

@@ -13,6 +13,7 @@ from types import MappingProxyType
 import numpy as np
 
 from cellengine.arrays import Mat
+from cellengine.errors import Problem
 from cellengine.info.mesh import Mesh
 
 
@@ -63,3 +64,5 @@ class Platform:
     name: str
     T_cell_platform: Mat
     elements: Mapping[str, Element]
+    # what a user should know and the files do not forbid (a CAD part no row maps)
+    warnings: tuple[Problem, ...] = ()

@@ -45,7 +45,8 @@ def in_platform(p: Platform, element: str, keypoint: str) -> Mat:
 
 def test_elements_in_map_order_with_names_models_and_sources() -> None:
     p = load()
-    assert list(p.elements) == ["guide1", "guide2", "comb_a"]
+    # the mapped elements in map order, then the CAD parts no row names, as obstacles
+    assert list(p.elements) == ["guide1", "guide2", "comb_a", "Base"]
     g = p.elements["guide2"]
     assert (g.name, g.model) == ("guide2", "guide_u")
     assert list(g.keypoints) == ["slot", "entry"]
@@ -54,7 +55,14 @@ def test_elements_in_map_order_with_names_models_and_sources() -> None:
     )
     assert g.source is not None
     assert (Path(g.source.file).name, g.source.line) == ("map.csv", 3)
-    assert "Base" not in p.elements  # the root assembly is in no map row
+    base = p.elements["Base"]  # the root assembly's plate is in no map row
+    assert (base.model, dict(base.keypoints), base.mesh is not None) == ("obstacle", {}, True)
+    (warning,) = p.warnings
+    assert (Path(warning.file or "").name, warning.line) == ("platform.x3d", base.source.line)
+    assert warning.message == (
+        "CAD part 'Base' is in no row of map.csv: it is checked as the obstacle "
+        "'holder.Base'; give it a row (its model, or 'obstacle' or 'ignore')"
+    )
 
 
 def test_keypoints_through_the_blender_root_transform() -> None:
@@ -168,3 +176,18 @@ def test_assemble_from_a_scene_built_by_hand() -> None:
     # tooth1 (5, 17, 80) mm turned 90° about z -> (-17, 5, 80) mm, + (100, 200, 300) mm.
     T = e.T_platform_element @ e.keypoints["tooth1"].T_element_keypoint
     np.testing.assert_allclose(T[:3, 3], [0.083, 0.205, 0.380])
+
+
+def test_obstacle_and_ignore_rows(tmp_path: Path) -> None:
+    """A row with model 'obstacle' names the part an obstacle (no warning); 'ignore' leaves
+    it out of the scene (a label, a part the cable passes through)."""
+    folder = tmp_path / "p"
+    shutil.copytree(DATA, folder)
+    mapping = folder / "map.csv"
+    mapping.write_text(mapping.read_text().rstrip("\n") + "\nBase,obstacle,plate\n")
+    p = load(folder)
+    assert (p.elements["plate"].model, p.warnings) == ("obstacle", ())
+    assert "Base" not in p.elements
+    mapping.write_text(mapping.read_text().replace("Base,obstacle,plate", "Base,ignore,base"))
+    p = load(folder)
+    assert list(p.elements) == ["guide1", "guide2", "comb_a"] and p.warnings == ()

@@ -221,6 +221,30 @@ def test_an_arm_into_a_routing_guide(
     assert checker.check(q_above) is None
 
 
+def test_an_unmapped_cad_part_is_an_obstacle(tmp_path: Path) -> None:
+    """A U guide added to the X3D between guide1 and guide2, not to map.csv: in the scene as
+    routing.Stray_Guide (it was left out, and a plan ran through it)."""
+    folder = tmp_path / "cable_routing"
+    shutil.copytree(CELL, folder)
+    x3d = folder / "routing" / "routing.x3d"
+    text = x3d.read_text()
+    i = text.index('<Transform DEF="Guide_U_001"')
+    stray = '<Transform DEF="Stray_Guide" translation="150 205 10" rotation="0 0 1 1.570796">'
+    stray += '<Shape><Box size="10 24 60"/></Shape></Transform>\n'
+    x3d.write_text(text[:i] + stray + text[i:])
+    world = load_world(folder / "cell.yaml")
+    assert [w.message.split(":")[0] for w in world.warnings] == [
+        "CAD part 'Stray_Guide' is in no row of map.csv"
+    ]
+    cell = build_cell_model(world)
+    scene = build_scene(cell, world)
+    routing = world.platforms["routing"]
+    T = routing.T_cell_platform @ routing.elements["Stray_Guide"].T_platform_element
+    # the open fingers 30 mm off the TCP along y: one of them where the stray guide stands
+    q = both(cell, left=ik(cell, "left", g.transform(DOWN, T[:3, 3] + [0, 0.03, 0])))
+    assert ("left/tool/finger_left", "routing.Stray_Guide") in all_contacts(scene, q)
+
+
 def test_a_held_vial_hits_a_guide_but_not_its_gripper(
     cell: CellModel, scene: CollisionScene, world: World
 ) -> None:
