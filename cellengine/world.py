@@ -13,6 +13,7 @@ from pathlib import Path
 from cellengine.arrays import Mat
 from cellengine.errors import Problem, known
 from cellengine.info.cell import Cell
+from cellengine.info.mapcsv import OBSTACLE
 from cellengine.info.objects import Cable, Container, Objects
 from cellengine.info.platform import Element, Keypoint, Platform
 
@@ -47,7 +48,7 @@ class World:
         element = platform.elements.get(parts[1])
         if element is None:
             what = "guide" if kind == "guide" else "element"
-            names = [n for n, e in platform.elements.items() if e.model != "obstacle"]
+            names = [n for n, e in platform.elements.items() if e.model != OBSTACLE]
             raise RefError(f"unknown {what} '{parts[0]}.{parts[1]}'" + known(names))
         if not element.keypoints:
             why = f": {element.note}" if element.note else ""
