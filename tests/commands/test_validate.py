@@ -242,3 +242,23 @@ def test_file_names_are_escaped(
     (cell_dir / "cell.yaml").rename(cell_dir / "cell\x1b[2J\n::error::x.yaml")
     assert main(["validate", "--no-compile", "cell\x1b[2J\n::error::x.yaml"]) == 0
     assert capsys.readouterr().out == "cell\\x1b[2J\\n::error::x.yaml: ok (cell)\n"
+
+
+def test_warnings_in_every_format(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A CAD part no map row names: a warning, once (the plan repeats its cell's), and the
+    files still pass."""
+    monkeypatch.chdir(ROOT / "tests" / "data" / "bad" / "x3d_unmapped_part")
+    message = (
+        "CAD part 'Stray' is in no row of map.csv: it is checked as the obstacle "
+        "'routing.Stray'; give it a row (its model, or 'obstacle' or 'ignore')"
+    )
+    assert main(["validate", "--no-compile", "cell.yaml", "--format", "github"]) == 0
+    assert capsys.readouterr().out == (f"::warning file=routing/routing.x3d,line=15::{message}\n")
+    assert main(["validate", "--no-compile", "cell.yaml", "--format", "json"]) == 0
+    (entry,) = json.loads(capsys.readouterr().out)["files"]
+    assert (entry["ok"], entry["warnings"]) == (
+        True,
+        [{"file": "routing/routing.x3d", "line": 15, "col": None, "message": message}],
+    )
