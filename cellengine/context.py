@@ -43,7 +43,7 @@ class PlanningContext:
     @property
     def home(self) -> Mat:
         """Every arm at its cell.yaml ``home`` (InputError naming an arm without one)."""
-        return home_configuration(self.cell)
+        return home_configuration(self.cell, self.world.cell_file)
 
     def tcp_home(self, arm: str) -> Mat:
         """T_cell_tcp of ``arm`` at home."""

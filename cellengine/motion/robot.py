@@ -196,16 +196,19 @@ class CellModel:
         return out
 
 
-def home_configuration(cell: CellModel) -> Vec:
+def home_configuration(cell: CellModel, cell_file: Path | None = None) -> Vec:
     """Every arm at its cell.yaml ``home``: where a program starts, and the one configuration
-    of the cell called home (reach tests, the arms' rests, a report without motion)."""
+    of the cell called home (reach tests, the arms' rests, a report without motion). An arm
+    without one is an error at its robot in ``cell_file`` when given."""
     missing = [name for name, arm in cell.arms.items() if arm.home is None]
     if missing:
-        raise InputError.at(
+        message = (
             f"robots.{missing[0]}.home is not given: a program needs every arm's start "
-            "configuration",
-            None,
+            "configuration"
         )
+        if cell_file is not None:
+            raise _cell_error(cell_file, message, ("robots", missing[0]))
+        raise InputError.at(message, None)
     return cell.join({name: np.asarray(arm.home) for name, arm in cell.arms.items()})
 
 

@@ -1,5 +1,6 @@
 import json
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -261,4 +262,20 @@ def test_warnings_in_every_format(
     assert (entry["ok"], entry["warnings"]) == (
         True,
         [{"file": "routing/routing.x3d", "line": 15, "col": None, "message": message}],
+    )
+
+
+def test_an_arm_without_home_is_named_at_its_robot(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    shutil.copytree(ROOT / "cells" / "cable_routing", tmp_path / "cell")
+    monkeypatch.chdir(tmp_path / "cell")
+    text = Path("cell.yaml").read_text()
+    i = text.index("    home:", text.index("  right:"))
+    Path("cell.yaml").write_text(text[:i] + text[text.index("\n", i) + 1 :])
+    assert main(["validate", "plan_straight.yaml"]) == 1
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].startswith("cell.yaml:")
+    assert out[0].endswith(
+        ": robots.right.home is not given: a program needs every arm's start configuration"
     )
