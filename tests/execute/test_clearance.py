@@ -158,11 +158,12 @@ def test_a_transit_keeps_the_default_clearance_in_a_cell_set_lower() -> None:
 
 
 def test_a_motion_leaving_where_the_step_before_worked_is_held_to_its_start_distance() -> None:
-    """The left fingertips taken down to 12 mm over the table (the cell's clearance 0 for
-    it), then the clearance raised to 30 mm: going back up leaves the table, never closer
-    than where it starts, and passes; moving 5 cm sideways down there does not."""
+    """The left fingertips taken down to 12 mm over the table beyond the routing plate's
+    edge (y = 0.21 m; the cell's clearance 0 for it), then the clearance raised to 30 mm:
+    going back up leaves the table, never closer than where it starts, and passes; moving
+    5 cm sideways down there does not."""
     world, cell, checker = cable_cell()
-    lx, ly, _ = LEFT_READY
+    lx, ly = LEFT_READY[0], 0.30
     low = (lx, ly, 0.012)
     down = Segment(1, "down", (ArmPath("left", "cartesian", line(LEFT_READY, low)),))
     c = Compiler(world, cell, checker, home(cell), clearance=0.0)

@@ -74,10 +74,11 @@ def test_only_measures_the_objects_it_names(ctx) -> None:  # type: ignore[no-unt
 
 
 def test_under_names_what_lies_wholly_below_a_level(ctx) -> None:  # type: ignore[no-untyped-def]
-    """On the reference cell the table's top is at z = 0 and the guides and combs stand
-    about 60 mm (the platforms' plates are not in the scene): up to the slots' 65 mm only
-    the table lies under, at 200 mm everything does."""
+    """On the reference cell the table's top is at z = 0, the platforms' 10 mm plates on it,
+    and the guides and combs stand about 60 mm: at 5 mm only the table lies under, up to
+    the slots' 65 mm the plates too, at 200 mm everything does."""
     probe = ctx.probe
     up = np.array([0.0, 0.0, 1.0])
-    assert probe.under(0.005, up) == probe.under(0.065, up) == {"table"}
+    assert probe.under(0.005, up) == {"table"}
+    assert probe.under(0.065, up) == {"table", "routing.plate", "holder.plate"}
     assert {"routing.guide1", "holder.comb_a", "table"} <= probe.under(0.2, up)
