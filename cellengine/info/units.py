@@ -61,6 +61,8 @@ def _within(v: float, info: ValidationInfo) -> float:
     if abs(v) > limit:
         unit = _unit(LENGTH, factor)
         metres = f" ({MAX_COORDINATE:g} m)" if unit != "m" else ""
+        if unit == "m" and abs(v) <= 1000.0 * limit:  # a cell's size in millimetres
+            metres = " (lengths are metres unless the file says `units: {length: mm}`)"
         raise ValueError(f"must be between {-limit:g} and {limit:g} {unit}{metres}")
     return v
 

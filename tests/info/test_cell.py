@@ -186,7 +186,8 @@ def test_lengths_bounded_in_the_files_unit(write) -> None:
     at_limit = CELL.replace("xyz: [0, -350, 0]", "xyz: [0, -100000, 0]")
     assert load(write, at_limit).robots["right"].base.xyz == pytest.approx((0, -100, 0))
     metres = CELL.replace("length: mm", "length: m").replace("[0, -350, 0]", "[0, -101, 0]")
-    assert ":11:21: robots.right.base.xyz[1]: must be between -100 and 100 m, got -101" in (
+    mm = "(lengths are metres unless the file says `units: {length: mm}`)"
+    assert f":11:21: robots.right.base.xyz[1]: must be between -100 and 100 m {mm}, got -101" in (
         errors(write, metres)
     )
 
