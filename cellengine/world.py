@@ -31,11 +31,12 @@ class World:
     cell_file: Path
     platforms: Mapping[str, Platform]
     objects: Objects
+    cell_warnings: tuple[Problem, ...] = ()  # the cell file's (info/load.py)
 
     @property
     def warnings(self) -> tuple[Problem, ...]:
-        """What the files allow but a user should know (each platform's)."""
-        return tuple(w for p in self.platforms.values() for w in p.warnings)
+        """What the files allow but a user should know: the cell file's, each platform's."""
+        return self.cell_warnings + tuple(w for p in self.platforms.values() for w in p.warnings)
 
     def resolve(self, ref: str, kind: str = "keypoint") -> tuple[Platform, Element, Keypoint]:
         """``platform.element[.keypoint]``; without a keypoint, the element's first."""

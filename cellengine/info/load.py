@@ -6,6 +6,7 @@ depends on it (a plan is not checked against a cell that did not load).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -45,6 +46,28 @@ def load_cell(path: Path) -> tuple[Cell, YamlDoc]:
     if problems:
         raise InputError(problems)
     return cell, doc
+
+
+def _cell_warnings(cell: Cell, doc: YamlDoc) -> list[Problem]:
+    """What a cell file allows but is likely a mistake: a home written in radians in a file
+    of degrees (every value within half a turn and not whole: the arm starts somewhere else
+    than meant, within its limits)."""
+    if _units(doc).angle != "deg":
+        return []
+    out = []
+    for name, robot in cell.robots.items():
+        raw = [math.degrees(v) for v in robot.home or ()]
+        if (
+            raw
+            and max(map(abs, raw)) <= math.pi + 1e-6
+            and any(abs(v - round(v)) > 1e-6 for v in raw)
+        ):
+            message = (
+                f"robots.{name}.home: every value is within +-3.15 and not whole: radians? "
+                "this file's angles are degrees (units: {angle: deg})"
+            )
+            out.append(doc.error(message, ("robots", name, "home")).problems[0])
+    return out
 
 
 def _check_cell(cell: Cell, doc: YamlDoc) -> list[Problem]:
@@ -204,7 +227,7 @@ def load_world(cell_path: Path, objects_path: Path | None = None) -> World:
             objects, objects_doc = _load_objects(objects_path)
         except InputError as e:
             problems.extend(e.problems)
-    world = World(cell, cell_path, platforms, objects)
+    world = World(cell, cell_path, platforms, objects, tuple(_cell_warnings(cell, doc)))
     if not problems:
         problems.extend(_check_zone_keypoints(world, doc))
     if objects_doc is not None and not problems:
