@@ -52,9 +52,9 @@ def _cell_warnings(cell: Cell, doc: YamlDoc) -> list[Problem]:
     """What a cell file allows but is likely a mistake: a home written in radians in a file
     of degrees (every value within half a turn and not whole: the arm starts somewhere else
     than meant, within its limits)."""
+    out = _bases_apart(cell, doc)
     if _units(doc).angle != "deg":
-        return []
-    out = []
+        return out
     for name, robot in cell.robots.items():
         raw = [math.degrees(v) for v in robot.home or ()]
         if (
@@ -70,11 +70,40 @@ def _cell_warnings(cell: Cell, doc: YamlDoc) -> list[Problem]:
     return out
 
 
+BASES_APART = 0.15  # m: about a UR arm's base across; robots closer stand on one another
+SAME_PLACE = 1e-3  # m: two bases this close are one base given twice (an error)
+
+
+def _bases_apart(cell: Cell, doc: YamlDoc) -> list[Problem]:
+    """Two robots whose bases stand closer than BASES_APART (one base given twice)."""
+    out = []
+    names = list(cell.robots)
+    for i, a in enumerate(names):
+        for b in names[i + 1 :]:
+            d = math.dist(cell.robots[a].base.xyz, cell.robots[b].base.xyz)
+            if SAME_PLACE <= d < BASES_APART:
+                message = (
+                    f"robots.{b}.base: {d * 1000:.0f} mm from robots.{a}'s base: both robots "
+                    "on one base? (a UR arm's base is about 150 mm across)"
+                )
+                out.append(doc.error(message, ("robots", b, "base")).problems[0])
+    return out
+
+
 def _check_cell(cell: Cell, doc: YamlDoc) -> list[Problem]:
     out: list[Problem] = []
 
     def err(message: str, *loc: str | int, key: bool = False) -> None:
         out.append(doc.error(message, loc, key).problems[0])
+
+    names = list(cell.robots)
+    for i, b in enumerate(names):
+        for a in names[:i]:
+            if math.dist(cell.robots[a].base.xyz, cell.robots[b].base.xyz) < SAME_PLACE:
+                err(
+                    f"robots.{b}.base: where robots.{a}'s base is; each robot has its own",
+                    *("robots", b, "base"),
+                )
 
     def inside(ref: str, *loc: str | int) -> None:
         """A file the cell names must be inside the cell's folder."""
