@@ -106,7 +106,7 @@ def _unmapped(
         name = _free_name(re.sub(r"[.\s]", "_", cad), elements)
         note = f"a CAD part no row of {map_file.name} names: an obstacle"
         elements[name] = _obstacle(name, node, Source(file, line or 1), note)
-        what = f"CAD part '{cad}'" if cad != "unnamed" else "geometry under no DEF"
+        what = "geometry under no DEF" if node is loose else f"CAD part '{cad}'"
         warnings.append(
             Problem(
                 f"{what} is in no row of {map_file.name}: it is checked as the obstacle "
