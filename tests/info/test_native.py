@@ -13,6 +13,7 @@ from cellengine.arrays import Mat
 from cellengine.errors import InputError
 from cellengine.geometry import pose, rot_z, transform
 from cellengine.info.mapcsv import MapRow
+from cellengine.info.mesh import Mesh
 from cellengine.info.models_xml import load_models
 from cellengine.info.native import assemble, load_native_platform
 from cellengine.info.platform import Platform
@@ -191,3 +192,20 @@ def test_obstacle_and_ignore_rows(tmp_path: Path) -> None:
     mapping.write_text(mapping.read_text().replace("Base,obstacle,plate", "Base,ignore,base"))
     p = load(folder)
     assert list(p.elements) == ["guide1", "guide2", "comb_a"] and p.warnings == ()
+
+
+def test_geometry_under_no_def_is_an_obstacle_too() -> None:
+    """A Shape straight under the Scene (no DEF over it), and a DEF called 'unnamed' with
+    geometry of its own: both obstacles, told apart in their warnings."""
+    tri = Mesh(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]]), np.array([[0, 1, 2]]))
+    scene = X3DScene(
+        "hand.x3d",
+        MappingProxyType({"unnamed": X3DNode("unnamed", "hand.x3d", 3, np.eye(4), tri)}),
+        mesh=tri,
+    )
+    p = assemble("p", np.eye(4), scene, {}, (), DATA / "models.xml", DATA / "map.csv")
+    assert list(p.elements) == ["unnamed", "unnamed_2"]
+    assert [(w.line, w.message.split(" is in")[0]) for w in p.warnings] == [
+        (3, "CAD part 'unnamed'"),
+        (None, "geometry under no DEF"),
+    ]
