@@ -220,7 +220,10 @@ def test_arm_letter_needs_a_robot_of_that_name(
     src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     robots = tmp_path / "robots.yaml"
-    robots.write_text("name: c\nrobots: {a: {model: ur5e}, b: {model: ur5e}}\n")
+    robots.write_text(
+        "name: c\nrobots:\n  a: {model: ur5e, base: {xyz: [0, 0.35, 0]}}\n"
+        "  b: {model: ur5e, base: {xyz: [0, -0.35, 0]}}\n"
+    )
     monkeypatch.chdir(tmp_path)
     assert run(src, tmp_path / "cell", "--robots", robots) == 1
     assert errors(capsys) == [
