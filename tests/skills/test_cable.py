@@ -957,11 +957,8 @@ def test_placing_keeps_the_published_hold_first_then_the_most_room() -> None:
     assert rooms == sorted(rooms, reverse=True)
 
 
-def test_the_arms_are_screened_while_the_routing_hand_comes_and_slides() -> None:
-    """plan_straight's guide1, its first way: the routing arm is kept only on branches on
-    which some branch of the other arm, standing still, stays the cell's clearance away while
-    the routing hand approaches and slides (branch 4 comes within it). Asked to keep half a
-    metre, the way is refused, saying how near every pair comes."""
+def _straight_guide1() -> tuple[PlanningContext, CableState, C.GuidePlan]:
+    """plan_straight after PickCable and PlaceConnector, and guide1's first way from there."""
     world, steps = _world()
     ctx = context(world)
     state = CableState.at_home(ctx)
@@ -970,7 +967,15 @@ def test_the_arms_are_screened_while_the_routing_hand_comes_and_slides() -> None
     state = replace(state, step=2)
     route = steps[2]
     assert isinstance(route, RouteCable)
-    gp = next(route.guide_plans(ctx, state, 0))
+    return ctx, state, next(route.guide_plans(ctx, state, 0))
+
+
+def test_the_arms_are_screened_while_the_routing_hand_comes_and_slides() -> None:
+    """plan_straight's guide1, its first way: the routing arm is kept only on branches on
+    which some branch of the other arm, standing still, stays the cell's clearance away while
+    the routing hand approaches and slides (branch 4 comes within it). Asked to keep half a
+    metre, the way is refused, saying how near every pair comes."""
+    ctx, state, gp = _straight_guide1()
     rooms = C._coming_rooms(ctx, state, gp, ("left", "right"), C.ANY_BRANCH)
     assert gp.branches and all(rooms[k] >= ctx.clearance for k in gp.branches)
     assert any(rooms[k] < ctx.clearance for k in C.ANY_BRANCH - gp.branches)
@@ -1028,15 +1033,7 @@ def test_the_arms_pair_is_screened_from_the_pivot_grasp_to_the_insert() -> None:
     10 mm apart from the other arm's descent to the insert (the way is offered). Asked to keep
     half a metre, no pair can: the way is refused, saying how near every pair comes (true of
     each: no nearer than the pair that stays farthest apart all along)."""
-    world, steps = _world()
-    ctx = context(world)
-    state = CableState.at_home(ctx)
-    for i in range(2):
-        _, state = next(C.step_ways(ctx, steps, i, state))
-    state = replace(state, step=2)
-    route = steps[2]
-    assert isinstance(route, RouteCable)
-    gp = next(route.guide_plans(ctx, state, 0))
+    ctx, _, gp = _straight_guide1()
     C._check_pair_along(ctx, gp, "left", "right")
     with pytest.raises(InputError) as err:
         C._check_pair_along(replace(ctx, clearance=0.5), gp, "left", "right")
