@@ -15,7 +15,7 @@ PLAN = CELLS / "cable_routing" / "plan_straight.yaml"
 
 
 def test_driver_kinds_are_the_registry_s() -> None:
-    assert DRIVER_KINDS == tuple(DRIVERS)
+    assert tuple(DRIVERS) == DRIVER_KINDS
 
 
 def test_unknown_driver_is_a_usage_error_before_compiling(
