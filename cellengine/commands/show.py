@@ -97,10 +97,11 @@ def reach_summary(reach: dict[str, tuple[str, ...]], arms: list[str]) -> str:
             return "every arm"
         return f"{reached[0]} only" if len(reached) == 1 else ", ".join(reached)
 
-    # every arm first, then each arm alone, then several, no arm last
-    order = sorted(
-        set(reach.values()), key=lambda r: (-len(r) if len(r) == len(arms) else 0, r == ())
-    )
+    def rank(reached: tuple[str, ...]) -> tuple[int, int, list[int]]:
+        # every arm first, then one arm, then several, in the cell's order; no arm last
+        return (len(reached) != len(arms), not reached, [arms.index(a) for a in reached])
+
+    order = sorted(set(reach.values()), key=rank)
     counts = {r: sum(1 for v in reach.values() if v == r) for r in order}
     parts = [f"{n} by {what(r)}" for r, n in counts.items()]
     if parts:
