@@ -11,6 +11,7 @@ from dataclasses import replace
 import pytest
 
 from cellengine.allocate import (
+    AllocationError,
     AllocationProblem,
     AnyOf,
     Blocker,
@@ -448,7 +449,7 @@ def test_error_unreachable_location() -> None:
     only_r1_picks = replace(R2, skills=frozenset({"turn_cap"}))
     p = problem(Task("p", (pick((1.2, 0.3, 0.0)),)), robots=(R1, only_r1_picks))
     assert _error(p) == (
-        "task 'p': primitive 0 (pick) at (1.200, 0.300, 0.000): "
+        "task 'p': primitive 0 (pick) at (1.200, 0.300, 0.000) m: "
         "r1 cannot reach it; r2 lacks skill 'pick'"
     )
 
@@ -475,7 +476,7 @@ def test_error_cooperation_out_of_the_helpers_reach() -> None:
     p = problem(Task("u", (pick((0.3, 0.3, 0.0)), *unscrew_prims((0.3, 0.3, 0.0))[2:4])))
     assert _error(p) == (
         "task 'u': no alliance of r1, r2 can do its primitives in order: "
-        "r2 cannot reach (0.300, 0.300, 0.000) for primitive 2 (turn_cap)"
+        "r2 cannot reach (0.300, 0.300, 0.000) m for primitive 2 (turn_cap)"
     )
 
 
@@ -483,7 +484,7 @@ def test_error_relocation_names_the_blocker_task() -> None:
     stuck = Blocker("b", (0.3, 0.3, 0.0), ((1.3, 0.3, 0.0),))  # only spot: robot 2's side
     p = problem(Task("grab", (pick((0.3, 0.4, 0.0)),), blocked_by=(stuck,)), robots=(R1,))
     assert _error(p) == (
-        "task 'clear:b': primitive 1 (place) at (1.300, 0.300, 0.000): r1 cannot reach it"
+        "task 'clear:b': primitive 1 (place) at (1.300, 0.300, 0.000) m: r1 cannot reach it"
     )
 
 
@@ -506,3 +507,17 @@ def test_error_relocation_names_the_blocker_task() -> None:
 )
 def test_errors_in_the_problem(tasks: tuple[Task, ...], message: str) -> None:
     assert _error(problem(*tasks)) == message
+
+
+def test_error_names_its_task_and_speaks_the_cell_s_unit() -> None:
+    only_r1_picks = replace(R2, skills=frozenset({"turn_cap"}))
+    p = replace(
+        problem(Task("p", (pick((1.2, 0.3, 0.0)),)), robots=(R1, only_r1_picks)), length_unit="mm"
+    )
+    with pytest.raises(AllocationError) as e:
+        allocate(p)
+    assert e.value.task == "p"
+    assert str(e.value) == (
+        "task 'p': primitive 0 (pick) at (1200, 300, 0) mm: r1 cannot reach it; "
+        "r2 lacks skill 'pick'"
+    )
