@@ -102,8 +102,8 @@ def plan_lab_steps(ctx: PlanningContext, steps: Sequence[Skill]) -> LabPlan:
         mission = allocate(problem)
     except AllocationError as e:  # at the line of the step whose task it is
         task = needs.get(e.task.split(":", 1)[1], "") if e.task and ":" in e.task else e.task
-        step = by_id[task][0] if task in by_id else None
-        raise StepError(Problem(str(e)), step) from None
+        index = by_id[task][0] if task in by_id else None
+        raise StepError(Problem(str(e)), index) from None
     except ValueError as e:
         raise InputError(Problem(str(e))) from None
     tcp = {name: ctx.tcp_home(name) for name in cell.arms}
