@@ -23,9 +23,10 @@ PAGE = object()  # --html without a path: CELLNAME.html in the working folder
 def add_parser(sub: Any, name: str) -> None:
     p = sub.add_parser(
         name,
-        help="print every keypoint of a cell in the cell frame",
+        help="print every keypoint of a cell in the cell frame, or write the cell page",
         description="Print every keypoint in the cell frame: a table with xyz "
-        "in mm and rpy in deg, or JSON in metres and radians.",
+        "in mm and rpy in deg, or JSON in metres and radians; or write the cell page "
+        "(--html): the robots at home and each keypoint coloured by the arms that reach it.",
     )
     p.add_argument("cell", type=Path, metavar="CELL", help="a cell.yaml, or its folder")
     out = p.add_mutually_exclusive_group()
