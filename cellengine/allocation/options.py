@@ -201,7 +201,7 @@ class _Walker:
             return
         group = self.groups[g]
         if len(group) > len(self.robots):
-            kinds = " and ".join(f"{i} ({p.kind})" for i, p in group)
+            kinds = " and ".join(f"{i + 1} ({p.kind})" for i, p in group)
             self.reasons.append((g, f"primitives {kinds} run at once and need {len(group)} robots"))
         for team in itertools.permutations(self.robots, len(group)):
             if any(p.skill not in r.skills for r, (_, p) in zip(team, group, strict=True)):
@@ -244,7 +244,7 @@ class _Walker:
             here = actions[0].start if actions else loc
             if here is None and p.start is None:
                 raise AllocationError(
-                    f"task '{self.task.id}': primitive {i} ({p.kind}) has no start location",
+                    f"task '{self.task.id}': primitive {i + 1} ({p.kind}) has no start location",
                     self.task.id,
                 )
             start = resolve(p.start, here or ())
@@ -252,7 +252,7 @@ class _Walker:
             for where in (start, end):
                 if not self.problem.reaches(robot, where):
                     at = fmt_loc(where, self.problem.length_unit)
-                    why = f"{robot.name} cannot reach {at} for primitive {i} ({p.kind})"
+                    why = f"{robot.name} cannot reach {at} for primitive {i + 1} ({p.kind})"
                     self.reasons.append((g, why))
                     return None
             step = self.task.id
@@ -273,7 +273,7 @@ def _groups(task: Task) -> list[list[tuple[int, Primitive]]]:
         raise AllocationError(f"task '{task.id}': no primitives", task.id)
     if task.primitives[0].with_previous:
         raise AllocationError(
-            f"task '{task.id}': primitive 0 cannot run with a previous one", task.id
+            f"task '{task.id}': primitive 1 cannot run with a previous one", task.id
         )
     groups: list[list[tuple[int, Primitive]]] = []
     for i, p in enumerate(task.primitives):
@@ -321,7 +321,7 @@ def _diagnose(problem: AllocationProblem, task: Task, reasons: Sequence[tuple[in
         if not able:
             have = "; ".join(f"{r.name} has {', '.join(sorted(r.skills)) or '-'}" for r in robots)
             who = "no robot has" if task.arms is None else "its arms do not have"
-            need = f"primitive {i} ({p.kind}) needs skill '{p.skill}'"
+            need = f"primitive {i + 1} ({p.kind}) needs skill '{p.skill}'"
             return f"task '{task.id}': {need}, which {who} ({have})"
         for where in (p.start, p.end):
             loc = resolve(where, ())
@@ -333,7 +333,7 @@ def _diagnose(problem: AllocationProblem, task: Task, reasons: Sequence[tuple[in
                     for r in robots
                 )
                 at = fmt_loc(loc, problem.length_unit)
-                return f"task '{task.id}': primitive {i} ({p.kind}) at {at}: {lack}"
+                return f"task '{task.id}': primitive {i + 1} ({p.kind}) at {at}: {lack}"
     names = ", ".join(r.name for r in robots)
     furthest = max((g for g, _ in reasons), default=0)
     why = next((w for g, w in reasons if g == furthest), "no assignment found")

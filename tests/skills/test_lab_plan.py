@@ -38,5 +38,5 @@ def test_an_allocation_error_is_at_its_step_in_the_cell_s_unit(
     assert main(["validate", str(plan)]) == 1
     out = capsys.readouterr()
     assert f"{out.out}{out.err}".splitlines()[0] == (
-        f"{plan}:7:5: task 'move': primitive 0 (pick) at (300, 150, 6) mm: robot2 cannot reach it"
+        f"{plan}:7:5: task 'move': primitive 1 (pick) at (300, 150, 6) mm: robot2 cannot reach it"
     )
