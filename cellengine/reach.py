@@ -11,7 +11,7 @@ limits. Collisions are not checked: a screen of where each arm can go, not a pla
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable
 
 import numpy as np
 
@@ -49,7 +49,3 @@ def keypoint_reach(
         )
     return out
 
-
-def unreached(reach: Mapping[str, tuple[str, ...]]) -> list[str]:
-    """The keypoints no arm reaches, in ``reach``'s order."""
-    return [name for name, arms in reach.items() if not arms]
