@@ -48,4 +48,3 @@ def keypoint_reach(
             arm for arm, ik in iks.items() if any(ik.solve(t) is not None for t in tcp)
         )
     return out
-
