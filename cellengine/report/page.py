@@ -40,7 +40,16 @@ from numpy.typing import NDArray
 ASSETS = files("cellengine.report") / "assets"
 STYLE = "page.css"
 GUARD = "guard.js"  # runs first: catches the errors of the page's script into the DOM
-SCRIPTS = ("base.js", "time.js", "scene.js", "draw.js", "plots.js", "panels.js", "main.js")
+SCRIPTS = (
+    "base.js",
+    "time.js",
+    "scene.js",
+    "draw.js",
+    "plots.js",
+    "panels.js",
+    "reach.js",  # the cell page's (cell_page.py); nothing without the replay's ``reach``
+    "main.js",
+)
 
 
 def asset(name: str) -> str:

@@ -3,6 +3,7 @@
 /* global addKeypoints, addLinks, addStatic, armColor, BG, cam, canvas, css, ctx, drawCables,
    handsAt, lastStarted, locate, makeView, mix, N, NEAR, project, rgb, RP, state, statics, WHITE */
 /* exported drawView */
+/* global drawReach */
 
 // ---------------------------------------------------------------- drawing
 function fitCanvas(c, g) {
@@ -165,5 +166,6 @@ function drawView() {
   const cables = drawCables(V, handsAt(i, f));
   drawAxes(V);
   drawArmLabels(V);
+  if (RP.reach) drawReach(V);
   return { shapes: ground.length + prims.length, cables };
 }
