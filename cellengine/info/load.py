@@ -15,6 +15,7 @@ from typing import Any
 from cellengine.errors import InputError, Problem, known
 from cellengine.family import families
 from cellengine.info.cell import BUILTIN_ROBOTS, Cell, PlatformSpec, UrdfModel
+from cellengine.info.far import out_of_reach
 from cellengine.info.files import resolve_inside
 from cellengine.info.objects import Objects
 from cellengine.info.overlaps import overlaps
@@ -265,7 +266,8 @@ def load_world(cell_path: Path, objects_path: Path | None = None) -> World:
         problems.extend(_check_objects(world, objects_doc))
     if problems:
         raise InputError(problems)
-    return replace(world, cell_warnings=world.cell_warnings + tuple(overlaps(world, doc)))
+    more = overlaps(world, doc) + out_of_reach(world, doc)
+    return replace(world, cell_warnings=world.cell_warnings + tuple(more))
 
 
 @dataclass(frozen=True)
