@@ -22,7 +22,7 @@ from cellengine.world import World
 
 def out_of_reach(world: World, doc: YamlDoc) -> list[Problem]:
     """A warning per platform that has keypoints and none within any robot's bound."""
-    arms = [(name, *b) for name, r in world.cell.robots.items() if (b := _bound(world.cell, r))]
+    arms = [(name, *b) for name, r in world.cell.robots.items() if (b := arm_bound(world.cell, r))]
     if not arms:
         return []
     out = []
@@ -45,7 +45,7 @@ def out_of_reach(world: World, doc: YamlDoc) -> list[Problem]:
     return out
 
 
-def _bound(cell: Cell, robot: Robot) -> tuple[np.ndarray, float] | None:
+def arm_bound(cell: Cell, robot: Robot) -> tuple[np.ndarray, float] | None:
     """The robot's shoulder in the cell frame and how far its TCP can be from it."""
     if not isinstance(robot.model, str) or robot.model not in UR_DH:
         return None
