@@ -23,7 +23,7 @@ from cellengine.arrays import Vec
 from cellengine.info.platform import Element
 from cellengine.skill import Skill
 from cellengine.skills import cable_geometry as cg
-from cellengine.skills.cable import PlaceConnector, RouteCable
+from cellengine.skills.cable import PickCable, PlaceConnector, RouteCable
 from cellengine.world import World
 
 Loc = tuple[str | int, ...]
@@ -39,7 +39,9 @@ def check(world: World, steps: Sequence[Skill]) -> list[Finding]:
     out: list[Finding] = []
     came_from: dict[str, _Seat] = {}  # cable -> the keypoint it last went into
     for i, step in enumerate(steps):
-        if isinstance(step, PlaceConnector):
+        if isinstance(step, PickCable):
+            out += _span(world, step, ("steps", i, "from"))
+        elif isinstance(step, PlaceConnector):
             out += _seat(world, step, ("steps", i, "guide"))
             came_from[step.cable] = _Seat(step.guide, ("steps", i, "guide"), connector=True)
         elif isinstance(step, RouteCable):
@@ -151,6 +153,22 @@ def _crossed(world: World, a: str, b: str, up: Vec) -> list[str]:
         and f.distance(p, p, up) > 0.0
         and f.distance(q, q, up) > 0.0
     ]
+
+
+def _span(world: World, step: PickCable, loc: Loc) -> Iterator[Finding]:
+    """The cable lies in both keypoints it is picked from: they are no farther apart than
+    its length."""
+    a, b = step.from_
+    apart = float(np.linalg.norm(cg.position(world, b) - cg.position(world, a)))
+    length = world.cable(step.cable).length
+    if apart > length:
+        yield (
+            loc,
+            (
+                f"{step.cable} ({length * 1000:.0f} mm long) cannot lie in both {a} and {b}: "
+                f"they are {apart * 1000:.0f} mm apart"
+            ),
+        )
 
 
 def _seat(world: World, step: PlaceConnector, loc: Loc) -> Iterator[Finding]:
