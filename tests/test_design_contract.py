@@ -16,6 +16,7 @@ from cellengine.cli import main
 from tests.conftest import CELLS, REMODEL, SHARED
 
 DESIGN = SHARED / "DESIGN.md"
+U_GUIDES = ("", "_001", "_002", "_003", "_004", "_005", "_006")  # the reference X3D's DEFs
 
 
 def example(heading: str) -> str:
@@ -28,6 +29,13 @@ def example(heading: str) -> str:
 def design_cell(tmp_path: Path) -> Path:
     for platform in ("holder", "routing"):
         shutil.copytree(CELLS / "cable_routing" / platform, tmp_path / platform)
+    # DESIGN's plan places the connector into routing.guide1 and routes through guide2 and
+    # guide3 after it: the reference connector guide and the two U guides after it, named so
+    (tmp_path / "routing" / "map.csv").write_text(
+        "cad_name,model,name\nConn_Holder,connector_guide,guide1\n"
+        + "".join(f"Guide_U{s},guide_u,guide{i + 2}\n" for i, s in enumerate(U_GUIDES))
+        + "Routing_Plate,obstacle,plate\n"
+    )
     shutil.copytree(REMODEL, tmp_path / "board")
     (tmp_path / "cell.yaml").write_text(example("### 3.1 cell.yaml"))
     (tmp_path / "objects.yaml").write_text(example("### 3.3 objects.yaml"))
