@@ -81,7 +81,9 @@ class Problem:
     def warning(self) -> str:
         """As :meth:`__str__`, for what the files allow but a user should know."""
         where = self.location()
-        return printable(f"{where}: warning: {self.message}" if where else f"warning: {self.message}")
+        return printable(
+            f"{where}: warning: {self.message}" if where else f"warning: {self.message}"
+        )
 
 
 class CellError(Exception):

@@ -23,6 +23,7 @@ from cellengine.family import SkillFamily, families, skill_name
 from cellengine.info.load import LoadedPlan, load_plan
 from cellengine.info.plan import Plan
 from cellengine.motion.robot import CellModel
+from cellengine.motion.speed import resolve
 from cellengine.program import Program, Segment
 from cellengine.skill import Skill
 from cellengine.world import World
@@ -83,10 +84,12 @@ def compile_plan(
     merge: str = "joint",
     progress: Progress | None = None,
     cell: Path | None = None,
+    speed: float = 1.0,
 ) -> Compiled:
     """Load, check and compile ``path`` (in ``cell`` instead of the plan's cell when
-    given); InputError (in plan terms) when it cannot run."""
-    return compile_loaded(load_plan(path, cell=cell), strategy, merge, progress)
+    given; ``speed``: the command line's factor on the files' speeds); InputError (in plan
+    terms) when it cannot run."""
+    return compile_loaded(load_plan(path, cell=cell), strategy, merge, progress, speed=speed)
 
 
 def compile_loaded(
@@ -96,12 +99,16 @@ def compile_loaded(
     progress: Progress | None = None,
     context: PlanningContext | None = None,
     masses: Mapping[str, float] | None = None,
+    speed: float | None = None,
 ) -> Compiled:
     """Compile a loaded plan. ``context``: one already built for this plan's world (a
     caller compiling several plans of one cell builds it once); ``masses``: measured masses
-    (kg) for runtime choices (else objects.yaml's)."""
+    (kg) for runtime choices (else objects.yaml's); ``speed``: the command line's factor on
+    the files' speeds (default: the context's, else none)."""
     plan = loaded.plan
     ctx = context if context is not None else build_context(loaded.world)
+    factor = ctx.speed.factor if speed is None else speed
+    ctx = ctx.with_speed(resolve(loaded.world.cell, plan, factor))
     if masses is not None:
         ctx = ctx.with_masses(masses)
     chosen = strategy or plan.execution

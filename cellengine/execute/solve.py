@@ -183,7 +183,7 @@ def _quickest(
         if rows is None:
             reason = "the timing spline through the planned path leaves its clearance"
             continue
-        duration = max(fastest(rows[:, cell.slices[a]], cell.arms[a].limits) for a in arms)
+        duration = max(fastest(rows[:, cell.slices[a]], cell.timing_limits(a)) for a in arms)
         if best is None or duration < best[0]:
             best = (duration, rows)
     return (None, reason) if best is None else (best[1], "")
