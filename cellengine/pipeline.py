@@ -19,11 +19,12 @@ from cellengine.context import PlanningContext, build_context
 from cellengine.errors import InputError, Problem, StepError
 from cellengine.execute.candidates import compile_candidates
 from cellengine.execute.compile import Compiler
+from cellengine.execute.home import return_home
 from cellengine.family import SkillFamily, families, skill_name
 from cellengine.info.load import LoadedPlan, load_plan
 from cellengine.info.plan import Plan
 from cellengine.motion.robot import CellModel
-from cellengine.motion.speed import resolve
+from cellengine.motion.speed import resolve, speed_json
 from cellengine.program import Program, Segment
 from cellengine.skill import Skill
 from cellengine.world import World
@@ -131,6 +132,8 @@ def compile_loaded(
     def search() -> Compiled:
         family = family_of(plan.steps)
         taken = compile_candidates(compiler, family.plan(ctx, plan.steps), before_each)
+        if plan.return_home:
+            return_home(compiler, ctx.home, len(plan.steps) - 1)
         program = compiler.program()
         report: dict[str, Any] = {}
         for candidate in taken:
@@ -235,6 +238,7 @@ def write_plan_outputs(compiled: Compiled, out: Path) -> dict[str, Path]:
         "execution": compiled.strategy,
         "duration": compiled.program.duration,
         "clearance_m": compiled.context.clearance,
+        "speed": speed_json(compiled.context.speed),
     }
     extra.update(compiled.report)
     labels = {i: step_label(step) for i, step in enumerate(plan.steps)}

@@ -140,6 +140,22 @@ def transit(
     raise Refused(f"no collision-free transit for {_names(arms)}: {reason}")
 
 
+def to_configuration(
+    cell: CellModel,
+    checker: CollisionChecker,
+    arms: Sequence[str],
+    q: Vec,
+    goal: Vec,
+    clearance: float | None = None,
+) -> Vec:
+    """Whole-cell rows from ``q`` to the configuration ``goal`` (``arms`` move, the others
+    stand), keeping ``clearance`` as a transit does; Refused when there is none."""
+    rows, reason = _reach(cell, checker, arms, q, [goal], clearance)
+    if rows is None:
+        raise Refused(f"no collision-free transit for {_names(arms)}: {reason}")
+    return rows
+
+
 def _reach(
     cell: CellModel,
     checker: CollisionChecker,

@@ -45,6 +45,17 @@ def resolve(cell: Cell, plan: Plan | None = None, factor: float = 1.0) -> Speed:
     return Speed(fractions.velocity * factor, fractions.acceleration * factor, tcp, factor)
 
 
+def speed_json(speed: Speed) -> dict[str, float | None]:
+    """report.json's ``speed``: the fractions and the TCP cap (m/s) the program was timed
+    with, and the command line's factor."""
+    return {
+        "velocity": speed.velocity,
+        "acceleration": speed.acceleration,
+        "tcp_m_s": speed.tcp,
+        "factor": speed.factor,
+    }
+
+
 def tcp_limit(cell: CellModel, arms: tuple[str, ...] | None = None) -> TcpSpeedLimit | None:
     """The cell's TCP speed cap on ``arms``' TCPs (default: every arm; rows of their joints
     only when ``arms`` is one arm), for the timing; None without a cap."""
