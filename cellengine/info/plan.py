@@ -5,9 +5,9 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import Field
+from pydantic import Field, Strict
 
 from cellengine.errors import InputError, Problem, StepError, known
 from cellengine.family import families
@@ -28,7 +28,7 @@ class PlanFile(Frozen):
     tcp_speed: Length | None = Field(None, gt=0)
     # after its last step, the arms go back to their homes: the plan ends where it starts
     # (so that `run --cycles N` can repeat it)
-    return_home: bool = False
+    return_home: Annotated[bool, Strict()] = False  # `yes` is a string in YAML 1.2
     steps: list[dict[str, Any]] = Field(min_length=1)
 
 
