@@ -12,32 +12,33 @@ from cellengine.drivers.fault import DriverFault
 from cellengine.errors import DriverError, Problem, UsageError, display_path
 
 if TYPE_CHECKING:
-    from cellengine.pipeline import Compiled
+    from cellengine.info.load import LoadedPlan
 
 
-def resume_command(compiled: Compiled, run_dir: Path) -> str:
+def resume_command(loaded: LoadedPlan, execution: str, speed: float, run_dir: Path) -> str:
     """``cellengine run PLAN --resume RUN_DIR``, with ``--cell``, ``--execution`` and
     ``--speed`` when the run was started with them (a resume must give the same)."""
-    plan = compiled.loaded.plan
+    plan = loaded.plan
     words = ["cellengine", "run", display_path(plan.file), "--resume", display_path(run_dir)]
-    cell = compiled.world.cell_file
+    cell = loaded.world.cell_file
     if cell.resolve() != (plan.file.parent / plan.cell).resolve():
         words += ["--cell", display_path(cell)]
-    if compiled.strategy != plan.execution:
-        words += ["--execution", compiled.strategy]
-    if compiled.context.speed.factor != 1.0:
-        words += ["--speed", f"{compiled.context.speed.factor:g}"]
+    if execution != plan.execution:
+        words += ["--execution", execution]
+    if speed != 1.0:
+        words += ["--speed", f"{speed:g}"]
     return shlex.join(words)
 
 
 @contextlib.contextmanager
-def resumable(compiled: Compiled, run_dir: Path) -> Iterator[None]:
-    """A fault or a Ctrl-C inside ends the run with how to go on after it: a fault as it is
-    (exit 3), a Ctrl-C as an interruption (exit 2)."""
-    hint = Problem(f"to go on from where it stopped: {resume_command(compiled, run_dir)}")
+def resumable(command: str) -> Iterator[None]:
+    """A fault or a Ctrl-C inside ends the run saying how to go on (``command``): a fault as
+    it is (exit 3), a Ctrl-C as an interruption (exit 2). A refusal moved nothing: there is
+    nothing to go on with."""
+    hint = Problem(f"to go on from where it stopped: {command}")
     try:
         yield
-    except DriverFault as e:  # a refusal moved nothing: there is nothing to go on with
+    except DriverFault as e:
         raise DriverError([*e.problems, hint]) from None
     except KeyboardInterrupt:
         raise UsageError([Problem("interrupted; both arms stopped"), hint]) from None

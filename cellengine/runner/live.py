@@ -49,21 +49,21 @@ class Silent:
         pass
 
 
-def describe(compiled: Compiled, index: int, cycle: int = 1, cycles: int = 1) -> str:
-    """One segment in words: ``step 2/3 PlaceConnector cable1: routing.connector, segment
-    9/38 'PlaceConnector routing.connector: approach', 5.20 s of 25.74 s`` (with ``cycle
-    1/2, `` first when there are several)."""
+def describe(compiled: Compiled, index: int, cycle: int = 1, cycles: int = 1) -> tuple[str, str]:
+    """One segment in words, what and when: ``step 2/3 PlaceConnector cable1:
+    routing.connector, segment 9/38 'PlaceConnector routing.connector: approach'`` (with
+    ``cycle 1/2, `` first when there are several) and ``5.20 s of 25.74 s``."""
     from cellengine.pipeline import step_label
 
     program, steps = compiled.program, compiled.loaded.plan.steps
     seg = program.segments[index]
     step = seg.segment.step
     head = f"cycle {cycle}/{cycles}, " if cycles > 1 else ""
-    return printable(
+    what = (
         f"{head}step {step + 1}/{len(steps)} {step_label(steps[step])}, "
-        f"segment {index + 1}/{len(program.segments)} '{seg.segment.label}', "
-        f"{seg.trajectory.start_time:.2f} s of {program.duration:.2f} s"
+        f"segment {index + 1}/{len(program.segments)} '{seg.segment.label}'"
     )
+    return printable(what), f"{seg.trajectory.start_time:.2f} s of {program.duration:.2f} s"
 
 
 class Lines:
@@ -77,7 +77,8 @@ class Lines:
         self.at = (cycle, cycles)
 
     def segment(self, compiled: Compiled, index: int) -> None:
-        print(describe(compiled, index, *self.at), file=self.stream, flush=True)
+        what, when = describe(compiled, index, *self.at)
+        print(f"{what}, {when}", file=self.stream, flush=True)
 
     def close(self) -> None:
         pass
@@ -90,15 +91,19 @@ class Bar:
         from rich.console import Console
         from rich.markup import escape
         from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+        from rich.table import Column
 
         self.progress = Progress(
-            TextColumn("{task.description}"),
-            BarColumn(),
+            BarColumn(bar_width=24),
+            TextColumn("{task.fields[when]}"),
             TimeElapsedColumn(),
+            # what wraps rather than be cut: the segment's label is at its end
+            TextColumn("{task.description}", table_column=Column(no_wrap=False, ratio=1)),
             console=Console(file=stream),
             auto_refresh=False,  # no thread beside the servo loop: redrawn between segments
         )
-        self.task = self.progress.add_task("", total=compiled.program.duration or 1.0)
+        total = compiled.program.duration or 1.0
+        self.task = self.progress.add_task("", total=total, when="")
         self.at = (1, 1)
         self.escape = escape
         self.progress.start()
@@ -109,8 +114,9 @@ class Bar:
     def segment(self, compiled: Compiled, index: int) -> None:
         t = compiled.program.segments[index].trajectory.start_time
         total = compiled.program.duration or 1.0
-        text = self.escape(describe(compiled, index, *self.at))  # names are not rich markup
-        self.progress.update(self.task, completed=t, total=total, description=text)
+        what, when = describe(compiled, index, *self.at)
+        what = self.escape(what)  # names from files are not rich markup
+        self.progress.update(self.task, completed=t, total=total, description=what, when=when)
         self.progress.refresh()
 
     def close(self) -> None:

@@ -20,7 +20,7 @@ from cellengine.journal import JOURNAL, Entry, append, refuse_unfinished
 from cellengine.runfolder import open_append, using
 from cellengine.runner.cycles import check_cycles
 from cellengine.runner.driver import DriverOptions, confirm, open_driver
-from cellengine.runner.hint import resumable
+from cellengine.runner.hint import resumable, resume_command
 from cellengine.runner.identity import differences, run_identity
 from cellengine.runner.live import live
 from cellengine.runner.move import move_to
@@ -53,7 +53,7 @@ def run_plan(
         paths = write_plan_outputs(compiled, out)
         driver = open_driver(compiled, driver_options)
         confirm(driver, yes, lambda: motion_summary(compiled, cycles), quiet)
-        with open_append(out / JOURNAL) as journal, driver, resumable(compiled, out):
+        with open_append(out / JOURNAL) as journal, driver, resumable(_resume(compiled, out)):
             plan, kind = str(compiled.loaded.plan.file), type(driver).__name__
             run = run_identity(compiled)
             append(journal, Entry.START, plan=plan, driver=kind, run=run, cycles=cycles)
@@ -98,7 +98,7 @@ def resume_run(
             start, cycle = 0, cycle + 1
         nxt = compiled.program.segments[start].segment.label
         drop_torn_tail(journal_path)
-        with open_append(journal_path) as journal, driver, resumable(compiled, run_dir):
+        with open_append(journal_path) as journal, driver, resumable(_resume(compiled, run_dir)):
             if cycle != progress.cycle:
                 append(journal, Entry.CYCLE, cycle=cycle, of=progress.cycles)
                 progress = replace(progress, labels=(), measured={}, cycle=cycle)
@@ -155,6 +155,12 @@ def _drive(
     finally:
         shown.close()
     append(journal, Entry.END, duration=compiled.program.duration * (last - first + 1))
+
+
+def _resume(compiled: Compiled, run_dir: Path) -> str:
+    """The command that goes on with the run in ``run_dir``."""
+    factor = compiled.context.speed.factor
+    return resume_command(compiled.loaded, compiled.strategy, factor, run_dir)
 
 
 def _resumable(compiled: Compiled, progress: Progress, run_dir: Path) -> Compiled:
