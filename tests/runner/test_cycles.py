@@ -14,7 +14,7 @@ from cellengine.errors import InputError
 from cellengine.journal import read_progress
 from cellengine.pipeline import Compiled
 from cellengine.program import Program
-from cellengine.runner import DriverOptions, run_plan
+from cellengine.runner import DriverOptions, resume_run, run_plan
 from cellengine.runner.cycles import check_cycles
 
 
@@ -59,3 +59,27 @@ def test_a_plan_that_ends_elsewhere_is_refused_before_anything_moves(
     )
     assert not (tmp_path / "run").exists()
     run_plan(short, tmp_path / "once", DriverOptions(), yes=False, quiet=True)  # once is fine
+
+
+@pytest.mark.parametrize("kept", ["into the second cycle", "the first cycle only"])
+def test_a_killed_run_of_cycles_is_resumed_in_its_cycle(
+    cycling: Compiled, tmp_path: Path, kept: str
+) -> None:
+    """The journal of a run killed in its second cycle (or between the two) goes on from the
+    first segment that cycle did not finish, and ends after the last cycle."""
+    run_dir = tmp_path / "run"
+    run_plan(cycling, run_dir, DriverOptions(), yes=False, quiet=True, cycles=2)
+    journal = run_dir / "journal.jsonl"
+    lines = journal.read_text().splitlines(keepends=True)
+    n = len(cycling.program.segments)
+    cut = 1 + 2 * n + (1 + 2 * 5 if kept == "into the second cycle" else 0)
+    journal.write_text("".join(lines[:cut]))
+    resume_run(run_dir, lambda: cycling, DriverOptions(), yes=False, quiet=True)
+    entries = [json.loads(line) for line in journal.read_text().splitlines()[cut:]]
+    finished = [e["segment"] for e in entries if e["entry"] == "finished"]
+    assert finished == list(range(5 if kept == "into the second cycle" else 0, n))
+    kinds = [e["entry"] for e in entries if e["entry"] not in ("sent", "finished")]
+    first = ["resume"] if kept == "into the second cycle" else ["cycle", "resume"]
+    assert kinds == [*first, "end"]
+    progress = read_progress(journal)
+    assert (progress.ended, progress.cycle, progress.done) == (True, 2, n)
