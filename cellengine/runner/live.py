@@ -101,6 +101,8 @@ class Bar:
             TextColumn("{task.description}", table_column=Column(no_wrap=False, ratio=1)),
             console=Console(file=stream),
             auto_refresh=False,  # no thread beside the servo loop: redrawn between segments
+            redirect_stdout=False,  # standard output may be a pipe: it stays one
+            redirect_stderr=False,
         )
         total = compiled.program.duration or 1.0
         self.task = self.progress.add_task("", total=total, when="")

@@ -126,34 +126,26 @@ def _drive(
     to the journal's end."""
     start, measured = (0, None) if progress is None else (progress.done, progress.measured)
     first, last = cycles
-    shown = live(compiled, quiet)
 
     def go_on() -> None:
-        for cycle in range(first, last + 1):
-            if cycle > first:  # the plan ends where it starts (check_cycles)
-                append(journal, Entry.CYCLE, cycle=cycle, of=last)
-            shown.cycle(cycle, last)
-            begin = start if cycle == first else 0
-            play(
-                compiled,
-                driver,
-                journal,
-                quiet,
-                out,
-                begin,
-                measured if cycle == first else None,
-                shown,
-            )
+        shown = live(compiled, quiet)  # drawn while the program plays
+        try:
+            for cycle in range(first, last + 1):
+                if cycle > first:  # the plan ends where it starts (check_cycles)
+                    append(journal, Entry.CYCLE, cycle=cycle, of=last)
+                shown.cycle(cycle, last)
+                begin = start if cycle == first else 0
+                again = measured if cycle == first else None
+                play(compiled, driver, journal, quiet, out, begin, again, shown)
+        finally:
+            shown.close()  # before anything else is printed
 
-    try:
-        with timed(journal, driver, out, quiet):
-            driver.configure()
-            driver.activate()
-            move_to(compiled, driver, journal, start, left)
-            journaled(journal, driver, go_on)
-            driver.deactivate()
-    finally:
-        shown.close()
+    with timed(journal, driver, out, quiet):
+        driver.configure()
+        driver.activate()
+        move_to(compiled, driver, journal, start, left)
+        journaled(journal, driver, go_on)
+        driver.deactivate()
     append(journal, Entry.END, duration=compiled.program.duration * (last - first + 1))
 
 

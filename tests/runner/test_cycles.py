@@ -13,7 +13,7 @@ import pytest
 from cellengine.errors import InputError
 from cellengine.journal import read_progress
 from cellengine.pipeline import Compiled
-from cellengine.program import Program
+from cellengine.program import GripperEvent, Program, TimedEvent
 from cellengine.runner import DriverOptions, resume_run, run_plan
 from cellengine.runner.cycles import check_cycles
 
@@ -83,3 +83,15 @@ def test_a_killed_run_of_cycles_is_resumed_in_its_cycle(
     assert kinds == [*first, "end"]
     progress = read_progress(journal)
     assert (progress.ended, progress.cycle, progress.done) == (True, 2, n)
+
+
+def test_a_plan_that_ends_holding_something_is_refused(cycling: Compiled) -> None:
+    program = cycling.program
+    grasp = TimedEvent(program.duration, GripperEvent("left", "grasp", "cable1"))
+    holding = Program(program.joint_names, program.segments, (*program.events, grasp))
+    with pytest.raises(InputError) as e:
+        check_cycles(replace(cycling, program=holding), 2)
+    assert str(e.value) == (
+        f"{cycling.loaded.plan.file}: --cycles 2: the plan ends with the left gripper holding "
+        "'cable1': a cycle must end with nothing held"
+    )
