@@ -333,7 +333,7 @@ def _progress(entries: list[dict[str, Any]]) -> Progress:
             cycle, cycles = 1, int(e.get("cycles", 1))
         if kind == Entry.CYCLE:  # the program again from its start, where the arms are
             labels, measured, fault = [], {}, None
-            cycle = int(e["cycle"])
+            cycle, cycles = int(e["cycle"]), int(e["of"])
         if kind == Entry.FINISHED:
             if int(e["segment"]) != len(labels):
                 labels = labels[: int(e["segment"])]  # a replanned or resumed run goes on
