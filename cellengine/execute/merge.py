@@ -87,7 +87,9 @@ def merge_rows(
         arm: timed(r, cell.timing_limits(arm), cell.arms[arm].joint_names, tcp_limit(cell, (arm,)))
         for arm, r in moving.items()
     }
-    bound = max(fastest(r, cell.timing_limits(arm)) for arm, r in moving.items())
+    bound = max(
+        fastest(r, cell.timing_limits(arm), tcp_limit(cell, (arm,))) for arm, r in moving.items()
+    )
     bound_jerk = max(t.duration for t in alone.values())
     built = {
         "published": published(cell, q, alone, moving),

@@ -96,15 +96,16 @@ def timed(
     )
 
 
-def fastest(rows: Vec, limits: Limits) -> float:
+def fastest(rows: Vec, limits: Limits, tcp: TcpSpeedLimit | None = None) -> float:
     """The time-optimal duration along the spline through ``rows``: the TOPP-RA profile
-    itself (velocity and acceleration limits, accelerations bang-bang), the lower bound of
+    itself (velocity and acceleration limits, the TCPs within ``tcp`` when given,
+    accelerations bang-bang), the lower bound of
     any timing of the path. (timing.time_optimal makes that profile playable, C2 and checked
     between samples, which costs ten times more and a few per cent of duration.)"""
     R = thinned(rows)
     if len(R) < 2:
         return 0.0
-    return _in_range(lambda W: speed_profile(W, limits).duration, R, rows)
+    return _in_range(lambda W: speed_profile(W, limits, tcp=tcp).duration, R, rows)
 
 
 def _in_range(time: Callable[[Vec], T], R: Vec, rows: Vec) -> T:

@@ -38,6 +38,7 @@ from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.ik import arm_ik
 from cellengine.motion.margins import keeping_clearance
 from cellengine.motion.robot import CellModel
+from cellengine.motion.speed import tcp_limit
 from cellengine.motion.topp import SplinePath
 from cellengine.motion.transit import CellChecker, plan_for_arms
 
@@ -199,7 +200,10 @@ def _quickest(
         if rows is None:
             reason = "the timing spline through the planned path leaves its clearance"
             continue
-        duration = max(fastest(rows[:, cell.slices[a]], cell.timing_limits(a)) for a in arms)
+        duration = max(
+            fastest(rows[:, cell.slices[a]], cell.timing_limits(a), tcp_limit(cell, (a,)))
+            for a in arms
+        )
         if best is None or duration < best[0]:
             best = (duration, rows)
     return (None, reason) if best is None else (best[1], "")
