@@ -14,11 +14,12 @@ import numpy as np
 from cellengine.arrays import Vec
 from cellengine.info.speed import SpeedScaling, scaling
 from cellengine.motion.timing import TcpSpeedLimit
+from cellengine.motion.ur_ik import URKinematics
 
 if TYPE_CHECKING:
     from cellengine.info.cell import Cell
     from cellengine.info.plan import Plan
-    from cellengine.motion.robot import CellModel
+    from cellengine.motion.robot import Arm, CellModel
     from cellengine.motion.trajectory import Trajectory
 
 
@@ -66,14 +67,22 @@ def tcp_limit(cell: CellModel, arms: tuple[str, ...] | None = None) -> TcpSpeedL
 
     def position(Q: Vec) -> Vec:
         rows = np.asarray(Q, dtype=float)
-        out = np.empty((len(rows), len(names), 3))
-        for i, q in enumerate(rows):
-            for k, name in enumerate(names):
-                arm = cell.arms[name]
-                out[i, k] = arm.fk(q if one else q[cell.slices[name]])[:3, 3]
-        return out
+        tcps = [tcp_points(cell.arms[n], rows if one else rows[:, cell.slices[n]]) for n in names]
+        return np.stack(tcps, axis=1)
 
     return TcpSpeedLimit(cell.speed.tcp, position)
+
+
+def tcp_points(arm: Arm, Q: Vec) -> Vec:
+    """The arm's TCP positions (M, 3) in the cell frame at its configurations ``Q`` (M, n):
+    a built-in UR's from its DH table all at once (the timing asks for thousands), any
+    other's one by one."""
+    if arm.dh is None:
+        return np.array([arm.fk(q)[:3, 3] for q in Q])
+    T = URKinematics.from_dh(arm.dh).fk_batch(Q)  # T_base_flange
+    tcp = T @ arm.T_flange_tcp[:, 3]
+    out: Vec = (tcp @ arm.T_cell_base.T)[:, :3]
+    return out
 
 
 def tcp_speeds(cell: CellModel, traj: Trajectory, dt: float = 0.002) -> dict[str, Vec]:

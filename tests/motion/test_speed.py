@@ -11,7 +11,7 @@ from cellengine.info.cell import Cell
 from cellengine.info.plan import Plan
 from cellengine.info.speed import SpeedScaling
 from cellengine.motion.gate import check_cell_trajectory
-from cellengine.motion.speed import Speed, resolve, tcp_speeds
+from cellengine.motion.speed import Speed, resolve, tcp_points, tcp_speeds
 from cellengine.motion.trajectory import Trajectory
 from tests.execute.scenes import cable_cell, home, reference_segments
 
@@ -79,3 +79,11 @@ def test_a_plan_s_speed_replaces_the_cell_s_and_the_lower_tcp_cap_holds() -> Non
     assert resolve(cell, plan) == Speed(0.8, 1.0, 0.2)  # a plan cannot raise the cell's cap
     assert resolve(cell, _plan(tcp=0.1), 0.5) == Speed(0.25, 0.25, 0.05, 0.5)
     assert resolve(Cell.model_validate(CELL)) == Speed(1.0, 1.0, None)
+
+
+def test_tcp_points_of_a_built_in_arm_all_at_once_are_its_forward_kinematics() -> None:
+    _, cell, _ = cable_cell()
+    arm = cell.arms["right"]
+    Q = np.random.default_rng(0).uniform(-3.0, 3.0, (50, 6))
+    one_by_one = np.array([arm.fk(q)[:3, 3] for q in Q])
+    assert np.abs(tcp_points(arm, Q) - one_by_one).max() < 1e-9
