@@ -21,6 +21,7 @@ from cellengine.motion.ik import ArmIK, arm_ik
 from cellengine.motion.probe import ToolProbe
 from cellengine.motion.robot import CellModel, build_cell_model, home_configuration
 from cellengine.motion.scene import CollisionScene, build_scene
+from cellengine.motion.speed import Speed, resolve
 from cellengine.world import World
 
 
@@ -53,10 +54,19 @@ class PlanningContext:
         """The same cell with other measured masses (a replan after a weighing)."""
         return replace(self, masses=MappingProxyType(dict(masses)))
 
+    @property
+    def speed(self) -> Speed:
+        """How fast trajectories are timed (the cell model's)."""
+        return self.cell.speed
+
+    def with_speed(self, speed: Speed) -> PlanningContext:
+        """The same cell timed at ``speed`` (a plan's own, the command line's)."""
+        return self if speed == self.speed else replace(self, cell=self.cell.with_speed(speed))
+
 
 def build_context(world: World, masses: Mapping[str, float] | None = None) -> PlanningContext:
     """Build the robots, the scene, its checker and the IK of every arm of ``world``."""
-    cell = build_cell_model(world)
+    cell = build_cell_model(world).with_speed(resolve(world.cell))
     scene = build_scene(cell, world)
     return PlanningContext(
         world,

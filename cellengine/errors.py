@@ -62,7 +62,11 @@ class Problem:
     col: int | None = None
 
     def location(self) -> str:
-        parts = [display_path(self.file) if self.file else "<input>"]
+        """``file:line:col`` as far as known; empty for a problem of no file (a refusal,
+        a driver's fault), which is then printed as its message alone."""
+        if not self.file:
+            return ""
+        parts = [display_path(self.file)]
         if self.line is not None:
             parts.append(str(self.line))
             if self.col is not None:
@@ -71,11 +75,15 @@ class Problem:
 
     def __str__(self) -> str:
         """The problem on one line, as printed: names from files are escaped there."""
-        return printable(f"{self.location()}: {self.message}")
+        where = self.location()
+        return printable(f"{where}: {self.message}" if where else self.message)
 
     def warning(self) -> str:
         """As :meth:`__str__`, for what the files allow but a user should know."""
-        return printable(f"{self.location()}: warning: {self.message}")
+        where = self.location()
+        return printable(
+            f"{where}: warning: {self.message}" if where else f"warning: {self.message}"
+        )
 
 
 class CellError(Exception):

@@ -6,7 +6,8 @@ The journal is append-only, one JSON object per line, on disk at each entry (:cl
 :mod:`cellengine.runner.identity`; a new run into the folder starts afresh) or ``resume``,
 ``recovery`` (a move to where a segment starts), then per segment
 ``sent`` and ``finished`` (with the arms' q and grippers after it), ``measured`` (a load
-cell), ``replanned``, ``fault`` (what stopped the run), ``timing`` (the servo loop's), ``end``.
+cell), ``replanned``, ``cycle`` (``run --cycles N``: the program begins again; the start
+says how many cycles), ``fault`` (what stopped the run), ``timing`` (the servo loop's), ``end``.
 A run killed at any moment leaves whole lines and at most one torn last line, which is
 ignored; any other line that is not a JSON object is an error at its line. So is every value
 ``--resume`` would act on that is not what the runner writes (a journal can be edited or
@@ -41,6 +42,7 @@ class Entry(StrEnum):
     FINISHED = "finished"
     MEASURED = "measured"
     REPLANNED = "replanned"
+    CYCLE = "cycle"
     FAULT = "fault"
     TIMING = "timing"
     END = "end"
@@ -68,6 +70,8 @@ class Progress:
     fault: dict[str, Any] | None = None
     run: dict[str, Any] | None = None  # the run's identity, from its ``start`` entry
     started: bool = False  # the journal has a ``start``: progress is of its last run
+    cycle: int = 1  # the cycle ``labels`` are of (run --cycles)
+    cycles: int = 1  # the cycles the run was started for
 
     @property
     def done(self) -> int:
@@ -127,7 +131,7 @@ def read_progress(path: Path) -> Progress:
 def _in_order(entry: dict[str, Any], done: int) -> int:
     """How many segments are finished after ``entry``: a segment finishes after every one
     before it (a replanned or resumed run may finish one again, never skip one)."""
-    if entry["entry"] == Entry.START:
+    if entry["entry"] in (Entry.START, Entry.CYCLE):
         return 0
     if entry["entry"] != Entry.FINISHED:
         return done
@@ -173,6 +177,7 @@ def _entry(line: bytes) -> dict[str, Any]:
 
 _KINDS = {str(k) for k in Entry}
 MAX_JOINT = 100.0  # rad (m for a prismatic joint): no arm turns a joint 16 times
+MAX_CYCLES = 1_000_000  # run --cycles
 
 
 def _field(entry: dict[str, Any], name: str) -> Any:
@@ -275,8 +280,22 @@ def _fault(entry: dict[str, Any]) -> None:
                 _text(g[key], f"{name}.{key}")
 
 
+def _count(value: Any, name: str) -> int:
+    if not isinstance(value, int) or isinstance(value, bool) or not 1 <= value <= MAX_CYCLES:
+        raise _Bad(f"'{name}' must be a count of cycles (1 to {MAX_CYCLES}), got {_shown(value)}")
+    return value
+
+
+def _cycle(entry: dict[str, Any]) -> None:
+    cycle, of = _count(_field(entry, "cycle"), "cycle"), _count(_field(entry, "of"), "of")
+    if cycle > of:
+        raise _Bad(f"cycle {cycle} of {of}")
+
+
 def _start(entry: dict[str, Any]) -> None:
     """The run's identity, if any (an older journal has none: resume refuses that itself)."""
+    if "cycles" in entry:
+        _count(entry["cycles"], "cycles")
     run = entry.get("run")
     if run is not None and not (
         isinstance(run, dict) and all(isinstance(v, str) for v in run.values())
@@ -293,6 +312,7 @@ _CHECKS: dict[str, Callable[[dict[str, Any]], None]] = {
     Entry.FINISHED: _finished,
     Entry.MEASURED: _measured,
     Entry.FAULT: _fault,
+    Entry.CYCLE: _cycle,
 }
 
 
@@ -304,11 +324,16 @@ def _progress(entries: list[dict[str, Any]]) -> Progress:
     ended, fault = False, None
     run: dict[str, Any] | None = None
     started = False
+    cycle, cycles = 1, 1
     for e in entries:
         kind = e["entry"]
         if kind == Entry.START:  # a new run into the folder: progress is of it alone
             labels, q, grippers, measured, fault = [], None, {}, {}, None
             run, started = e.get("run"), True
+            cycle, cycles = 1, int(e.get("cycles", 1))
+        if kind == Entry.CYCLE:  # the program again from its start, where the arms are
+            labels, measured, fault = [], {}, None
+            cycle, cycles = int(e["cycle"]), int(e["of"])
         if kind == Entry.FINISHED:
             if int(e["segment"]) != len(labels):
                 labels = labels[: int(e["segment"])]  # a replanned or resumed run goes on
@@ -324,4 +349,4 @@ def _progress(entries: list[dict[str, Any]]) -> Progress:
             fault = dict(e.get("fault") or {})
         elif kind == Entry.START:
             ended = False
-    return Progress(tuple(labels), q, grippers, measured, ended, fault, run, started)
+    return Progress(tuple(labels), q, grippers, measured, ended, fault, run, started, cycle, cycles)

@@ -19,10 +19,12 @@ from cellengine.context import PlanningContext, build_context
 from cellengine.errors import InputError, Problem, StepError
 from cellengine.execute.candidates import compile_candidates
 from cellengine.execute.compile import Compiler
+from cellengine.execute.home import return_home
 from cellengine.family import SkillFamily, families, skill_name
 from cellengine.info.load import LoadedPlan, load_plan
 from cellengine.info.plan import Plan
 from cellengine.motion.robot import CellModel
+from cellengine.motion.speed import resolve, speed_json
 from cellengine.program import Program, Segment
 from cellengine.skill import Skill
 from cellengine.world import World
@@ -83,10 +85,12 @@ def compile_plan(
     merge: str = "joint",
     progress: Progress | None = None,
     cell: Path | None = None,
+    speed: float = 1.0,
 ) -> Compiled:
     """Load, check and compile ``path`` (in ``cell`` instead of the plan's cell when
-    given); InputError (in plan terms) when it cannot run."""
-    return compile_loaded(load_plan(path, cell=cell), strategy, merge, progress)
+    given; ``speed``: the command line's factor on the files' speeds); InputError (in plan
+    terms) when it cannot run."""
+    return compile_loaded(load_plan(path, cell=cell), strategy, merge, progress, speed=speed)
 
 
 def compile_loaded(
@@ -96,12 +100,16 @@ def compile_loaded(
     progress: Progress | None = None,
     context: PlanningContext | None = None,
     masses: Mapping[str, float] | None = None,
+    speed: float | None = None,
 ) -> Compiled:
     """Compile a loaded plan. ``context``: one already built for this plan's world (a
     caller compiling several plans of one cell builds it once); ``masses``: measured masses
-    (kg) for runtime choices (else objects.yaml's)."""
+    (kg) for runtime choices (else objects.yaml's); ``speed``: the command line's factor on
+    the files' speeds (default: the context's, else none)."""
     plan = loaded.plan
     ctx = context if context is not None else build_context(loaded.world)
+    factor = ctx.speed.factor if speed is None else speed
+    ctx = ctx.with_speed(resolve(loaded.world.cell, plan, factor))
     if masses is not None:
         ctx = ctx.with_masses(masses)
     chosen = strategy or plan.execution
@@ -124,6 +132,8 @@ def compile_loaded(
     def search() -> Compiled:
         family = family_of(plan.steps)
         taken = compile_candidates(compiler, family.plan(ctx, plan.steps), before_each)
+        if plan.return_home:
+            return_home(compiler, ctx.home, len(plan.steps) - 1)
         program = compiler.program()
         report: dict[str, Any] = {}
         for candidate in taken:
@@ -228,6 +238,7 @@ def write_plan_outputs(compiled: Compiled, out: Path) -> dict[str, Path]:
         "execution": compiled.strategy,
         "duration": compiled.program.duration,
         "clearance_m": compiled.context.clearance,
+        "speed": speed_json(compiled.context.speed),
     }
     extra.update(compiled.report)
     labels = {i: step_label(step) for i, step in enumerate(plan.steps)}

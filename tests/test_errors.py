@@ -14,3 +14,11 @@ def test_a_problem_prints_on_one_line() -> None:
     assert str(p) == "f\\x1b.yaml:3:1: unknown key 'a\\n::error::x'"
     assert p.message == "unknown key 'a\n::error::x'"  # the data stays as read
     assert str(InputError([p, p])).splitlines() == [str(p), str(p)]
+
+
+def test_a_problem_of_no_file_is_its_message_alone() -> None:
+    """A refusal or a driver's hint is about no file: no stray '<input>:' before it."""
+    p = Problem("not confirmed: nothing moved")
+    assert (p.location(), str(p)) == ("", "not confirmed: nothing moved")
+    assert p.warning() == "warning: not confirmed: nothing moved"
+    assert str(Problem("bad", "cell.yaml")) == "cell.yaml: bad"

@@ -159,8 +159,8 @@ def test_deep_nesting(tmp_path: Path) -> None:
 
 def test_unknown_entry(tmp_path: Path) -> None:
     assert error(tmp_path, START, {"entry": ["finished"]}) == (
-        'journal.jsonl:2: unknown journal entry ["finished"]; known: end, fault, finished, '
-        "measured, recovery, replanned, resume, sent, start, timing"
+        'journal.jsonl:2: unknown journal entry ["finished"]; known: cycle, end, fault, '
+        "finished, measured, recovery, replanned, resume, sent, start, timing"
     )
 
 
@@ -182,4 +182,18 @@ def test_a_segment_finished_out_of_order_is_refused(tmp_path: Path) -> None:
     )
     assert error(tmp_path, START, {**FINISHED, "segment": 2}) == (
         "journal.jsonl:2: segment 2 finished before segment 0"
+    )
+
+
+def test_cycles_are_counts_and_a_cycle_starts_the_segments_again(tmp_path: Path) -> None:
+    cycle = {"entry": "cycle", "cycle": 2, "of": 3}
+    progress = read_progress(_write(tmp_path, {**START, "cycles": 3}, FINISHED, cycle))
+    assert (progress.cycle, progress.cycles, progress.done) == (2, 3, 0)
+    assert progress.q == tuple(FINISHED["q"])  # where the arms are when the cycle begins
+    assert error(tmp_path, START, {**cycle, "cycle": 4}) == "journal.jsonl:2: cycle 4 of 3"
+    assert error(tmp_path, {**START, "cycles": 0}) == (
+        "journal.jsonl:1: 'cycles' must be a count of cycles (1 to 1000000), got 0"
+    )
+    assert error(tmp_path, START, {**cycle, "of": True}) == (
+        "journal.jsonl:2: 'of' must be a count of cycles (1 to 1000000), got true"
     )

@@ -37,6 +37,25 @@ def add_common(p: argparse.ArgumentParser) -> None:
         "--cell", type=Path, metavar="CELL", help="run the plan in this cell file instead"
     )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+    p.add_argument(
+        "--speed",
+        type=_fraction,
+        default=1.0,
+        metavar="FRACTION",
+        help="slow every motion to this fraction (0 < FRACTION <= 1) of the files' speeds "
+        "(velocity, acceleration and TCP speed cap), e.g. 0.25 for a first run",
+    )
+
+
+def _fraction(text: str) -> float:
+    """``--speed``'s value: a number in (0, 1] (argparse makes anything else exit 2)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: '{text}'") from None
+    if not 0.0 < value <= 1.0:  # also refuses nan
+        raise argparse.ArgumentTypeError(f"must be more than 0 and at most 1, got {text}")
+    return value
 
 
 def compile_from_args(args: argparse.Namespace) -> Compiled:
@@ -48,7 +67,9 @@ def compile_from_args(args: argparse.Namespace) -> Compiled:
     if args.cell is not None and not os.path.lexists(args.cell):
         raise UsageError.at("no such cell file", args.cell)
     progress = None if args.quiet else _progress()
-    compiled = compile_plan(args.plan, args.execution, progress=progress, cell=args.cell)
+    compiled = compile_plan(
+        args.plan, args.execution, progress=progress, cell=args.cell, speed=args.speed
+    )
     for w in compiled.world.warnings:
         print(w.warning(), file=sys.stderr)
     return compiled

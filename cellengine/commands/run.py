@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from cellengine.commands.plan import add_common, compile_from_args
-from cellengine.errors import EXIT_OK, known
+from cellengine.errors import EXIT_OK, UsageError, known
 
 # The drivers' names (cellengine/drivers/registry.py DRIVERS, which a test keeps equal): here so
 # that `--driver foo` is a usage error before anything compiles, without importing the drivers
@@ -39,6 +39,13 @@ def add_parser(sub: Any, name: str) -> None:
         metavar="RUN_DIR",
         help="go on with the run in RUN_DIR from the last segment it finished",
     )
+    p.add_argument(
+        "--cycles",
+        type=_count,
+        default=1,
+        metavar="N",
+        help="play the plan N times in a row (it must end where it starts: return_home: true)",
+    )
     p.set_defaults(run=run)
 
 
@@ -49,13 +56,24 @@ def driver_kind(value: str) -> str:
     return value
 
 
+def _count(text: str) -> int:
+    """``--cycles``' value: a whole number from 1 (argparse makes anything else exit 2)."""
+    from cellengine.journal import MAX_CYCLES
+
+    if not text.isdigit() or not 1 <= int(text) <= MAX_CYCLES:
+        raise argparse.ArgumentTypeError(f"must be a whole number from 1 to {MAX_CYCLES}")
+    return int(text)
+
+
 def run(args: argparse.Namespace) -> int:
     # the runner brings the motion stack and drivers: imported when the command runs
     from cellengine.runner import DriverOptions, resume_run, run_plan
 
     options = DriverOptions(kind=args.driver, realtime=args.realtime)
+    if args.resume is not None and args.cycles != 1:
+        raise UsageError.at("--cycles with --resume: a resumed run goes on with its own", None)
     if args.resume is not None:  # compiled only if the run has something left to do
         resume_run(args.resume, lambda: compile_from_args(args), options, args.yes, args.quiet)
     else:
-        run_plan(compile_from_args(args), args.out, options, args.yes, args.quiet)
+        run_plan(compile_from_args(args), args.out, options, args.yes, args.quiet, args.cycles)
     return EXIT_OK

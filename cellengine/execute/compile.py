@@ -198,6 +198,35 @@ class Compiler:
             self.transit_clearance,
             ahead,
         )
+        return self._assembled(segment, parts, t0, transit_choice=choice, started=started)
+
+    def add_parts(self, segment: Segment, parts: Sequence[Part]) -> CompiledSegment:
+        """Add a segment whose joint rows are solved already (a return home planned in
+        joint space): timed, merged and gated as any other; InputError if it cannot run."""
+        mark = self.mark()
+        try:
+            started = time.perf_counter()
+            self._events(segment.before, self.t, self.q)
+            self.holding.touch(segment.contacts)
+            compiled = self._assembled(segment, parts, self.t, transit_choice=0, started=started)
+        except Refused as e:
+            self.restore(mark)
+            raise in_plan_terms(segment, e) from None
+        self.segments.append(compiled)
+        self.q = np.array(compiled.trajectory.q[-1])
+        self.t = compiled.trajectory.end_time
+        return compiled
+
+    def _assembled(
+        self,
+        segment: Segment,
+        parts: Sequence[Part],
+        t0: float,
+        transit_choice: int,
+        started: float,
+    ) -> CompiledSegment:
+        """The segment's solved ``parts`` timed, merged and through the gate from ``t0`` (its
+        ``before`` events done), with its ``after`` events, as a compiled segment."""
         merge = self._merge_for(segment)
         near = self._near(segment)
         pieces: list[Trajectory] = []
@@ -216,9 +245,9 @@ class Compiler:
         self._events(segment.after, trajectory.end_time, np.asarray(trajectory.q[-1]))
         self.holding.touch(())
         summary = _report(
-            segment, self.strategy, _merge_name(parts, merge, self.strategy), figures, kept
+            segment, self.strategy, _merge_name(list(parts), merge, self.strategy), figures, kept
         )
-        summary["transit_choice"] = choice
+        summary["transit_choice"] = transit_choice
         summary["planning_time_s"] = time.perf_counter() - started
         summary["start_s"] = t0
         summary["duration_s"] = trajectory.end_time - t0

@@ -45,7 +45,9 @@ import numpy as np
 
 from cellengine.arrays import Vec
 from cellengine.execute.retime import fastest, jerk_limits, moves, still, thinned, timed
+from cellengine.motion.jerk import TCP_MARGIN
 from cellengine.motion.robot import CellModel
+from cellengine.motion.speed import tcp_limit, tcp_speeds
 from cellengine.motion.topp import SplinePath
 from cellengine.motion.trajectory import Trajectory
 
@@ -82,10 +84,12 @@ def merge_rows(
     if not moving:
         return Merged(still(q, cell.joint_names), {}, {m: 0.0 for m in MERGES}, 0.0, 0.0)
     alone = {
-        arm: timed(r, cell.arms[arm].limits, cell.arms[arm].joint_names)
+        arm: timed(r, cell.timing_limits(arm), cell.arms[arm].joint_names, tcp_limit(cell, (arm,)))
         for arm, r in moving.items()
     }
-    bound = max(fastest(r, cell.arms[arm].limits) for arm, r in moving.items())
+    bound = max(
+        fastest(r, cell.timing_limits(arm), tcp_limit(cell, (arm,))) for arm, r in moving.items()
+    )
     bound_jerk = max(t.duration for t in alone.values())
     built = {
         "published": published(cell, q, alone, moving),
@@ -115,7 +119,7 @@ def joint(
     following = None if pairing is None else follow(cell, q, alone[lead], lead, pairing)
     if following is not None and following.duration <= alone[lead].duration * (1 + 1e-9):
         return following  # the slower arm's own timing, unslowed: nothing does better
-    together = timed(coupled, cell.limits, cell.joint_names)
+    together = timed(coupled, cell.timing_limits(), cell.joint_names, tcp_limit(cell))
     if following is None or together.duration <= following.duration:
         return together
     return following
@@ -217,18 +221,22 @@ def _progress(traj: Trajectory) -> tuple[Vec, Vec, Vec]:
 
 
 def within_limits(traj: Trajectory, cell: CellModel) -> Trajectory:
-    """``traj`` slowed uniformly (velocity scales as 1/k, acceleration 1/k^2, jerk 1/k^3)
-    until the bounds of Trajectory.peaks are within the cell's limits."""
+    """``traj`` slowed uniformly (velocity and TCP speed scale as 1/k, acceleration 1/k^2,
+    jerk 1/k^3) until the bounds of Trajectory.peaks are within the cell's timing limits
+    and its TCPs within the cell's TCP speed cap."""
     if len(traj) < 2:
         return traj
     peaks = traj.peaks()
-    lim = cell.limits
+    lim = cell.timing_limits()
     k = max(
         1.0,
         float(np.max(peaks.velocity / lim.velocity)),
         float(np.max(peaks.acceleration / lim.acceleration)) ** 0.5,
         float(np.max(peaks.jerk / jerk_limits(lim))) ** (1.0 / 3.0),
     )
+    if cell.speed.tcp is not None:
+        fastest_tcp = max(float(v.max()) for v in tcp_speeds(cell, traj).values())
+        k = max(k, fastest_tcp / (cell.speed.tcp * TCP_MARGIN))
     return traj if k <= 1.0 else traj.time_scaled(k * (1.0 + 1e-9))
 
 

@@ -19,6 +19,7 @@ from cellengine.execute.retime import timed
 from cellengine.motion.gate import check_cell_trajectory
 from cellengine.motion.robot import CellModel
 from cellengine.motion.scene import CollisionScene
+from cellengine.motion.speed import tcp_limit
 from cellengine.motion.transit import plan_for_arms
 from cellengine.program import CompiledSegment, Segment
 from cellengine.world import World
@@ -50,7 +51,7 @@ def recovery_segment(
     result = plan_for_arms(cell, holding.checker, off, q_now, q_target[None, :])
     if result.path is None:
         raise DriverRefused("recovery", f"no safe move back for {', '.join(off)}: {result.reason}")
-    traj = timed(result.path, cell.limits, cell.joint_names)
+    traj = timed(result.path, cell.timing_limits(), cell.joint_names, tcp_limit(cell))
     gate = check_cell_trajectory(traj, cell, holding.checker)
     if not gate.ok:
         raise DriverRefused("recovery", f"the move back fails the gate: {gate.violations[0]}")

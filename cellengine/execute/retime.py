@@ -20,7 +20,12 @@ import numpy as np
 from cellengine.arrays import Vec
 from cellengine.execute.refused import Refused
 from cellengine.motion.robot import Limits
-from cellengine.motion.timing import PathOutOfRange, speed_profile, time_parameterize
+from cellengine.motion.timing import (
+    PathOutOfRange,
+    TcpSpeedLimit,
+    speed_profile,
+    time_parameterize,
+)
 from cellengine.motion.trajectory import Trajectory
 
 JERK_PER_ACCELERATION = 50.0  # 1/s: jerk limit = 50 x acceleration limit, per joint
@@ -74,28 +79,33 @@ def moves(rows: Vec) -> bool:
     return len(distinct(rows)) >= 2
 
 
-def timed(rows: Vec, limits: Limits, names: Sequence[str]) -> Trajectory:
-    """The jerk-limited trajectory through ``rows`` (rest to rest); one point when they do
-    not move."""
+def timed(
+    rows: Vec, limits: Limits, names: Sequence[str], tcp: TcpSpeedLimit | None = None
+) -> Trajectory:
+    """The jerk-limited trajectory through ``rows`` (rest to rest), its TCPs within ``tcp``
+    when given; one point when they do not move."""
     R = thinned(rows)
     if len(R) < 2:
         return still(R[0], names)
     return _in_range(
-        lambda W: time_parameterize(W, limits, jerk=jerk_limits(limits), joint_names=tuple(names)),
+        lambda W: time_parameterize(
+            W, limits, jerk=jerk_limits(limits), joint_names=tuple(names), tcp=tcp
+        ),
         R,
         rows,
     )
 
 
-def fastest(rows: Vec, limits: Limits) -> float:
+def fastest(rows: Vec, limits: Limits, tcp: TcpSpeedLimit | None = None) -> float:
     """The time-optimal duration along the spline through ``rows``: the TOPP-RA profile
-    itself (velocity and acceleration limits, accelerations bang-bang), the lower bound of
+    itself (velocity and acceleration limits, the TCPs within ``tcp`` when given,
+    accelerations bang-bang), the lower bound of
     any timing of the path. (timing.time_optimal makes that profile playable, C2 and checked
     between samples, which costs ten times more and a few per cent of duration.)"""
     R = thinned(rows)
     if len(R) < 2:
         return 0.0
-    return _in_range(lambda W: speed_profile(W, limits).duration, R, rows)
+    return _in_range(lambda W: speed_profile(W, limits, tcp=tcp).duration, R, rows)
 
 
 def _in_range(time: Callable[[Vec], T], R: Vec, rows: Vec) -> T:

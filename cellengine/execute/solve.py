@@ -38,6 +38,7 @@ from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.ik import arm_ik
 from cellengine.motion.margins import keeping_clearance
 from cellengine.motion.robot import CellModel
+from cellengine.motion.speed import tcp_limit
 from cellengine.motion.topp import SplinePath
 from cellengine.motion.transit import CellChecker, plan_for_arms
 
@@ -140,6 +141,22 @@ def transit(
     raise Refused(f"no collision-free transit for {_names(arms)}: {reason}")
 
 
+def to_configuration(
+    cell: CellModel,
+    checker: CollisionChecker,
+    arms: Sequence[str],
+    q: Vec,
+    goal: Vec,
+    clearance: float | None = None,
+) -> Vec:
+    """Whole-cell rows from ``q`` to the configuration ``goal`` (``arms`` move, the others
+    stand), keeping ``clearance`` as a transit does; Refused when there is none."""
+    rows, reason = _reach(cell, checker, arms, q, [goal], clearance)
+    if rows is None:
+        raise Refused(f"no collision-free transit for {_names(arms)}: {reason}")
+    return rows
+
+
 def _reach(
     cell: CellModel,
     checker: CollisionChecker,
@@ -183,7 +200,10 @@ def _quickest(
         if rows is None:
             reason = "the timing spline through the planned path leaves its clearance"
             continue
-        duration = max(fastest(rows[:, cell.slices[a]], cell.arms[a].limits) for a in arms)
+        duration = max(
+            fastest(rows[:, cell.slices[a]], cell.timing_limits(a), tcp_limit(cell, (a,)))
+            for a in arms
+        )
         if best is None or duration < best[0]:
             best = (duration, rows)
     return (None, reason) if best is None else (best[1], "")

@@ -10,6 +10,7 @@ from pydantic import Field, StringConstraints, field_validator, model_validator
 
 from cellengine import geometry
 from cellengine.arrays import Mat
+from cellengine.info.speed import SpeedSpec
 from cellengine.info.units import Angle, Frozen, Length, Mass, Units, Vec3Angle, Vec3Length
 
 # Names become parts of dotted references (platform.element.keypoint): no dots, no spaces.
@@ -241,6 +242,11 @@ class Cell(Frozen):
     # every compiled segment keeps the arms this far apart, and from what they do not touch
     # on purpose (the gate refuses a segment passing closer); 0: measured and reported only
     clearance: Length = Field(DEFAULT_CLEARANCE, ge=0)
+    # fractions of the joints' velocity and acceleration limits the trajectories are timed
+    # with (one number: both); a plan's own replaces it
+    speed: SpeedSpec = 1.0
+    # the tools' (TCPs') speed cap, length unit per second; a plan's own may lower it
+    tcp_speed: Length | None = Field(None, gt=0)
 
     @field_validator("robots")
     @classmethod

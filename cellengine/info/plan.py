@@ -5,13 +5,14 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import Field
+from pydantic import Field, Strict
 
 from cellengine.errors import InputError, Problem, StepError, known
 from cellengine.family import families
-from cellengine.info.units import Frozen, Units
+from cellengine.info.speed import SpeedScaling, SpeedSpec, scaling
+from cellengine.info.units import Frozen, Length, Units
 from cellengine.info.validation import validate
 from cellengine.info.yamlio import YamlDoc
 from cellengine.skill import Skill
@@ -22,6 +23,12 @@ class PlanFile(Frozen):
     objects: str | None = None
     execution: Literal["split", "sync", "async"] = "split"
     units: Units = Units()
+    # the cell's speed, replaced for this plan; a lower TCP speed cap than the cell's
+    speed: SpeedSpec | None = None
+    tcp_speed: Length | None = Field(None, gt=0)
+    # after its last step, the arms go back to their homes: the plan ends where it starts
+    # (so that `run --cycles N` can repeat it)
+    return_home: Annotated[bool, Strict()] = False  # `yes` is a string in YAML 1.2
     steps: list[dict[str, Any]] = Field(min_length=1)
 
 
@@ -34,6 +41,9 @@ class Plan:
     steps: tuple[Skill, ...]
     # where each step begins in the file (line, column), kept from loading it
     positions: tuple[tuple[int, int] | None, ...] = ()
+    speed: SpeedScaling | None = None  # the plan's own speed, if it gives one
+    tcp_speed: float | None = None  # m/s
+    return_home: bool = False
 
     def locate(self, error: StepError) -> InputError:
         """``error`` at its step's place in the plan file (at the file's top when the step
@@ -45,8 +55,11 @@ class Plan:
 
 
 def parse_plan(doc: YamlDoc) -> Plan:
-    head = validate(PlanFile, doc)
-    context = head.units.context()
+    units = Units()  # first: the plan's own lengths (tcp_speed) are in its unit
+    if isinstance(doc.data, dict) and "units" in doc.data:
+        units = validate(Units, doc, data=doc.data["units"], prefix=("units",))
+    context = units.context()
+    head = validate(PlanFile, doc, context)
     problems: list[Problem] = []
     steps: list[Skill] = []
     skills = families().skills
@@ -74,7 +87,17 @@ def parse_plan(doc: YamlDoc) -> Plan:
     if problems:
         raise InputError(problems)
     positions = tuple(doc.where(("steps", i)) for i in range(len(steps)))
-    return Plan(doc.file, head.cell, head.objects, head.execution, tuple(steps), positions)
+    return Plan(
+        doc.file,
+        head.cell,
+        head.objects,
+        head.execution,
+        tuple(steps),
+        positions,
+        scaling(head.speed),
+        head.tcp_speed,
+        head.return_home,
+    )
 
 
 def _check_graph(doc: YamlDoc, steps: list[Skill]) -> list[Problem]:

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Literal
@@ -40,6 +40,7 @@ from cellengine.info.cell import Robot, Tool, UrdfModel
 from cellengine.info.files import resolve_inside
 from cellengine.info.units import Units
 from cellengine.info.yamlio import load_yaml
+from cellengine.motion.speed import Speed
 from cellengine.motion.tool import DEFAULT_FINGER_WIDTH as DEFAULT_FINGER_WIDTH
 from cellengine.motion.tool import TOOL_GEOMETRY as TOOL_GEOMETRY
 from cellengine.motion.tool import Fingers, Solid, fingers_of, tool_solids
@@ -169,6 +170,8 @@ class CellModel:
     slices: Mapping[str, slice]  # each arm's entries of the cell's q
     tool0: Mapping[str, int]  # each arm's flange frame id in `model`
     tcp: Mapping[str, int]  # each arm's TCP frame id in `model`
+    # how fast trajectories are timed (the plan's speed); ``limits`` stay the arms' own
+    speed: Speed = field(default_factory=Speed)
 
     @property
     def nq(self) -> int:
@@ -176,7 +179,21 @@ class CellModel:
 
     @property
     def limits(self) -> Limits:
+        """The arms' own limits: what the gate checks."""
         return Limits.concatenate([a.limits for a in self.arms.values()])
+
+    def timing_limits(self, arm: str | None = None) -> Limits:
+        """The limits trajectories are timed with, of ``arm`` (default: the whole cell):
+        velocity and acceleration scaled by ``speed``."""
+        own = self.limits if arm is None else self.arms[arm].limits
+        if self.speed.velocity == 1.0 and self.speed.acceleration == 1.0:
+            return own
+        v, a = own.velocity * self.speed.velocity, own.acceleration * self.speed.acceleration
+        return Limits(own.lower, own.upper, v, a)
+
+    def with_speed(self, speed: Speed) -> CellModel:
+        """The same arms timed at ``speed``."""
+        return replace(self, speed=speed)
 
     def split(self, q: ArrayLike) -> dict[str, Vec]:
         qa = np.asarray(q, dtype=float)

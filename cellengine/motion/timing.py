@@ -220,12 +220,20 @@ def _tcp_path_speed(
 
 
 def speed_profile(
-    waypoints: ArrayLike, limits: KinematicLimits, *, grid_points: int | None = None
+    waypoints: ArrayLike,
+    limits: KinematicLimits,
+    *,
+    tcp: TcpSpeedLimit | None = None,
+    grid_points: int | None = None,
 ) -> SpeedProfile:
     """The raw TOPP-RA profile along the spline (the figure to compare with toppra):
-    limits met at the grid points, accelerations bang-bang, not checked in between."""
-    problem = _problem(waypoints, limits, None, None, grid_points)
-    return problem.planner.solve()
+    limits (and `tcp`) met at the grid points, accelerations bang-bang, not checked in
+    between."""
+    problem = _problem(waypoints, limits, None, tcp, grid_points)
+    if problem.tcp_speed is None or problem.tcp_ds is None:
+        return problem.planner.solve()
+    with np.errstate(divide="ignore"):  # a grid point where the TCPs stand: no cap
+        return problem.planner.solve((problem.tcp_speed / problem.tcp_ds) ** 2)
 
 
 def time_optimal(

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -43,15 +44,21 @@ def open_driver(
     return make_driver(world.cell, joints, objects=world.objects, kind=options.kind, **sim)
 
 
-def confirm(driver: Driver, yes: bool) -> None:
-    """Real arms move only when the user says so: ``yes``, or 'yes' typed at a terminal."""
-    if driver.kind == "sim" or yes:
+def confirm(driver: Driver, yes: bool, about: Callable[[], str], quiet: bool = False) -> None:
+    """Real arms move only when the user says so: ``yes``, or 'yes' typed at a terminal,
+    asked with what the run will do (``about()``: its duration and speeds; said too, unless
+    ``quiet``, when ``yes`` was given)."""
+    if driver.kind == "sim":
         return
     where = ", ".join(f"{arm} at {ip}" for arm, ip in getattr(driver, "addresses", {}).items())
+    if yes:
+        if not quiet:
+            print(f"moving real arms ({where}): {about()}", file=sys.stderr)
+        return
     if not sys.stdin.isatty():
         raise UsageError.at(
             f"refusing to move real arms ({where}) without --yes: no terminal to ask", None
         )
-    answer = input(f"This moves real arms: {where}. Type 'yes' to go on: ")
+    answer = input(f"This moves real arms: {where}; {about()}. Type 'yes' to go on: ")
     if answer.strip().lower() != "yes":
         raise UsageError.at("not confirmed: nothing moved", None)

@@ -24,7 +24,9 @@ def run_identity(compiled: Compiled) -> dict[str, str]:
     if plan.objects is not None:
         paths["objects"] = plan.file.parent / plan.objects
     out = {role: _digest(path) for role, path in paths.items()}
-    return {**out, "execution": compiled.strategy, "version": __version__}
+    out = {**out, "execution": compiled.strategy, "version": __version__}
+    factor = compiled.context.speed.factor
+    return out if factor == 1.0 else {**out, "speed": f"{factor:g}"}
 
 
 def differences(journaled: dict[str, Any], now: dict[str, str]) -> list[str]:
@@ -32,6 +34,8 @@ def differences(journaled: dict[str, Any], now: dict[str, str]) -> list[str]:
     out = [f"the {role} file changed" for role in FILES if journaled.get(role) != now.get(role)]
     if journaled.get("execution") != now["execution"]:
         out.append(f"the execution was {journaled.get('execution')}, now {now['execution']}")
+    if journaled.get("speed", "1") != now.get("speed", "1"):
+        out.append(f"--speed was {journaled.get('speed', '1')}, now {now.get('speed', '1')}")
     if journaled.get("version") != now["version"]:
         out.append(f"cellengine was {journaled.get('version')}, now {now['version']}")
     return out

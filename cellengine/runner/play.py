@@ -14,6 +14,7 @@ if TYPE_CHECKING:
     from cellengine.drivers.base import Driver
     from cellengine.pipeline import Compiled
     from cellengine.program import CompiledSegment, Segment, TimedEvent
+    from cellengine.runner.live import Live
 
 
 def play(
@@ -24,12 +25,14 @@ def play(
     out: Path,
     start: int = 0,
     measured: dict[str, float] | None = None,
+    shown: Live | None = None,
 ) -> None:
     """Send every segment from ``start``; after a segment that measures, read the load cell.
     When the masses measured (and ``measured``, read by an earlier run) change what a runtime
     choice picks, the plan is compiled again with them and the run goes on with the new
     program from the first segment that differs (the ones before are the same), its
-    trajectory and report written over the first ones."""
+    trajectory and report written over the first ones. ``shown``: told of each segment
+    before it is sent."""
     from cellengine.drivers.play import segment_events
     from cellengine.pipeline import write_plan_outputs
 
@@ -39,6 +42,8 @@ def play(
     planned = dict(measured)  # the masses the program was planned with
     i = start
     while i < len(program.segments):
+        if shown is not None:
+            shown.segment(compiled, i)
         _send(driver, journal, i, program.segments[i], events_of[i], compiled.cell.arms)
         if _weigh(driver, journal, program.segments[i].segment, measured):
             again = _recompiled(compiled, planned, measured, i + 1)

@@ -11,17 +11,22 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
 from cellengine.errors import InputError, Problem, display_path, known, printable
 from cellengine.journal import JOURNAL, Entry, append, refuse_unfinished
 from cellengine.runfolder import open_append, using
+from cellengine.runner.cycles import check_cycles
 from cellengine.runner.driver import DriverOptions, confirm, open_driver
+from cellengine.runner.hint import resumable, resume_command
 from cellengine.runner.identity import differences, run_identity
+from cellengine.runner.live import live
 from cellengine.runner.move import move_to
 from cellengine.runner.outcome import journaled, timed
 from cellengine.runner.play import play
+from cellengine.runner.summary import motion_summary
 
 if TYPE_CHECKING:
     from cellengine.drivers.base import Driver
@@ -30,25 +35,33 @@ if TYPE_CHECKING:
 
 
 def run_plan(
-    compiled: Compiled, out: Path, driver_options: DriverOptions, yes: bool, quiet: bool
+    compiled: Compiled,
+    out: Path,
+    driver_options: DriverOptions,
+    yes: bool,
+    quiet: bool,
+    cycles: int = 1,
 ) -> None:
-    """Write the run directory ``out`` and play the program in it from the start."""
+    """Write the run directory ``out`` and play the program in it from the start, ``cycles``
+    times (an error before anything moves unless the plan ends where it starts)."""
     from cellengine.pipeline import write_plan_outputs
 
+    check_cycles(compiled, cycles)
     with using(out):
         if (replaced := refuse_unfinished(out)) is not None:
             print(printable(replaced), file=sys.stderr)
         paths = write_plan_outputs(compiled, out)
         driver = open_driver(compiled, driver_options)
-        confirm(driver, yes)
-        with open_append(out / JOURNAL) as journal, driver:
+        confirm(driver, yes, lambda: motion_summary(compiled, cycles), quiet)
+        with open_append(out / JOURNAL) as journal, driver, resumable(_resume(compiled, out)):
             plan, kind = str(compiled.loaded.plan.file), type(driver).__name__
             run = run_identity(compiled)
-            append(journal, Entry.START, plan=plan, driver=kind, run=run)
-            _drive(compiled, driver, journal, out, quiet)
+            append(journal, Entry.START, plan=plan, driver=kind, run=run, cycles=cycles)
+            _drive(compiled, driver, journal, out, quiet, cycles=(1, cycles))
     if not quiet:
+        times = f" x {cycles} cycles" if cycles > 1 else ""
         print(
-            f"ran {len(compiled.program.segments)} segments, "
+            f"ran {len(compiled.program.segments)} segments{times}, "
             f"{compiled.program.duration:.2f} s of motion ({compiled.strategy})"
         )
         print(f"report: {display_path(paths['html'])}")
@@ -78,15 +91,24 @@ def resume_run(
         write_plan_outputs(compiled, run_dir)
         q0, grippers = _where_left(progress)
         driver = open_driver(compiled, driver_options, q0=q0, grippers=grippers)
-        confirm(driver, yes)
-        nxt = compiled.program.segments[progress.done].segment.label
+        left = progress.cycles - progress.cycle + 1
+        confirm(driver, yes, lambda: motion_summary(compiled, left), quiet)
+        start, cycle = progress.done, progress.cycle
+        if start == len(compiled.program.segments):  # a cycle finished: the next begins
+            start, cycle = 0, cycle + 1
+        nxt = compiled.program.segments[start].segment.label
         drop_torn_tail(journal_path)
-        with open_append(journal_path) as journal, driver:
-            append(journal, Entry.RESUME, from_segment=progress.done, label=nxt)
-            _drive(compiled, driver, journal, run_dir, quiet, progress, q0)
+        with open_append(journal_path) as journal, driver, resumable(_resume(compiled, run_dir)):
+            if cycle != progress.cycle:
+                append(journal, Entry.CYCLE, cycle=cycle, of=progress.cycles)
+                progress = replace(progress, labels=(), measured={}, cycle=cycle)
+            append(journal, Entry.RESUME, from_segment=start, label=nxt)
+            _drive(
+                compiled, driver, journal, run_dir, quiet, progress, q0, (cycle, progress.cycles)
+            )
     if not quiet:
-        done = len(compiled.program.segments) - progress.done
-        print(f"resumed at segment {progress.done} ('{printable(nxt)}'): ran {done} more")
+        done = len(compiled.program.segments) - start
+        print(f"resumed at segment {start} ('{printable(nxt)}'): ran {done} more")
 
 
 def _drive(
@@ -97,13 +119,26 @@ def _drive(
     quiet: bool,
     progress: Progress | None = None,
     left: Any = None,
+    cycles: tuple[int, int] = (1, 1),
 ) -> None:
     """The driver's life around the program, from the first segment ``progress`` did not
-    finish (and from where the arms were ``left``), to the journal's end."""
+    finish (and from where the arms were ``left``), in cycle ``cycles[0]`` of ``cycles[1]``,
+    to the journal's end."""
     start, measured = (0, None) if progress is None else (progress.done, progress.measured)
+    first, last = cycles
 
     def go_on() -> None:
-        play(compiled, driver, journal, quiet, out, start, measured)
+        shown = live(compiled, quiet)  # drawn while the program plays
+        try:
+            for cycle in range(first, last + 1):
+                if cycle > first:  # the plan ends where it starts (check_cycles)
+                    append(journal, Entry.CYCLE, cycle=cycle, of=last)
+                shown.cycle(cycle, last)
+                begin = start if cycle == first else 0
+                again = measured if cycle == first else None
+                play(compiled, driver, journal, quiet, out, begin, again, shown)
+        finally:
+            shown.close()  # before anything else is printed
 
     with timed(journal, driver, out, quiet):
         driver.configure()
@@ -111,7 +146,13 @@ def _drive(
         move_to(compiled, driver, journal, start, left)
         journaled(journal, driver, go_on)
         driver.deactivate()
-    append(journal, Entry.END, duration=compiled.program.duration)
+    append(journal, Entry.END, duration=compiled.program.duration * (last - first + 1))
+
+
+def _resume(compiled: Compiled, run_dir: Path) -> str:
+    """The command that goes on with the run in ``run_dir``."""
+    factor = compiled.context.speed.factor
+    return resume_command(compiled.loaded, compiled.strategy, factor, run_dir)
 
 
 def _resumable(compiled: Compiled, progress: Progress, run_dir: Path) -> Compiled:
@@ -136,7 +177,7 @@ def _resumable(compiled: Compiled, progress: Progress, run_dir: Path) -> Compile
                 str(compiled.loaded.plan.file),
             )
         )
-    if progress.done >= len(labels):
+    if progress.done >= len(labels) and progress.cycle >= progress.cycles:
         raise InputError(Problem("every segment was finished; only the end was not journaled"))
     return compiled
 

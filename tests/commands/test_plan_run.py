@@ -135,3 +135,34 @@ def test_validate_compiles_plans_unless_told_not_to(
         "plan_straight.yaml:12:5: steps[1] PlaceConnector routing.connector: arm must be one "
         "robot or 'auto', not 'both'; known: left, right\n"
     )
+
+
+@pytest.mark.parametrize("command", ["plan", "run"])
+@pytest.mark.parametrize("value", ["0", "1.5", "-0.25", "nan", "fast"])
+def test_a_speed_outside_0_to_1_is_a_usage_error(
+    command: str, value: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as e:
+        main([command, str(PLAN), "--speed", value])
+    assert e.value.code == 2
+    why = (
+        f"not a number: '{value}'"
+        if value == "fast"
+        else f"must be more than 0 and at most 1, got {value}"
+    )
+    assert capsys.readouterr().err.endswith(f"error: argument --speed: {why}\n")
+
+
+def test_cycles_are_counted_from_1_and_a_resumed_run_keeps_its_own(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as e:
+        main(["run", str(PLAN), "--cycles", "0"])
+    assert e.value.code == 2
+    assert capsys.readouterr().err.endswith(
+        "error: argument --cycles: must be a whole number from 1 to 1000000\n"
+    )
+    assert main(["run", str(PLAN), "--resume", str(tmp_path), "--cycles", "2"]) == 2
+    assert capsys.readouterr().err == (
+        "--cycles with --resume: a resumed run goes on with its own\n"
+    )

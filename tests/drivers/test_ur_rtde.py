@@ -64,3 +64,12 @@ def test_run_asks_before_moving_real_arms(
     assert not (out / "journal.jsonl").exists()
     assert main(["run", str(plan), "--out", str(out), "-q", "--yes"]) == 3
     assert "arm 'left': dashboard at 127.0.0.9" in capsys.readouterr().err
+    # not quiet: what is about to move, how long and how fast, before anything connects
+    slow = ["--out", str(tmp_path / "slow"), "--yes", "--speed", "0.5"]
+    assert main(["run", str(plan), *slow]) == 3
+    said = capsys.readouterr().err
+    assert (
+        said.startswith("[1/3] PickCable")
+        and "\nmoving real arms (left at 127.0.0.9, right at 127.0.0.10): " in said
+    )
+    assert "; timed at 50 % of the joints' velocity and acceleration limits (--speed 0.5)\n" in said

@@ -88,7 +88,7 @@ def test_nothing_runs_the_first_of_the_furthest_errors_is_raised() -> None:
             c, choice(Candidate((hop(0, FAR),)), Candidate((hop(0, (1.6, 0.15, 0.2)),)))
         )
     assert e.value.step == 0
-    assert str(e.value).startswith(f"<input>: step 1 (to {FAR}): ")
+    assert str(e.value).startswith(f"step 1 (to {FAR}): ")
     assert labels(c) == []
 
 
@@ -100,7 +100,7 @@ def test_nothing_runs_the_error_of_the_attempt_that_got_furthest_is_raised() -> 
     further = Candidate((hop(0, NEAR),), then=lambda: choice(Candidate((hop(1, beyond),))))
     with pytest.raises(StepError) as e:
         compile_candidates(c, choice(Candidate((hop(0, FAR),)), further))
-    assert str(e.value).startswith(f"<input>: step 2 (to {beyond}): ")
+    assert str(e.value).startswith(f"step 2 (to {beyond}): ")
 
 
 def test_a_family_error_before_anything_compiles_is_raised_as_it_is() -> None:

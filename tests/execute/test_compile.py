@@ -138,7 +138,7 @@ def test_a_goal_out_of_reach_is_refused_naming_step_and_segment() -> None:
     with pytest.raises(InputError) as e:
         compile_segments(world, cell, checker, [far], home(cell))
     assert str(e.value) == (
-        "<input>: step 5 (PickCable: reach): the left arm cannot reach its transit goal at "
+        "step 5 (PickCable: reach): the left arm cannot reach its transit goal at "
         "(1500.0, 150.0, 200.0) mm: no IK solution within its joint limits"
     )
 
@@ -156,7 +156,7 @@ def test_a_cartesian_path_out_of_reach_is_refused_with_its_stop() -> None:
     with pytest.raises(InputError) as e:
         compile_segments(world, cell, checker, [ready(), seg], home(cell))
     assert str(e.value) == (
-        f"<input>: step 3 (RouteCable guide3: slide): the left arm's Cartesian path stops at "
+        f"step 3 (RouteCable guide3: slide): the left arm's Cartesian path stops at "
         f"{100 * expected.fraction:.0f} % of its length: {expected.stop.message}"
     )
 
@@ -197,7 +197,7 @@ def test_the_gate_stops_a_held_object_in_the_table() -> None:
     with pytest.raises(InputError) as e:
         compile_segments(world, cell, checker, segments, home(cell))
     message = str(e.value)
-    assert message.startswith("<input>: step 2 (grasp): the trajectory fails the gate: t=")
+    assert message.startswith("step 2 (grasp): the trajectory fails the gate: t=")
     assert "collision between cable1@left / table" in message
 
 
@@ -264,7 +264,7 @@ def test_a_coupling_of_an_unknown_arm_is_refused() -> None:
     with pytest.raises(InputError) as e:
         compile_segments(world, cell, checker, [seg], home(cell))
     assert str(e.value) == (
-        "<input>: step 1 (hands apart): keep_distance names an unknown arm 'middle' "
+        "step 1 (hands apart): keep_distance names an unknown arm 'middle' "
         "(the cell has left, right)"
     )
 
@@ -300,6 +300,6 @@ def test_a_transit_reaches_its_goal_on_a_branch_the_segments_after_it_require() 
         c.add(required)
     assert e.value.blames == "configuration"
     assert str(e.value) == (
-        f"<input>: step 2 (lift): the left arm is on IK branch {on}; the skill checked this "
+        f"step 2 (lift): the left arm is on IK branch {on}; the skill checked this "
         f"segment's poses on branches [{other}] only"
     )

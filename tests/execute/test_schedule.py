@@ -109,7 +109,7 @@ def test_async_plans_each_arm_against_where_the_earlier_ones_end() -> None:
         c.add(_collide_at_the_end())
     message = str(e.value)
     assert message.startswith(
-        "<input>: step 2 (collide at the end): the right arm's Cartesian path stops at "
+        "step 2 (collide at the end): the right arm's Cartesian path stops at "
     )
     assert "collision between 'left/" in message
 

@@ -383,3 +383,19 @@ def test_time_scaled_trajectory_is_the_same_motion_slower() -> None:
     np.testing.assert_allclose(qdd2, qdd / 4, atol=1e-9)
     with pytest.raises(ValueError, match="factor must be"):
         traj.time_scaled(0.0)
+
+
+def test_the_raw_profile_keeps_a_tcp_speed_limit_at_its_grid_points() -> None:
+    """A straight TCP path 0.4 m long at most 0.1 m/s takes at least 4 s; the joints alone
+    would allow it in well under a second."""
+
+    def tcp(q: np.ndarray) -> np.ndarray:
+        return np.stack([q[:, 0], q[:, 1], np.zeros(len(q))], axis=1)  # joints as x, y (m)
+
+    wp = np.array([[0.0, 0.0], [0.2, 0.0], [0.4, 0.0]])
+    limits = ur_limits(dof=2, jerk=None)
+    free = speed_profile(wp, limits)
+    capped = speed_profile(wp, limits, tcp=TcpSpeedLimit(0.1, tcp))
+    assert free.duration < 1.0
+    assert capped.duration > 4.0 - 1e-6
+    assert np.sqrt(capped.x).max() <= 0.1 * (1 + 1e-9)  # s runs along the chords: |dp/ds| = 1

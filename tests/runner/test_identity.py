@@ -4,9 +4,11 @@ differs said in words."""
 from __future__ import annotations
 
 import shutil
+from dataclasses import replace
 from pathlib import Path
 
-from cellengine.pipeline import compile_plan
+from cellengine.motion.speed import Speed
+from cellengine.pipeline import Compiled, compile_plan
 from cellengine.runner.identity import differences, run_identity
 from tests.conftest import CELLS
 
@@ -26,3 +28,11 @@ def test_the_identity_follows_the_files_content_and_the_execution(tmp_path: Path
         "the objects file changed",
         "the execution was split, now async",
     ]
+
+
+def test_a_run_slowed_on_the_command_line_is_resumed_at_that_speed(cycling: Compiled) -> None:
+    first = run_identity(cycling)
+    assert "speed" not in first  # as runs were journaled before --speed
+    slowed = replace(cycling, context=cycling.context.with_speed(Speed(0.25, 0.25, None, 0.25)))
+    assert run_identity(slowed)["speed"] == "0.25"
+    assert differences(run_identity(slowed), first) == ["--speed was 0.25, now 1"]

@@ -726,7 +726,7 @@ def test_the_connector_goes_to_the_placing_arm_the_plan_names() -> None:
     with pytest.raises(InputError) as e:
         plan_cable_steps(context(world), (steps[0], place, steps[2]))
     assert str(e.value).startswith(
-        "<input>: steps[0] PickCable cable1: every inverse kinematics solution of the pick "
+        "steps[0] PickCable cable1: every inverse kinematics solution of the pick "
         "configuration (left over connector end, right over free end) is in collision ("
     )
 
