@@ -105,7 +105,7 @@ def _drive(
     def go_on() -> None:
         play(compiled, driver, journal, quiet, out, start, measured)
 
-    with timed(journal, driver, out, quiet):
+    with timed(journal, driver, out, quiet, compiled):
         driver.configure()
         driver.activate()
         move_to(compiled, driver, journal, start, left)
