@@ -162,6 +162,10 @@ def pack_replay(replay: Mapping[str, Any]) -> dict[str, Any]:
         {**link, "points": pack(link["points"], link["stride"], POSITION_SCALE)}
         for link in replay["links"]
     ]
+    out["objects"] = [
+        {**o, "points": pack(o["points"], o["stride"], POSITION_SCALE)}
+        for o in replay.get("objects", [])
+    ]
     if replay.get("arm_distance") is not None:
         out["arm_distance"] = pack(replay["arm_distance"], 1, POSITION_SCALE)
     return out

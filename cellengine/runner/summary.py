@@ -109,7 +109,9 @@ def _segments(out: Path, compiled: Compiled) -> int:
     from cellengine.report.write import REPORT_JSON
 
     try:
-        return int(json.loads((out / REPORT_JSON).read_text(encoding="utf-8"))["totals"]["segments"])
+        return int(
+            json.loads((out / REPORT_JSON).read_text(encoding="utf-8"))["totals"]["segments"]
+        )
     except (OSError, ValueError, KeyError, TypeError):
         return len(compiled.program.segments)
 
