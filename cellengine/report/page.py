@@ -40,7 +40,21 @@ from numpy.typing import NDArray
 ASSETS = files("cellengine.report") / "assets"
 STYLE = "page.css"
 GUARD = "guard.js"  # runs first: catches the errors of the page's script into the DOM
-SCRIPTS = ("base.js", "time.js", "scene.js", "draw.js", "plots.js", "panels.js", "main.js")
+SCRIPTS = (
+    "base.js",
+    "time.js",
+    "units.js",
+    "scene.js",
+    "objects.js",
+    "labels.js",
+    "closest.js",
+    "draw.js",
+    "plots.js",
+    "panels.js",
+    "run.js",
+    "camera.js",
+    "main.js",
+)
 
 
 def asset(name: str) -> str:
