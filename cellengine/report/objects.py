@@ -71,6 +71,8 @@ def _poses(
     poses = np.empty((len(times), 4, 4))
     T, holder, offset, k = start, None, np.eye(4), 0
     for s, t in enumerate(times):
+        if holder is not None:
+            T = tcp[holder][s] @ offset
         while k < len(events) and events[k].time <= t + 1e-9:
             e = events[k].event
             if e.holds == name and e.arm in tcp:
@@ -78,8 +80,6 @@ def _poses(
             elif e.arm == holder:
                 holder = None  # let go: it stays where it is
             k += 1
-        if holder is not None:
-            T = tcp[holder][s] @ offset
         poses[s] = T
     return poses
 
