@@ -48,10 +48,10 @@ def run_summary(
     """report.json's ``run`` (see the module's notes) for the run in folder ``out``."""
     outcome, fault, message = ("running", None, None) if running else outcome_of(failure)
     entries = _this_run(out / JOURNAL)
-    measured = [
+    measured: list[dict[str, Any]] = [
         {k: e.get(k) for k in ("step", "object", "arm", "mass_kg")}
         for e in entries
-        if e["entry"] == Entry.MEASURED
+        if e["entry"] == Entry.MEASURED and isinstance(e.get("mass_kg"), int | float)
     ]
     masses = {str(m["object"]): float(m["mass_kg"]) for m in measured}
     return {

@@ -34,12 +34,14 @@ def test_containers_stand_at_their_keypoints_and_vials_have_caps() -> None:
     assert vial["radius"] == pytest.approx(0.014, abs=1e-9)
     base = world.pose("bench.rack1.slot1")[:3, 3]
     split = 0.060 * (1 - CAP_SHARE)
-    assert vial["points"] == pytest.approx([*base, *(base + [0, 0, split])], abs=1e-4)
+
+    def up(z: float) -> np.ndarray:
+        return base + np.array([0.0, 0.0, z])
+
+    assert vial["points"] == pytest.approx([*base, *up(split)], abs=1e-4)
     cap = shapes["vial1 cap"]
     assert cap["object"] == "cap"
-    assert cap["points"] == pytest.approx(
-        [*(base + [0, 0, split]), *(base + [0, 0, 0.06])], abs=1e-4
-    )
+    assert cap["points"] == pytest.approx([*up(split), *up(0.06)], abs=1e-4)
     beaker = shapes["beaker"]
     assert (beaker["object"], beaker["radius"]) == ("beaker", pytest.approx(0.035, abs=1e-9))
 
