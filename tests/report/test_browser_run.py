@@ -28,10 +28,17 @@ LAB_PLAN = CELLS / "lab_bench" / "plan_weigh_handover.yaml"
 DEADLINE = 300.0  # s for the run to finish a segment (compiling comes first)
 
 
+def _ctrl_c_raises() -> None:
+    """In the child: SIGINT handled as at a terminal, even when this process was started with
+    it ignored (a shell's background job): Python then raises KeyboardInterrupt."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _interrupted_run(out: Path) -> subprocess.CompletedProcess[str]:
     cmd = [sys.executable, "-m", "cellengine", "run", str(PLAN), "--out", str(out)]
     proc = subprocess.Popen(
         [*cmd, "--realtime", "-q"],
+        preexec_fn=_ctrl_c_raises,
         cwd=ROOT,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
