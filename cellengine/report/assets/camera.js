@@ -1,7 +1,7 @@
-// report.html's script (see base.js): camera presets (from the top, from the front, fitted to
-// the platforms) and the view's extra buttons (zones, the moment of least clearance), added
+// report.html's script (see base.js): camera presets (from the top and from the front, the whole
+// scene in view; fitted to the platforms) and the view's extra buttons (zones, the moment of least clearance), added
 // to the controls beside the 'view' button.
-/* global $, cam, closestMarks, el, FOV, RP, seek, state */
+/* global $, cam, closestMarks, el, FOV, RP, sceneBounds, seek, state */
 /* exported addViewButtons, setView */
 
 const TOP_EL = Math.PI / 2 - 1e-3; // straight down (the view needs a horizontal right vector)
@@ -29,10 +29,11 @@ function fitTo(lo, hi) {
   const radius = 0.5 * Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
   cam.dist = Math.max(0.2, 1.05 * radius / Math.sin(FOV / 2));
 }
+// top and front: the whole scene (the arms where they start too); fit: the platforms alone
 function setView(kind) {
   if (kind === 'top') { cam.az = -Math.PI / 2; cam.el = TOP_EL; }
-  if (kind === 'front') { cam.az = -Math.PI / 2; cam.el = 0.12; }
-  const b = platformBounds();
+  if (kind === 'front') { cam.az = -Math.PI / 2; cam.el = 0.3; }
+  const b = kind === 'fit' ? platformBounds() : sceneBounds();
   if (b) fitTo(b[0], b[1]);
 }
 function addViewButtons(invalidate) {

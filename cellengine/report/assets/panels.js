@@ -223,8 +223,13 @@ function clearanceClass(d) {
   if (!isNum(limit) || !isNum(d)) return '';
   return d < limit ? 'bad' : d < 1.5 * limit ? 'warn' : '';
 }
-// a step counted from 1, by its plan name; a segment without its step's part (replay.py)
-function stepTitle(s) { return s.title || 'step ' + (s.step + 1) + ' ' + s.label; }
+// a step counted from 1, by its plan name, with the object a runtime choice of the run picked;
+// a segment without its step's part (replay.py)
+function stepTitle(s) {
+  const title = s.title || 'step ' + (s.step + 1) + ' ' + s.label;
+  const chosen = ((RE.run || {}).choices || []).find((c) => c.step === s.step && c.chose);
+  return chosen ? title + ' \u2192 ' + chosen.chose : title;
+}
 function segName(s) { return s.name || s.label; }
 function buildHeader() {
   $('title').textContent = DATA.title;

@@ -1,7 +1,7 @@
 // report.html's script (see base.js): the 3D scene; the orbiting camera and its projection,
 // the static meshes as shaded triangles, the arms' links at a time, cables and fingertips.
 /* global $, armColor, css, FOV, GROUP_COLORS, linkAt, mix, NEAR, rgb, RP, state, tcpAt */
-/* exported addKeypoints, addLinks, addShape, addStatic, drawCables, handsAt, makeView, resetCamera,
+/* exported addKeypoints, addLinks, addShape, addStatic, sceneBounds, drawCables, handsAt, makeView, resetCamera,
    statics */
 
 // ---------------------------------------------------------------- camera
