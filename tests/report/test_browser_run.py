@@ -105,10 +105,10 @@ def _without_objects(page: Path, out: Path) -> Path:
 
 
 def test_a_lab_report_draws_the_vials(lab_run: Path, tmp_path: Path) -> None:
-    """Seen from the top, fitted to the bench: the containers drawn (the vials' light blue
+    """Seen from above, fitted to the bench: the containers drawn (the vials' light blue
     where the same page without them shows the bench), their names written."""
     page = lab_run / "report.html"
-    fragment = "#view=top"
+    fragment = "#az=-1.5708&el=1.45&view=fit"  # from above, fitted to the bench
     attrs, errors = dump_dom(page, tmp_path / "profile", fragment)
     assert attrs.get("data-status") == "ok", errors
     assert attrs["data-outcome"] == "completed"

@@ -93,8 +93,13 @@ function capture(target, e) {
     // a synthetic or already released pointer: dragging works without capture
   }
 }
-// a collision object's name for people (replay.py's part_names; else without its '#k')
-function partName(n) { return (RP.part_names || {})[n] || String(n).replace(/#\d+$/, ''); }
+// a collision object's name for people (replay.py's part_names; a held object, 'vial3@robot1',
+// as held by its arm; else without its '#k')
+function partName(n) {
+  const held = /^(.+)@([^@]+)$/.exec(n);
+  if (held) return held[1] + ' (held by ' + held[2] + ')';
+  return (RP.part_names || {})[n] || String(n).replace(/#\d+$/, '');
+}
 function pairText(p) { return Array.isArray(p) ? p.map(partName).join(' \u2194 ') : DASH; }
 function valueText(v) {
   if (v === null || v === undefined) return DASH;

@@ -44,7 +44,7 @@ function drawMarks(g, marks, xOf, top, bottom) {
 // a shape's centre and its points for an outline: an arm link or a static mesh, by name
 function shapeOf(name, i, f) {
   const link = RP.links.find((l) => l.name === name) ||
-    (RP.objects || []).find((o) => o.name === name);
+    RP.objects.find((o) => o.name === name.split('@')[0]);
   if (link) {
     const p = linkAt(link, i, f);
     const two = link.kind === 'capsule' || link.kind === 'cylinder';
