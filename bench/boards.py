@@ -21,11 +21,11 @@ stands on a 10 mm pad. The cable's length is the route (connector slot to last s
 
 Rejected (and the walk drawn again from the next draws of the same generator), exactly:
 a guide's footprint (+2 mm) overlapping another guide's or the holder plate's; the straight
-cable between two consecutive guides crossing the footprint of a third; a guide more than
-700 mm horizontally from either base (out of that arm's reach: the dual-arm method works
-every guide with both hands, one holding the pivot before it while the other lays the cable
-in) or within 150 mm of one (inside the robot's base); a guide off the table (x -200..1200,
-|y| <= 700 mm).
+cable between two consecutive guides crossing the footprint of a third or the holder plate
+(cellengine refuses such a route); a guide more than 700 mm horizontally from either base
+(out of that arm's reach: the dual-arm method works every guide with both hands, one holding
+the pivot before it while the other lays the cable in) or within 150 mm of one (inside the
+robot's base); a guide off the table (x -200..1200, |y| <= 700 mm).
 
 ``remodel_placements()`` are the 8 poses at which the REMODEL sample is imported instead:
 yaw 0, 90, 180, 270 deg, its keypoints' centre at the nearest and the farthest x (10 mm
@@ -182,6 +182,8 @@ def rejection(cg: Guide, guides: tuple[Guide, ...], base_distance: float) -> str
         for k, g in enumerate(every):
             if k not in (i, i + 1) and _segment_hits(p, q, _corners(g, 0.0)):
                 return f"the cable from {every[i].name} to {every[i + 1].name} crosses {g.name}"
+        if _segment_hits(p, q, _box_corners(HOLDER_BOX)):
+            return f"the cable from {every[i].name} to {every[i + 1].name} crosses the holder"
     return None
 
 
@@ -415,11 +417,12 @@ def _box_prism(b: Box) -> Prism:
 
 
 def _shape(prisms: list[Prism] | list[list[Pt]], name: str, indent: int) -> str:
-    """One IndexedFaceSet of quadrilateral prisms (a footprint list: pads 0..PAD high)."""
+    """One IndexedFaceSet of quadrilateral prisms (a footprint list: pads 0..PAD high, on
+    the table, under the guides that stand at PAD)."""
     points: list[str] = []
     faces: list[str] = []
     for item in prisms:
-        quad, z0, z1 = item if isinstance(item, tuple) else (item, -PAD, 0.0)
+        quad, z0, z1 = item if isinstance(item, tuple) else (item, 0.0, PAD)
         base = len(points)
         points += [f"{x:.3f} {y:.3f} {z:.3f}" for z in (z0, z1) for x, y in quad]
         faces += [" ".join(str(base + i) for i in f) + " -1" for f in _PRISM_FACES]

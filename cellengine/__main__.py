@@ -1,5 +1,3 @@
-import sys
+from cellengine.cli import entry
 
-from cellengine.cli import main
-
-sys.exit(main())
+entry()

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from cellengine.allocation.mission import Entry, Mission, build_mission
 from cellengine.allocation.model import (
+    AllocationError,
     AllocationProblem,
     AnyOf,
     Blocker,
@@ -31,6 +32,7 @@ from cellengine.allocation.search import compile_problem, exact, heuristic
 
 __all__ = [
     "Action",
+    "AllocationError",
     "AllocationProblem",
     "AnyOf",
     "Blocker",

@@ -13,6 +13,11 @@ run, it asks the choice that produced it for its next candidate, then the choice
 it (:mod:`cellengine.execute.candidates`). A family with one way per step yields one
 candidate per choice; a family that sees several (another grasp, another sliding angle)
 yields them in order of preference, and the compiler takes the first that compiles.
+
+A family may also have ``check(world, steps)``: what the steps mean in the loaded world,
+checked when the plan is loaded (``validate --no-compile`` too) and before any motion is
+planned. It returns ``(path, message)`` pairs, the path into the plan file (``("steps", 2,
+"guides", 1)``); the loader puts each at its file:line.
 """
 
 from __future__ import annotations

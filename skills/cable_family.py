@@ -13,6 +13,7 @@ from cellengine.errors import InputError, Problem, StepError, at_step
 from cellengine.family import Candidate
 from cellengine.program import Segment
 from cellengine.skill import Skill
+from cellengine.skills import cable_meaning
 from cellengine.skills.cable import (
     PickCable,
     PlaceConnector,
@@ -20,7 +21,9 @@ from cellengine.skills.cable import (
     release_and_retract,
     step_ways,
 )
+from cellengine.skills.cable_meaning import Finding
 from cellengine.skills.cable_state import ANY_BRANCH, CableState
+from cellengine.world import World
 
 if TYPE_CHECKING:
     from cellengine.context import PlanningContext
@@ -29,6 +32,9 @@ if TYPE_CHECKING:
 class CableFamily:
     name = "cable"
     skills: tuple[type[Skill], ...] = (PickCable, PlaceConnector, RouteCable)
+
+    def check(self, world: World, steps: Sequence[Skill]) -> list[Finding]:
+        return cable_meaning.check(world, steps)
 
     def plan(self, ctx: PlanningContext, steps: Sequence[Skill]) -> Iterator[Candidate]:
         _picked_once(steps)

@@ -33,6 +33,7 @@ import numpy as np
 
 from cellengine import geometry as g
 from cellengine.allocate import (
+    AllocationError,
     AllocationProblem,
     AnyOf,
     Blocker,
@@ -47,7 +48,7 @@ from cellengine.allocation.options import Action
 from cellengine.arrays import Mat
 from cellengine.choices import candidates, known_masses, resolve
 from cellengine.context import PlanningContext
-from cellengine.errors import InputError, Problem, at_step
+from cellengine.errors import InputError, Problem, StepError, at_step
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.robot import CellModel
 from cellengine.motion.scene import rearranged, standing_container
@@ -95,15 +96,19 @@ def plan_lab_steps(ctx: PlanningContext, steps: Sequence[Skill]) -> LabPlan:
     known = known_masses(world, ctx.masses)
     reach = _Reach(ctx, dict)  # no container for the allocation's reach tests
     problem = build_problem(ctx, steps, reach)
+    by_id = {_id(s, i): (i, s) for i, s in enumerate(steps)}
+    needs = {b.name: t.id for t in problem.tasks for b in t.blocked_by}
     try:
         mission = allocate(problem)
+    except AllocationError as e:  # at the line of the step whose task it is
+        task = needs.get(e.task.split(":", 1)[1], "") if e.task and ":" in e.task else e.task
+        index = by_id[task][0] if task in by_id else None
+        raise StepError(Problem(str(e)), index) from None
     except ValueError as e:
         raise InputError(Problem(str(e))) from None
     tcp = {name: ctx.tcp_home(name) for name in cell.arms}
     b = lm.Builder(LabState.start(world, tcp))
     reach.where = lambda: b.state.where
-    by_id = {_id(s, i): (i, s) for i, s in enumerate(steps)}
-    needs = {b.name: t.id for t in problem.tasks for b in t.blocked_by}
     for task in mission.order:
         if task not in by_id:  # a blocker moved out of the way ("clear:<name>")
             name = task.split(":", 1)[1]
@@ -183,7 +188,8 @@ def build_problem(
     handovers = tuple(
         _point(world.pose(ref)[:3, 3]) for z in world.cell.zones.values() for ref in z.handovers
     )
-    return AllocationProblem(robots, tuple(_tasks(ctx, steps)), zones, handovers)
+    tasks = tuple(_tasks(ctx, steps))
+    return AllocationProblem(robots, tasks, zones, handovers, length_unit=world.cell.units.length)
 
 
 def _tasks(ctx: PlanningContext, steps: Sequence[Skill]) -> list[Task]:

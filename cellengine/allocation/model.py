@@ -16,6 +16,16 @@ from typing import Literal
 Point = tuple[float, float, float]
 Loc = tuple[Point, ...]  # a resolved location: its candidates, at least one
 Inserted = Literal["handover", "cooperation", "obstacle"] | None
+# lengths in messages: per metre, and the decimals of a millimetre
+LENGTH_UNITS = {"m": (1.0, 3), "cm": (100.0, 1), "mm": (1000.0, 0)}
+
+
+class AllocationError(ValueError):
+    """No mission: ``task`` is the id of the task that cannot be done (None: not one task's)."""
+
+    def __init__(self, message: str, task: str | None = None) -> None:
+        super().__init__(message)
+        self.task = task
 
 
 @dataclass(frozen=True)
@@ -113,6 +123,7 @@ class AllocationProblem:
     zones: tuple[Zone, ...] = ()
     handovers: tuple[Point, ...] = ()
     handover_duration: float = 1.0  # each of the place and the pick at a handover
+    length_unit: str = "m"  # of locations in messages (LENGTH_UNITS): the cell file's
 
     def robot(self, name: str) -> Robot:
         return next(r for r in self.robots if r.name == name)
@@ -148,6 +159,8 @@ def distance(a: Loc, b: Loc) -> float:
     return max(math.dist(p, q) for p in a for q in b)
 
 
-def fmt_loc(loc: Loc) -> str:
-    points = ", ".join("(" + ", ".join(f"{v:.3f}" for v in p) + ")" for p in loc)
-    return points if len(loc) == 1 else f"any of {points}"
+def fmt_loc(loc: Loc, unit: str = "m") -> str:
+    """``(x, y, z) mm``, or ``any of (...), (...) mm``, in ``unit`` (LENGTH_UNITS)."""
+    scale, decimals = LENGTH_UNITS[unit]
+    points = ", ".join("(" + ", ".join(f"{v * scale:.{decimals}f}" for v in p) + ")" for p in loc)
+    return (points if len(loc) == 1 else f"any of {points}") + f" {unit}"

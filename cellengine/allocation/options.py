@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 from graphlib import CycleError, TopologicalSorter
 
 from cellengine.allocation.model import (
+    AllocationError,
     AllocationProblem,
     Blocker,
     Inserted,
@@ -132,11 +133,12 @@ def _check_graph(problem: AllocationProblem, tasks: Sequence[Task]) -> None:
     for t in tasks:
         for a in t.after:
             if a not in ids:
-                raise ValueError(f"task '{t.id}': after: unknown task '{a}'")
+                raise AllocationError(f"task '{t.id}': after: unknown task '{a}'", t.id)
         for arm in t.arms or ():
             if arm not in robots:
-                raise ValueError(
-                    f"task '{t.id}': arms: unknown robot '{arm}'; known: {', '.join(robots)}"
+                raise AllocationError(
+                    f"task '{t.id}': arms: unknown robot '{arm}'; known: {', '.join(robots)}",
+                    t.id,
                 )
     try:
         tuple(TopologicalSorter({t.id: t.after for t in tasks}).static_order())
@@ -146,7 +148,9 @@ def _check_graph(problem: AllocationProblem, tasks: Sequence[Task]) -> None:
 
 def _options(problem: AllocationProblem, task: Task, blocker: Blocker | None) -> tuple[Option, ...]:
     if blocker is not None and not blocker.spots:
-        raise ValueError(f"task '{task.id}': blocker '{blocker.name}' has no free spot")
+        raise AllocationError(
+            f"task '{task.id}': blocker '{blocker.name}' has no free spot", task.id
+        )
     variants = (
         [(task, None)] if blocker is None else [(_to_spot(task, s), s) for s in blocker.spots]
     )
@@ -157,7 +161,7 @@ def _options(problem: AllocationProblem, task: Task, blocker: Blocker | None) ->
         found += walker.options(spot)
         reasons += walker.reasons
     if not found:
-        raise ValueError(_diagnose(problem, variants[0][0], reasons))
+        raise AllocationError(_diagnose(problem, variants[0][0], reasons), task.id)
     return _cheapest_per_signature(found)
 
 
@@ -197,7 +201,7 @@ class _Walker:
             return
         group = self.groups[g]
         if len(group) > len(self.robots):
-            kinds = " and ".join(f"{i} ({p.kind})" for i, p in group)
+            kinds = " and ".join(f"{i + 1} ({p.kind})" for i, p in group)
             self.reasons.append((g, f"primitives {kinds} run at once and need {len(group)} robots"))
         for team in itertools.permutations(self.robots, len(group)):
             if any(p.skill not in r.skills for r, (_, p) in zip(team, group, strict=True)):
@@ -239,14 +243,16 @@ class _Walker:
         for robot, (i, p) in zip(team, self.groups[g], strict=True):
             here = actions[0].start if actions else loc
             if here is None and p.start is None:
-                raise ValueError(
-                    f"task '{self.task.id}': primitive {i} ({p.kind}) has no start location"
+                raise AllocationError(
+                    f"task '{self.task.id}': primitive {i + 1} ({p.kind}) has no start location",
+                    self.task.id,
                 )
             start = resolve(p.start, here or ())
             end = resolve(p.end, start)
             for where in (start, end):
                 if not self.problem.reaches(robot, where):
-                    why = f"{robot.name} cannot reach {fmt_loc(where)} for primitive {i} ({p.kind})"
+                    at = fmt_loc(where, self.problem.length_unit)
+                    why = f"{robot.name} cannot reach {at} for primitive {i + 1} ({p.kind})"
                     self.reasons.append((g, why))
                     return None
             step = self.task.id
@@ -264,9 +270,11 @@ def _robots(problem: AllocationProblem, task: Task) -> tuple[Robot, ...]:
 
 def _groups(task: Task) -> list[list[tuple[int, Primitive]]]:
     if not task.primitives:
-        raise ValueError(f"task '{task.id}': no primitives")
+        raise AllocationError(f"task '{task.id}': no primitives", task.id)
     if task.primitives[0].with_previous:
-        raise ValueError(f"task '{task.id}': primitive 0 cannot run with a previous one")
+        raise AllocationError(
+            f"task '{task.id}': primitive 1 cannot run with a previous one", task.id
+        )
     groups: list[list[tuple[int, Primitive]]] = []
     for i, p in enumerate(task.primitives):
         if p.with_previous:
@@ -313,7 +321,7 @@ def _diagnose(problem: AllocationProblem, task: Task, reasons: Sequence[tuple[in
         if not able:
             have = "; ".join(f"{r.name} has {', '.join(sorted(r.skills)) or '-'}" for r in robots)
             who = "no robot has" if task.arms is None else "its arms do not have"
-            need = f"primitive {i} ({p.kind}) needs skill '{p.skill}'"
+            need = f"primitive {i + 1} ({p.kind}) needs skill '{p.skill}'"
             return f"task '{task.id}': {need}, which {who} ({have})"
         for where in (p.start, p.end):
             loc = resolve(where, ())
@@ -324,7 +332,8 @@ def _diagnose(problem: AllocationProblem, task: Task, reasons: Sequence[tuple[in
                     else f"{r.name} lacks skill '{p.skill}'"
                     for r in robots
                 )
-                return f"task '{task.id}': primitive {i} ({p.kind}) at {fmt_loc(loc)}: {lack}"
+                at = fmt_loc(loc, problem.length_unit)
+                return f"task '{task.id}': primitive {i + 1} ({p.kind}) at {at}: {lack}"
     names = ", ".join(r.name for r in robots)
     furthest = max((g for g, _ in reasons), default=0)
     why = next((w for g, w in reasons if g == furthest), "no assignment found")

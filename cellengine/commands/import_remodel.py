@@ -15,6 +15,7 @@ import math
 import os
 import re
 import shutil
+import sys
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
@@ -111,8 +112,10 @@ a platform's own axes along the cell's (as cells/cable_routing/cell.yaml does).
 
 DEST is written only if the result validates; existing files there are kept unless
 --force. Each YAML file starts with a yaml-language-server $schema line naming this
-checkout's schemas/ (relative inside the checkout, absolute outside; left out when
-cellengine is installed without its schemas)."""
+checkout's schemas/, relative to DEST (left out when cellengine is installed without
+its schemas). A spot that no arm reaches (an IK check of each, fast) is a warning at
+its row: the plan cannot run, most often for want of --pose. The plan is not compiled
+here: `cellengine validate DEST` does that."""
 
 
 def add_parser(sub: Any, name: str) -> None:
@@ -510,15 +513,17 @@ def cable_connectors(inputs: Inputs, from_plan: Mapping[str, str]) -> dict[str, 
 
 
 def schema_line(kind: str, dest: Path) -> list[str]:
-    """The yaml-language-server line naming this checkout's schema: relative when DEST is
-    inside the checkout (so a committed cell works on any clone), absolute outside it (a
-    cell elsewhere is on this machine anyway); none if cellengine has no schemas."""
+    """The yaml-language-server line naming this checkout's schema, relative to DEST (so a
+    cell committed inside the checkout works on any clone, and one beside it keeps working
+    when both move together); absolute only where no relative path leads (another drive);
+    none if cellengine has no schemas."""
     schema = Path(str(resources.files("cellengine.schemas") / f"{kind}.schema.json")).resolve()
     if not schema.is_file():
         return []
-    target = dest.resolve()
-    inside = target.is_relative_to(schema.parent.parent)
-    ref = Path(os.path.relpath(schema, target)).as_posix() if inside else schema.as_posix()
+    try:
+        ref = Path(os.path.relpath(schema, dest.resolve())).as_posix()
+    except ValueError:  # another drive (Windows)
+        ref = schema.as_posix()
     return [f"# yaml-language-server: $schema={ref}"]
 
 
@@ -708,7 +713,7 @@ def write_files(tmp: Path, texts: Mapping[str, str], copies: Mapping[str, bytes]
         (tmp / rel).write_bytes(data)  # contents only: REMODEL files are often read-only
 
 
-def check_staged(tmp: Path, dest: Path, inputs: Inputs, steps: Sequence[Step]) -> None:
+def check_staged(tmp: Path, dest: Path, inputs: Inputs, steps: Sequence[Step]) -> World:
     """Load what was written as `cellengine validate` would. Spot references are checked
     first, so that a missing guide is reported at its row of the sequence CSV."""
     copies = inputs.source.copies()
@@ -728,6 +733,36 @@ def check_staged(tmp: Path, dest: Path, inputs: Inputs, steps: Sequence[Step]) -
     except InputError as e:
         note = Problem("nothing was written: the imported cell does not validate", str(dest))
         raise InputError([*map(remap, e.problems), note]) from None
+    return world
+
+
+def reach_warnings(
+    world: World, steps: Sequence[Step], inputs: Inputs, posed: bool
+) -> list[Problem]:
+    """The spots of the plan that no arm reaches (or not the arm a step names), at their rows of
+    the sequence: a plan that cannot run, most often platforms not placed (--pose). An IK
+    check per spot and arm (cellengine/reach.py): milliseconds, where compiling takes seconds."""
+    from cellengine.motion.robot import build_cell_model  # the motion stack, when it is needed
+    from cellengine.reach import keypoint_reach
+
+    refs = {ref for step in steps for kind, ref in step.refs if kind in ("keypoint", "guide")}
+    reach = keypoint_reach(world, build_cell_model(world), sorted(refs))
+    fix = "check --pose" if posed else "place the platforms in the cell with --pose"
+    out = []
+    for step in steps:
+        arm = step.data.get("arm")
+        for _, ref in step.refs:
+            if ref not in reach:
+                continue
+            if not reach[ref]:
+                why = f"no arm reaches {ref}"
+            elif arm is not None and arm not in reach[ref]:
+                why = f"arm {arm} does not reach {ref}"
+            else:
+                continue
+            message = f"{why} (the tool coming down its z): the plan cannot run; {fix}"
+            out.append(Problem(message, str(inputs.source.sequence), step.row))
+    return out
 
 
 def _check_refs(world: World, steps: Sequence[Step], inputs: Inputs) -> None:
@@ -784,7 +819,8 @@ def run(args: argparse.Namespace) -> int:
     )
     with staging(dest) as tmp:
         write_files(tmp, texts, contents)
-        check_staged(tmp, dest, inputs, steps)
+        world = check_staged(tmp, dest, inputs, steps)
+        warnings = reach_warnings(world, steps, inputs, bool(args.pose))
         move_into_place(tmp, dest)
     print(
         printable(
@@ -793,6 +829,10 @@ def run(args: argparse.Namespace) -> int:
             f"plan.yaml ({_count(len(steps), 'step')})"
         )
     )
+    for w in warnings:
+        print(w.warning(), file=sys.stderr)
+    # honest about what was checked: files and reach, not the motion
+    print(printable(f"not compiled: `cellengine validate {display_path(dest)}` compiles the plan"))
     return EXIT_OK
 
 

@@ -9,7 +9,11 @@ from pathlib import Path
 from typing import Any
 
 from cellengine.commands.plan import add_common, compile_from_args
-from cellengine.errors import EXIT_OK
+from cellengine.errors import EXIT_OK, known
+
+# The drivers' names (cellengine/drivers/registry.py DRIVERS, which a test keeps equal): here so
+# that `--driver foo` is a usage error before anything compiles, without importing the drivers
+DRIVER_KINDS = ("sim", "ur_rtde")
 
 
 def add_parser(sub: Any, name: str) -> None:
@@ -20,7 +24,11 @@ def add_parser(sub: Any, name: str) -> None:
         "the cell's driver (the simulated cell unless the cell says otherwise).",
     )
     add_common(p)
-    p.add_argument("--driver", help="driver to use instead of the cell's (e.g. sim)")
+    p.add_argument(
+        "--driver",
+        type=driver_kind,
+        help="driver to use instead of the cell's: " + ", ".join(DRIVER_KINDS),
+    )
     p.add_argument("--realtime", action="store_true", help="simulated cell: in real time")
     p.add_argument(
         "--yes", action="store_true", help="move real arms without asking for confirmation"
@@ -32,6 +40,13 @@ def add_parser(sub: Any, name: str) -> None:
         help="go on with the run in RUN_DIR from the last segment it finished",
     )
     p.set_defaults(run=run)
+
+
+def driver_kind(value: str) -> str:
+    """A --driver value: one of DRIVER_KINDS."""
+    if value not in DRIVER_KINDS:
+        raise argparse.ArgumentTypeError(f"unknown driver '{value}'" + known(DRIVER_KINDS))
+    return value
 
 
 def run(args: argparse.Namespace) -> int:

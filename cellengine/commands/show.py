@@ -1,4 +1,6 @@
-"""`cellengine show CELL [--json]`: every keypoint in the cell frame."""
+"""`cellengine show CELL [--json | --html [OUT]]`: every keypoint in the cell frame, or the
+cell page (cellengine/report/cell_page.py): the cell at home, its keypoints coloured by the
+arms that reach them."""
 
 from __future__ import annotations
 
@@ -6,23 +8,38 @@ import argparse
 import json
 import math
 import os
+import tempfile
 from pathlib import Path
 from typing import Any
 
-from cellengine.errors import EXIT_OK, UsageError, printable
+from cellengine.errors import EXIT_OK, InputError, UsageError, display_path, printable
 from cellengine.geometry import xyz_rpy
 from cellengine.info.load import load_world
+from cellengine.world import World
+
+PAGE = object()  # --html without a path: CELLNAME.html in the working folder
 
 
 def add_parser(sub: Any, name: str) -> None:
     p = sub.add_parser(
         name,
-        help="print every keypoint of a cell in the cell frame",
+        help="print every keypoint of a cell in the cell frame, or write the cell page",
         description="Print every keypoint in the cell frame: a table with xyz "
-        "in mm and rpy in deg, or JSON in metres and radians.",
+        "in mm and rpy in deg, or JSON in metres and radians; or write the cell page "
+        "(--html): the robots at home and each keypoint coloured by the arms that reach it.",
     )
     p.add_argument("cell", type=Path, metavar="CELL", help="a cell.yaml, or its folder")
-    p.add_argument("--json", action="store_true", help="print JSON (metres, radians)")
+    out = p.add_mutually_exclusive_group()
+    out.add_argument("--json", action="store_true", help="print JSON (metres, radians)")
+    out.add_argument(
+        "--html",
+        nargs="?",
+        const=PAGE,
+        type=Path,
+        metavar="OUT",
+        help="write the cell page: robots at home, keypoints labelled and coloured by the "
+        "arms that reach them (default OUT: CELLNAME.html here)",
+    )
     p.set_defaults(run=run)
 
 
@@ -33,6 +50,9 @@ def run(args: argparse.Namespace) -> int:
     if not os.path.lexists(path):  # there but not a file: the loader names what it is
         raise UsageError.at("no such cell file", path)
     world = load_world(path)
+    if args.html is not None:
+        out = Path(f"{world.cell.name}.html") if args.html is PAGE else args.html
+        return write_page(world, out)
     rows = {name: xyz_rpy(T) for name, T in world.keypoints().items()}
     if args.json:
         out = {
@@ -52,3 +72,57 @@ def run(args: argparse.Namespace) -> int:
         # round, then + 0.0 turns -0.0 into 0.0: the table never shows "-0.00"
         print(f"{shown[name]:<{width}}  " + "  ".join(f"{round(v, 2) + 0.0:9.2f}" for v in values))
     return EXIT_OK
+
+
+def write_page(world: World, out: Path) -> int:
+    """Write the cell page to ``out`` and say what reaches what."""
+    # the motion stack is imported when a page is asked for, not for the table
+    from cellengine.motion.robot import build_cell_model
+    from cellengine.reach import keypoint_reach
+    from cellengine.report.cell_page import cell_page
+
+    cell = build_cell_model(world)
+    reach = keypoint_reach(world, cell)
+    write_text(out, cell_page(world, cell, reach))
+    print(printable(f"{display_path(out)}: {reach_summary(reach, list(cell.arms))}"))
+    return EXIT_OK
+
+
+def reach_summary(reach: dict[str, tuple[str, ...]], arms: list[str]) -> str:
+    """'15 keypoints: 12 reached by every arm, 3 by left only' (the classes the page colours)."""
+
+    def what(reached: tuple[str, ...]) -> str:
+        if not reached:
+            return "no arm"
+        if len(reached) == len(arms):
+            return "every arm"
+        return f"{reached[0]} only" if len(reached) == 1 else ", ".join(reached)
+
+    def rank(reached: tuple[str, ...]) -> tuple[int, int, list[int]]:
+        # every arm first, then one arm, then several, in the cell's order; no arm last
+        return (len(reached) != len(arms), not reached, [arms.index(a) for a in reached])
+
+    order = sorted(set(reach.values()), key=rank)
+    counts = {r: sum(1 for v in reach.values() if v == r) for r in order}
+    parts = [f"{n} by {what(r)}" for r, n in counts.items()]
+    if parts:
+        parts[0] = parts[0].replace(" by ", " reached by ", 1)
+    return f"{len(reach)} keypoints" + (": " + ", ".join(parts) if parts else "")
+
+
+def write_text(path: Path, text: str) -> None:
+    """``path``'s new content, whole or not at all: a temporary file beside it, renamed over
+    it (which replaces a link rather than writing through it)."""
+    folder = path.parent
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+        try:
+            with os.fdopen(fd, "w", encoding="utf-8") as f:
+                f.write(text)
+            os.chmod(tmp, 0o644)  # mkstemp's 0600 would keep the page from others
+            os.replace(tmp, path)
+        except BaseException:
+            os.unlink(tmp)
+            raise
+    except OSError as e:
+        raise InputError.at(f"cannot write the cell page: {e.strerror}", path) from None

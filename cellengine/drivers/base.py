@@ -287,14 +287,14 @@ class Driver(ABC):
         if names != self.layout.joint_names:
             raise DriverRefused(
                 self.kind,
-                f"segment '{segment.segment.label}' (step {segment.segment.step}) moves "
+                f"segment '{segment.segment.label}' (step {segment.segment.step + 1}) moves "
                 f"{list(names)}; the cell's joints are {list(self.layout.joint_names)}",
             )
 
     def _check_events(self, segment: CompiledSegment, events: tuple[TimedEvent, ...]) -> None:
         traj = segment.trajectory
         lo, hi = traj.start_time - EVENT_TIME_SLACK, traj.end_time + EVENT_TIME_SLACK
-        where = f"segment '{segment.segment.label}' (step {segment.segment.step})"
+        where = f"segment '{segment.segment.label}' (step {segment.segment.step + 1})"
         for ev in events:
             arm, mode = ev.event.arm, ev.event.mode
             self._check_arm(arm)
@@ -324,7 +324,7 @@ class Driver(ABC):
         arm = self.layout.arm_of(j)
         raise DriverRefused(
             self.kind,
-            f"segment '{segment.segment.label}' (step {segment.segment.step}) not sent: "
+            f"segment '{segment.segment.label}' (step {segment.segment.step + 1}) not sent: "
             f"arm '{arm}' joint '{self.layout.joint_names[j]}' is at {q[j]:.4f}, the segment "
             f"starts at {first[j]:.4f} (deviation {deviation[j]:.4f} > tolerance "
             f"{self.start_tolerance:g})",

@@ -13,9 +13,12 @@ from pathlib import Path
 from typing import Any
 
 from cellengine.errors import InputError, Problem, known
+from cellengine.family import families
 from cellengine.info.cell import BUILTIN_ROBOTS, Cell, PlatformSpec, UrdfModel
+from cellengine.info.far import out_of_reach
 from cellengine.info.files import resolve_inside
 from cellengine.info.objects import Objects
+from cellengine.info.overlaps import overlaps
 from cellengine.info.plan import Plan, parse_plan
 from cellengine.info.platform import Platform
 from cellengine.info.units import Units
@@ -263,7 +266,8 @@ def load_world(cell_path: Path, objects_path: Path | None = None) -> World:
         problems.extend(_check_objects(world, objects_doc))
     if problems:
         raise InputError(problems)
-    return world
+    more = overlaps(world, doc) + out_of_reach(world, doc)
+    return replace(world, cell_warnings=world.cell_warnings + tuple(more))
 
 
 @dataclass(frozen=True)
@@ -330,7 +334,8 @@ def _expect_kind(path: Path, kind: str, plan: YamlDoc) -> None:
 
 
 def check_plan(plan: Plan, world: World, doc: YamlDoc) -> list[Problem]:
-    """Every name in every step resolves in the world."""
+    """Every name in every step resolves in the world; then what the steps mean there (the
+    families' ``check``: mistakes named in the board's terms before any motion)."""
     out: list[Problem] = []
     arms = [*world.cell.robots, "both", "auto"]
     for i, step in enumerate(plan.steps):
@@ -343,4 +348,11 @@ def check_plan(plan: Plan, world: World, doc: YamlDoc) -> list[Problem]:
             except RefError as e:
                 where: tuple[Any, ...] = ("steps", i, *loc)
                 out.append(doc.error(f"{dotted(where)}: {e}", where).problems[0])
+    if out:
+        return out
+    of_skill = families().of_skill
+    for family in dict.fromkeys(of_skill[s.skill] for s in plan.steps):
+        check = getattr(family, "check", None)
+        for where, message in check(world, plan.steps) if check is not None else ():
+            out.append(doc.error(f"{dotted(where)}: {message}", where).problems[0])
     return out

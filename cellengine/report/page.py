@@ -51,6 +51,7 @@ SCRIPTS = (
     "draw.js",
     "plots.js",
     "panels.js",
+    "reach.js",  # the cell page's (cell_page.py); nothing without the replay's ``reach``
     "run.js",
     "camera.js",
     "main.js",

@@ -7,6 +7,7 @@ import os
 import shutil
 import subprocess
 import sys
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +22,7 @@ from tests.conftest import REMODEL
 
 ROOT = Path(__file__).resolve().parents[2]
 ROBOTS = ROOT / "tests" / "data" / "remodel_import" / "robots.yaml"
+SCHEMAS = Path(str(resources.files("cellengine.schemas"))).resolve()
 SEQUENCE_HEAD = "Order;Type of operation;Label;Spot\n"
 
 
@@ -101,9 +103,13 @@ def test_sample_validates_and_platform_files_are_copied(
 ) -> None:
     dest = tmp_path / "cell"
     assert run(src, dest) == 0
-    assert capsys.readouterr().out.endswith(
-        "cell: cell.yaml (platforms combs, platform), objects.yaml (1 cable), plan.yaml (3 steps)\n"
-    )
+    out = capsys.readouterr()
+    assert out.out.splitlines()[-2:] == [
+        f"{dest}: cell.yaml (platforms combs, platform), objects.yaml (1 cable), "
+        "plan.yaml (3 steps)",
+        f"not compiled: `cellengine validate {dest}` compiles the plan",
+    ]
+    assert out.err == ""  # every spot within both arms' reach
     assert main(["validate", "--no-compile", str(dest)]) == 0
     cell = read(dest / "cell.yaml")
     assert cell["platforms"]["combs"] == {
@@ -143,13 +149,54 @@ def test_every_file_starts_with_its_schema_line(src: Path, tmp_path: Path) -> No
     assert run(src, dest) == 0
     for kind in ("cell", "objects", "plan"):
         first = (dest / f"{kind}.yaml").read_text().splitlines()[0]
-        # outside the checkout: the absolute path of its schemas folder
-        assert first == f"# yaml-language-server: $schema={ROOT}/schemas/{kind}.schema.json"
+        head, _, ref = first.partition("$schema=")
+        assert head == "# yaml-language-server: "
+        # relative to DEST, even outside the checkout: the cell and the checkout may move
+        assert not ref.startswith("/") and ref.endswith(f"/schemas/{kind}.schema.json")
+        assert (dest / ref).resolve() == SCHEMAS / f"{kind}.schema.json"
 
 
 def test_schema_line_is_relative_inside_the_checkout() -> None:
-    assert schema_line("plan", ROOT / "cells" / "imported") == [
+    """Relative from where the package's schemas are (in a worktree they may be another
+    checkout's: the virtual environment's editable install)."""
+    assert schema_line("plan", SCHEMAS.parent / "cells" / "imported") == [
         "# yaml-language-server: $schema=../../schemas/plan.schema.json"
+    ]
+
+
+def test_spots_out_of_reach_are_warnings_at_their_rows(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Platforms 2 m out: the files are written (they are valid), and each spot no arm
+    reaches is named at its row, saying the plan cannot run and what to check."""
+    dest = tmp_path / "cell"
+    assert run(src, dest, "--pose=2000 0 0 0 0 0") == 0
+    assert (dest / "plan.yaml").is_file()
+    seq = src / "Assembly_sequence.csv"
+    tail = "(the tool coming down its z): the plan cannot run; check --pose"
+    assert errors(capsys) == [
+        f"{seq}:2: warning: no arm reaches combs.C2.1 {tail}",
+        f"{seq}:2: warning: no arm reaches combs.C1.1 {tail}",
+        f"{seq}:3: warning: no arm reaches platform.J8.1 {tail}",
+        *(
+            f"{seq}:4: warning: no arm reaches platform.{j}.1 {tail}"
+            for j in ("J3", "J4", "J1", "J2")
+        ),
+    ]
+
+
+def test_a_step_s_arm_that_does_not_reach_its_spot(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Without --pose the platforms are at the origin; J8.1's step names the left arm.
+    Moved 700 mm to -y (out of the left arm's reach, within the right's), only that step's
+    arm is told of, with the advice to place the platforms."""
+    dest = tmp_path / "cell"
+    assert run(src, dest, "--pose=platform=0 -700 0 0 0 0") == 0
+    seq = src / "Assembly_sequence.csv"
+    assert errors(capsys) == [
+        f"{seq}:3: warning: arm left does not reach platform.J8.1 (the tool coming down its z): "
+        "the plan cannot run; check --pose"
     ]
 
 

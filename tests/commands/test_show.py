@@ -7,6 +7,7 @@ import pytest
 
 from cellengine.cli import main
 from tests.conftest import CELLS
+from tests.test_reach import moved_cell
 
 # routing.guide2 is Blender's Guide_U_001 at (150, 260, 10) mm turned +90 deg about Blender z.
 # Blender's root rotation and the y-up -> z-up turn map (x, y, z) -> (-x, -y, z); the platform
@@ -76,3 +77,43 @@ def test_errors_are_escaped(tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
         "digits, '_' and '-', starting with a letter or '_'",
         "<dir>/cell.yaml:2:9: robots: must have at least 1 item, got 0",
     ]
+
+
+def test_html_page_in_the_working_folder(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    assert main(["show", str(CELLS / "cable_routing"), "--html"]) == 0
+    assert capsys.readouterr().out == "cable_routing.html: 15 keypoints: 15 reached by every arm\n"
+    page = (tmp_path / "cable_routing.html").read_text(encoding="utf-8")
+    assert "<title>cellengine show: cable_routing</title>" in page
+    assert '"reach":{"holder.comb_a.slot":["left","right"]' in page
+    assert [p.name for p in tmp_path.iterdir()] == ["cable_routing.html"]  # no temporary left
+
+
+def test_html_page_where_asked(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    cell = moved_cell(tmp_path / "cell")
+    out = tmp_path / "page.html"
+    out.write_text("old")
+    assert main(["show", str(cell), "--html", str(out)]) == 0
+    assert capsys.readouterr().out == (
+        f"{out}: 15 keypoints: 2 reached by every arm, 7 by left only, 6 by no arm\n"
+    )
+    assert out.read_text(encoding="utf-8").startswith("<!DOCTYPE html>")
+
+
+def test_html_page_in_a_missing_folder(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "no" / "page.html"
+    assert main(["show", str(CELLS / "cable_routing"), "--html", str(out)]) == 1
+    assert capsys.readouterr().err == (
+        f"{out}: cannot write the cell page: No such file or directory\n"
+    )
+
+
+def test_json_and_html_are_one_or_the_other(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as e:
+        main(["show", str(CELLS / "cable_routing"), "--json", "--html"])
+    assert e.value.code == 2
+    assert capsys.readouterr().err.splitlines()[-1] == (
+        "cellengine show: error: argument --html: not allowed with argument --json"
+    )

@@ -204,7 +204,7 @@ def test_start_state_mismatch_is_refused_naming_the_joint() -> None:
     with pytest.raises(DriverRefused) as info:
         d.execute(compiled(quintic(np.zeros(N), A, 1.0), "PickCable: approach", 2))
     assert info.value.problems[0].message == (
-        "segment 'PickCable: approach' (step 2) not sent: arm 'right' joint "
+        "segment 'PickCable: approach' (step 3) not sent: arm 'right' joint "
         "'right_wrist_2_joint' is at -0.3000, the segment starts at 0.0000 "
         "(deviation 0.3000 > tolerance 0.01)"
     )
@@ -225,12 +225,12 @@ def test_start_within_tolerance_is_accepted() -> None:
     [
         (
             [event(0.5, "left", "pinch")],
-            "segment 'move' (step 0): arm 'left' has no gripper mode 'pinch'; "
+            "segment 'move' (step 1): arm 'left' has no gripper mode 'pinch'; "
             "known: grasp, open, slide",
         ),
         (
             [event(1.5, "left", "grasp")],
-            "segment 'move' (step 0): event 'grasp' of arm 'left' at t = 1.500 s is outside "
+            "segment 'move' (step 1): event 'grasp' of arm 'left' at t = 1.500 s is outside "
             "the segment (0.000 to 1.000 s)",
         ),
         ([event(0.5, "middle", "grasp")], "unknown arm 'middle'; known: left, right"),

@@ -16,7 +16,7 @@ const CLOSEST = (function () {
     out.push({ kind, time: m.time_s, pair: m.pair || [], d: m.distance_m,
       start: isNum(seg.start_s) ? seg.start_s : m.time_s, end: isNum(seg.end_s) ? seg.end_s : m.time_s });
   }
-  if (!out.length && RP.arm_distance && RP.arm_distance.length) {
+  if (!out.length && RP.segments.length && RP.arm_distance && RP.arm_distance.length) {
     let k = 0;
     RP.arm_distance.forEach((d, i) => { if (d < RP.arm_distance[k]) k = i; });
     const pair = (RE.totals || {}).closest_pair || [];

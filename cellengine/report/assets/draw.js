@@ -4,6 +4,7 @@
    drawCables, drawClosest, drawKeyLabels, drawObjectLabels, drawZones, handsAt, lastStarted,
    locate, makeView, mix, N, NEAR, project, rgb, RP, state, statics, WHITE */
 /* exported drawView */
+/* global drawReach */
 
 // ---------------------------------------------------------------- drawing
 function fitCanvas(c, g) {
@@ -173,5 +174,6 @@ function drawView() {
   drawClosest(V, i, f);
   drawAxes(V);
   drawArmLabels(V);
+  if (RP.reach) drawReach(V);
   return { shapes: ground.length + prims.length, cables, objects, labels };
 }
