@@ -53,10 +53,23 @@ function shapeOf(name, i, f) {
   }
   const s = statics.find((x) => x.name === name || x.name === name.replace(/#\d+$/, ''));
   if (!s) return null;
-  const pts = [];
-  for (let k = 0; k < s.v.length; k += 3) pts.push([s.v[k], s.v[k + 1], s.v[k + 2]]);
-  const c = [0, 1, 2].map((a) => pts.reduce((sum, q) => sum + q[a], 0) / pts.length);
-  return { c, pts };
+  const lo = [Infinity, Infinity, Infinity];
+  const hi = [-Infinity, -Infinity, -Infinity];
+  for (let k = 0; k < s.v.length; k += 3) {
+    for (let a = 0; a < 3; a++) {
+      lo[a] = Math.min(lo[a], s.v[k + a]); hi[a] = Math.max(hi[a], s.v[k + a]);
+    }
+  }
+  return { c: lo.map((v, a) => (v + hi[a]) / 2), pts: [], lo, hi };
+}
+// the pair's two points: a static's is the point of its bounds nearest the other's centre
+// (the table under a gripper, not the table's middle)
+function pairPoints(shapes) {
+  return shapes.map((s, k) => {
+    if (!s.lo) return s.c;
+    const o = shapes[1 - k].c;
+    return o.map((v, a) => Math.min(s.hi[a], Math.max(s.lo[a], v)));
+  });
 }
 function drawClosest(V, i, f) {
   const pad = 0.02 * DUR;
@@ -66,12 +79,12 @@ function drawClosest(V, i, f) {
     if (shapes.some((s) => !s)) continue;
     ctx.strokeStyle = css([220, 38, 38], 1, 0.9); ctx.fillStyle = CLOSEST_COLOR;
     ctx.lineWidth = 2; ctx.setLineDash([5, 4]);
-    const ends = shapes.map((s) => project(V, s.c[0], s.c[1], s.c[2]));
+    const ends = pairPoints(shapes).map((c) => project(V, c[0], c[1], c[2]));
     if (ends.some((q) => q[2] < NEAR)) { ctx.setLineDash([]); continue; }
     ctx.beginPath(); ctx.moveTo(ends[0][0], ends[0][1]); ctx.lineTo(ends[1][0], ends[1][1]);
     ctx.stroke(); ctx.setLineDash([]);
     for (const s of shapes) {
-      for (const p of s.pts.length > 40 ? [] : s.pts) {
+      for (const p of s.pts) {
         const q = project(V, p[0], p[1], p[2]);
         if (q[2] < NEAR) continue;
         ctx.beginPath(); ctx.arc(q[0], q[1], 5, 0, 2 * Math.PI); ctx.stroke();
