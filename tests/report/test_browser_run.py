@@ -126,3 +126,40 @@ def test_a_lab_report_draws_the_vials(lab_run: Path, tmp_path: Path) -> None:
     r, g, b = (shots[0][..., k] for k in range(3))
     vial_blue = changed & (b > r + 60) & (g > r + 40)  # OBJECT_COLORS.vial, #38bdf8, shaded
     assert vial_blue.sum() > 200, (int(changed.sum()), int(vial_blue.sum()))
+
+
+VIEW_BUTTONS = """
+<script>
+(function () {
+  const seen = [];
+  for (const id of ['btn-top', 'btn-front', 'btn-fit', 'btn-zones', 'btn-closest', 'btn-keys']) {
+    document.getElementById(id).click();
+    seen.push(id);
+  }
+  setTimeout(function () {
+    document.body.dataset.clicked = seen.join(',');
+    document.body.dataset.clock = document.getElementById('clock').textContent;
+  }, 500);
+})();
+</script>
+"""
+
+
+def test_view_presets_zones_closest_and_keypoint_labels(lab_run: Path, tmp_path: Path) -> None:
+    """The buttons the run report adds work without an error; 'closest' goes to the moment of
+    least clearance, the arms' or the environment's (report.json's totals); keypoints are
+    drawn with their names."""
+    report = json.loads((lab_run / "report.json").read_text())
+    least = min(
+        (c for c in report["totals"]["clearance"].values() if c is not None),
+        key=lambda c: c["distance_m"],
+    )
+    page = tmp_path / "buttons.html"
+    text = (lab_run / "report.html").read_text(encoding="utf-8")
+    page.write_text(text.replace("</body>", VIEW_BUTTONS + "</body>"), encoding="utf-8")
+    attrs, errors = dump_dom(page, tmp_path / "profile", "#keys=1")
+    assert attrs.get("data-status") == "ok", errors
+    assert attrs["data-clicked"].count("btn-") == 6
+    assert int(attrs["data-keylabels"]) > 0
+    now = float(attrs["data-clock"].split("/")[0].strip(" s"))
+    assert now == pytest.approx(least["time_s"], abs=0.01)

@@ -54,9 +54,9 @@ function addViewButtons(invalidate) {
     });
     z.classList.toggle('on', state.zones);
   }
-  const marks = closestMarks();
-  if (marks.length) {
-    add('btn-closest', 'closest', 'go to the moment of least clearance: ' + marks[0].label,
-      () => seek(marks[0].time));
+  // the least of the arms' and the environment's clearances
+  const least = closestMarks().sort((a, b) => a.d - b.d)[0];
+  if (least) {
+    add('btn-closest', 'closest', 'go to the moment of ' + least.label, () => seek(least.time));
   }
 }

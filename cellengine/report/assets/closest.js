@@ -25,7 +25,7 @@ const CLOSEST = (function () {
   return out;
 })();
 function closestMarks() {
-  return CLOSEST.map((m) => ({ time: m.time, label: 'least ' + m.kind + ' clearance ' +
+  return CLOSEST.map((m) => ({ time: m.time, d: m.d, label: 'least ' + m.kind + ' clearance ' +
     fmt(1000 * m.d, 1, 'mm') }));
 }
 // vertical dashed lines with their labels on a plot's canvas (x of a time by xOf)
