@@ -18,6 +18,7 @@ from cellengine.journal import JOURNAL, Entry
 if TYPE_CHECKING:
     from cellengine.pipeline import Compiled
 
+
 def outcome_of(failure: BaseException | None) -> tuple[str, dict[str, Any] | None, str | None]:
     """The outcome, the fault (as journaled) and a message for what ended a run."""
     from cellengine.drivers.fault import DriverFault
