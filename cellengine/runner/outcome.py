@@ -42,7 +42,10 @@ def timed(
             append(journal, Entry.TIMING, servo=timing)
             if not quiet:
                 print(describe(timing))
-        write_run(out, run_summary(compiled, driver.kind, out, failure, servo=timing))
+        summary = run_summary(
+            compiled, driver.kind, out, failure, servo=timing, stopped=driver.fault
+        )
+        write_run(out, summary)
 
 
 def journaled(journal: IO[str], driver: Driver, play: Callable[[], None]) -> None:

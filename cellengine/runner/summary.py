@@ -16,17 +16,22 @@ from typing import TYPE_CHECKING, Any
 from cellengine.journal import JOURNAL, Entry
 
 if TYPE_CHECKING:
+    from cellengine.drivers.fault import Fault
     from cellengine.pipeline import Compiled
 
 
-def outcome_of(failure: BaseException | None) -> tuple[str, dict[str, Any] | None, str | None]:
-    """The outcome, the fault (as journaled) and a message for what ended a run."""
+def outcome_of(
+    failure: BaseException | None, stopped: Fault | None = None
+) -> tuple[str, dict[str, Any] | None, str | None]:
+    """The outcome, the fault (as journaled) and a message for what ended a run; ``stopped``:
+    the driver's fault, which tells when an interrupt outside its loop stopped the arms."""
     from cellengine.drivers.fault import DriverFault
 
     if failure is None:
         return "completed", None, None
     if isinstance(failure, KeyboardInterrupt):
-        return "interrupted", None, "interrupted (Ctrl-C)"
+        fault = stopped.to_json() if stopped is not None else None
+        return "interrupted", fault, "interrupted (Ctrl-C)"
     if isinstance(failure, DriverFault):
         fault = failure.fault.to_json()
         kind = "interrupted" if failure.fault.kind == "interrupted" else "fault"
@@ -42,9 +47,10 @@ def run_summary(
     *,
     running: bool = False,
     servo: dict[str, Any] | None = None,
+    stopped: Fault | None = None,
 ) -> dict[str, Any]:
     """report.json's ``run`` (see the module's notes) for the run in folder ``out``."""
-    outcome, fault, message = ("running", None, None) if running else outcome_of(failure)
+    outcome, fault, message = ("running", None, None) if running else outcome_of(failure, stopped)
     entries = _this_run(out / JOURNAL)
     measured: list[dict[str, Any]] = [
         {k: e.get(k) for k in ("step", "object", "arm", "mass_kg")}

@@ -18,6 +18,13 @@ LAB_PLAN = CELLS / "lab_bench" / "plan_pour_heavier.yaml"
 def test_the_outcome_of_what_ended_the_run() -> None:
     assert outcome_of(None) == ("completed", None, None)
     assert outcome_of(KeyboardInterrupt()) == ("interrupted", None, "interrupted (Ctrl-C)")
+    # an interrupt outside the driver's loop: the driver's fault says when it stopped the arms
+    at = Fault("interrupted", "interrupted; both arms stopped", time=0.75)
+    assert outcome_of(KeyboardInterrupt(), at) == (
+        "interrupted",
+        at.to_json(),
+        "interrupted (Ctrl-C)",
+    )
     stopped = Fault("interrupted", "interrupted at t = 1.500 s; both arms stopped", time=1.5)
     kind, fault, message = outcome_of(DriverFault("sim", stopped))
     assert (kind, message) == ("interrupted", stopped.message)
