@@ -43,11 +43,17 @@ GUARD = "guard.js"  # runs first: catches the errors of the page's script into t
 SCRIPTS = (
     "base.js",
     "time.js",
+    "units.js",
     "scene.js",
+    "objects.js",
+    "labels.js",
+    "closest.js",
     "draw.js",
     "plots.js",
     "panels.js",
     "reach.js",  # the cell page's (cell_page.py); nothing without the replay's ``reach``
+    "run.js",
+    "camera.js",
     "main.js",
 )
 
@@ -170,6 +176,10 @@ def pack_replay(replay: Mapping[str, Any]) -> dict[str, Any]:
     out["links"] = [
         {**link, "points": pack(link["points"], link["stride"], POSITION_SCALE)}
         for link in replay["links"]
+    ]
+    out["objects"] = [
+        {**o, "points": pack(o["points"], o["stride"], POSITION_SCALE)}
+        for o in replay.get("objects", [])
     ]
     if replay.get("arm_distance") is not None:
         out["arm_distance"] = pack(replay["arm_distance"], 1, POSITION_SCALE)

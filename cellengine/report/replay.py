@@ -32,6 +32,9 @@ from cellengine.motion.scene import place_fingers
 from cellengine.program import Anchor, Program, TimedEvent
 from cellengine.report.data import event_entry, step_names
 from cellengine.report.distance import ArmDistance
+from cellengine.report.joints import joint_kinds
+from cellengine.report.names import part_names, segment_name, step_title
+from cellengine.report.objects import containers, zones
 from cellengine.report.sampling import joint_order, program_span, sample_program, sample_times
 from cellengine.world import World
 
@@ -70,6 +73,7 @@ def replay_data(
         "times": _round(times, DECIMALS),
         "arms": list(cell.arms),
         "joint_names": list(cell.joint_names),
+        "joint_kinds": joint_kinds(cell),
         "arm_joints": {a: list(range(s.start, s.stop)) for a, s in cell.slices.items()},
         "limits": {
             "lower": limits.lower.tolist(),
@@ -88,7 +92,19 @@ def replay_data(
         **timeline(program, step_labels or {}),
         "events": [event_entry(e) for e in program.events],
         "cables": cables(program, world),
+        "objects": containers(world, cell, program.events, times, q),
+        "zones": zones(world),
+        "part_names": part_names(_collision_names(cell, world), _tools(world)),
     }
+
+
+def _tools(world: World) -> dict[str, str]:
+    return {arm: robot.tool for arm, robot in world.cell.robots.items() if robot.tool}
+
+
+def _collision_names(cell: CellModel, world: World) -> list[str]:
+    """The names a closest pair may give: the arms' shapes, the obstacles."""
+    return [str(o.name) for o in cell.collision.geometryObjects] + list(world.cell.obstacles)
 
 
 def _round(a: Any, decimals: int) -> Any:
@@ -267,18 +283,19 @@ def decimate(vertices: Vec, faces: IntArray, max_faces: int) -> tuple[Vec, IntAr
 
 def timeline(program: Program, step_labels: Mapping[int, str]) -> dict[str, Any]:
     """Segments and steps with their start and end times."""
+    names = step_names(program, step_labels)
     segments: list[dict[str, Any]] = [
         {
             "index": i,
             "step": int(cs.segment.step),
             "label": cs.segment.label,
+            "name": segment_name(cs.segment.label, names[int(cs.segment.step)]),
             "strategy": cs.strategy,
             "start": cs.trajectory.start_time,
             "end": cs.trajectory.end_time,
         }
         for i, cs in enumerate(program.segments)
     ]
-    names = step_names(program, step_labels)
     steps: dict[int, dict[str, Any]] = {}
     for s in segments:
         step = steps.setdefault(
@@ -286,6 +303,7 @@ def timeline(program: Program, step_labels: Mapping[int, str]) -> dict[str, Any]
             {
                 "step": s["step"],
                 "label": names[s["step"]],
+                "title": step_title(s["step"], names[s["step"]]),
                 "start": s["start"],
                 "end": s["end"],
             },

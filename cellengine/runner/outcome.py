@@ -1,10 +1,10 @@
 """What ends a run goes on record: a driver fault in the journal (for ``--resume``), and how
-the driver's real-time loop kept its period in the journal, on screen and in report.json."""
+the driver's real-time loop kept its period in the journal and on screen, and what the run did
+in its report."""
 
 from __future__ import annotations
 
 import contextlib
-import json
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import IO, TYPE_CHECKING
@@ -13,29 +13,39 @@ from cellengine.journal import Entry, append
 
 if TYPE_CHECKING:
     from cellengine.drivers.base import Driver
+    from cellengine.pipeline import Compiled
 
 
 @contextlib.contextmanager
-def timed(journal: IO[str], driver: Driver, out: Path, quiet: bool) -> Iterator[None]:
+def timed(
+    journal: IO[str], driver: Driver, out: Path, quiet: bool, compiled: Compiled
+) -> Iterator[None]:
     """Whatever happens inside, afterwards: how the driver's real-time loop kept its period
-    (a real driver's), journaled, printed, and in report.json's ``run``."""
-    outcome = "fault"
+    (a real driver's), journaled and printed; and what the run did in report.json's and
+    report.html's ``run`` (written as ``running`` first: a report that still says so was
+    killed)."""
+    from cellengine.report.outcome import write_run
+    from cellengine.runner.ran import run_summary
+
+    write_run(out, run_summary(compiled, driver.kind, out, running=True))
+    failure: BaseException | None = None
     try:
         yield
-        outcome = "completed"
+    except BaseException as e:
+        failure = e
+        raise
     finally:
         timing = driver.timing()
         if timing is not None:
             from cellengine.drivers.servo_timing import describe
-            from cellengine.outfiles import write_files
-            from cellengine.report.write import REPORT_JSON
 
             append(journal, Entry.TIMING, servo=timing)
-            report = json.loads((out / REPORT_JSON).read_text())
-            report["run"] = {"driver": driver.kind, "outcome": outcome, "servo": timing}
-            write_files(out, {REPORT_JSON: json.dumps(report) + "\n"})
             if not quiet:
                 print(describe(timing))
+        summary = run_summary(
+            compiled, driver.kind, out, failure, servo=timing, stopped=driver.fault
+        )
+        write_run(out, summary)
 
 
 def journaled(journal: IO[str], driver: Driver, play: Callable[[], None]) -> None:

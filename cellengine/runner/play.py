@@ -52,9 +52,18 @@ def play(
                 events_of = segment_events(program)
                 write_plan_outputs(compiled, out)
                 append(journal, Entry.REPLANNED, reason="measured masses changed a choice")
+                _still_running(compiled, driver, out)
                 if not quiet:
                     print("measured masses changed a runtime choice: replanned")
         i += 1
+
+
+def _still_running(compiled: Compiled, driver: Driver, out: Path) -> None:
+    """The new program's report says, as the first one did, that the run goes on."""
+    from cellengine.report.outcome import write_run
+    from cellengine.runner.ran import run_summary
+
+    write_run(out, run_summary(compiled, driver.kind, out, running=True))
 
 
 def _send(

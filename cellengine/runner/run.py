@@ -140,7 +140,7 @@ def _drive(
         finally:
             shown.close()  # before anything else is printed
 
-    with timed(journal, driver, out, quiet):
+    with timed(journal, driver, out, quiet, compiled):
         driver.configure()
         driver.activate()
         move_to(compiled, driver, journal, start, left)

@@ -66,6 +66,11 @@ def test_a_protective_stop_stops_the_run_and_resume_completes_it(
     fault = next(e for e in journal(run) if e["entry"] == "fault")["fault"]
     assert fault["kind"] == "protective_stop" and fault["arm"] == "right"
     assert fault["details"]["safety_status_bits"] & 1 << 2
+    # the report says what stopped the run, where and when, and the servo loop's figures
+    stopped = json.loads((run / "report.json").read_text())["run"]
+    assert (stopped["outcome"], stopped["fault"]["kind"]) == ("fault", "protective_stop")
+    assert (stopped["fault"]["arm"], stopped["fault"]["time"]) == ("right", fault["time"])
+    assert stopped["servo"]["ticks"] > 0 and stopped["stopped_in"] is not None
     # not cleared yet: the resumed run is refused before anything moves
     again = run_cli(str(plan), "--resume", str(run), timeout=120)
     assert again.returncode == 3, again.stderr[-2000:]
@@ -76,6 +81,9 @@ def test_a_protective_stop_stops_the_run_and_resume_completes_it(
     finished = [e["segment"] for e in entries if e["entry"] == "finished"]
     assert finished == list(range(len(program.segments)))
     assert entries[-1]["entry"] == "end"
+    resumed = json.loads((run / "report.json").read_text())["run"]
+    assert (resumed["outcome"], resumed["fault"]) == ("completed", None)
+    assert resumed["resumed"][-1]["from_segment"] == stopped["segments_finished"]
 
 
 def test_a_controller_reporting_another_model_is_refused(

@@ -147,8 +147,14 @@ def test_static_meshes(replay: dict) -> None:
 
 def test_timeline_events_and_cable(replay: dict) -> None:
     assert replay["steps"] == [
-        {"step": 0, "label": "PickCable", "start": 0.0, "end": 3.0},
-        {"step": 1, "label": "RouteCable guide2", "start": 3.0, "end": 6.0},
+        {"step": 0, "label": "PickCable", "title": "step 1 PickCable", "start": 0.0, "end": 3.0},
+        {
+            "step": 1,
+            "label": "RouteCable guide2",
+            "title": "step 2 RouteCable guide2",
+            "start": 3.0,
+            "end": 6.0,
+        },
     ]
     assert [(s["index"], s["strategy"]) for s in replay["segments"]] == [
         (0, "split"),

@@ -4,7 +4,8 @@
 // used only by others (ESLint reports one missing). The header, up to the blank line, stays out
 // of the page.
 /* exported $, BG, capture, css, el, fmt, FOV, GROUP_COLORS, JOINT_COLORS, MISSION_COLORS, mix,
-   NEAR, pairText, RE, rgb, shortJoint, STEP_COLORS, STRATEGY_COLORS, valueText, WHITE */
+   NEAR, pairText, partName, RE, rgb, shortJoint, STEP_COLORS, STRATEGY_COLORS, valueText,
+   WHITE */
 
 const DATA = JSON.parse(document.getElementById('ce-data').textContent);
 const RP = DATA.replay;
@@ -30,6 +31,8 @@ RP.qd = RP.qd.map(unpack);
 RP.arm_distance = unpack(RP.arm_distance);
 for (const arm of Object.keys(RP.tcp)) RP.tcp[arm] = unpack(RP.tcp[arm]);
 for (const link of RP.links) link.points = unpack(link.points);
+RP.objects = RP.objects || [];
+for (const o of RP.objects) o.points = unpack(o.points);
 
 // ---------------------------------------------------------------- constants and helpers
 const ARM_COLORS = ['#2f6fdb', '#e0702a', '#0f9d58', '#9333ea'];
@@ -90,7 +93,14 @@ function capture(target, e) {
     // a synthetic or already released pointer: dragging works without capture
   }
 }
-function pairText(p) { return Array.isArray(p) ? p.join(' \u2194 ') : DASH; }
+// a collision object's name for people (replay.py's part_names; a held object, 'vial3@robot1',
+// as held by its arm; else without its '#k')
+function partName(n) {
+  const held = /^(.+)@([^@]+)$/.exec(n);
+  if (held) return held[1] + ' (held by ' + held[2] + ')';
+  return (RP.part_names || {})[n] || String(n).replace(/#\d+$/, '');
+}
+function pairText(p) { return Array.isArray(p) ? p.map(partName).join(' \u2194 ') : DASH; }
 function valueText(v) {
   if (v === null || v === undefined) return DASH;
   return typeof v === 'string' || typeof v === 'number' ? String(v) : JSON.stringify(v);

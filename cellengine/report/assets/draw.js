@@ -1,7 +1,8 @@
 // report.html's script (see base.js): drawing the 3D view; shapes back to front (painter's
 // algorithm), the ground grid, fingertip paths, axes and arm labels.
-/* global addKeypoints, addLinks, addStatic, armColor, BG, cam, canvas, css, ctx, drawCables,
-   handsAt, lastStarted, locate, makeView, mix, N, NEAR, project, rgb, RP, state, statics, WHITE */
+/* global addKeypoints, addLinks, addObjects, addStatic, armColor, BG, cam, canvas, css, ctx,
+   drawCables, drawClosest, drawKeyLabels, drawObjectLabels, drawZones, handsAt, lastStarted,
+   locate, makeView, mix, N, NEAR, project, rgb, RP, state, statics, WHITE */
 /* exported drawView */
 /* global drawReach */
 
@@ -157,15 +158,22 @@ function drawView() {
   ground.sort((a, b) => b.z - a.z);
   for (const p of ground) drawPrim(p);
   drawGrid(V);
+  drawZones(V);
   if (state.trails) drawTrails(V);
   const [i, f] = locate(state.t);
   addLinks(V, i, f, prims);
+  const before = prims.length;
+  addObjects(V, i, f, prims);
+  const objects = prims.length - before;
   if (state.keys) addKeypoints(V, prims);
   prims.sort((a, b) => b.z - a.z);
   for (const p of prims) drawPrim(p);
   const cables = drawCables(V, handsAt(i, f));
+  drawObjectLabels(V, i, f);
+  const labels = state.keys ? drawKeyLabels(V) : 0;
+  drawClosest(V, i, f);
   drawAxes(V);
   drawArmLabels(V);
   if (RP.reach) drawReach(V);
-  return { shapes: ground.length + prims.length, cables };
+  return { shapes: ground.length + prims.length, cables, objects, labels };
 }

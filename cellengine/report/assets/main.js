@@ -1,7 +1,7 @@
 // report.html's script (see base.js): playback, the controls (slider, buttons, orbit, pan,
 // zoom, keys) and start-up.
-/* global $, buildDetails, buildHeader, buildLegend, buildNow, buildPlots, buildTable,
-   buildTimeline, cam, canvas, capture, clampT, drawView, fmt, makeView, N, plots, resetCamera,
+/* global $, addViewButtons, buildDetails, buildHeader, buildLegend, buildNow, buildPlots,
+   buildRun, buildTable, buildTimeline, setView, cam, canvas, capture, clampT, drawView, fmt, makeView, N, plots, resetCamera,
    state, T, T0, T1, updateNow, updateTable, updateTimeline */
 
 // ---------------------------------------------------------------- interaction
@@ -120,8 +120,10 @@ function init() {
   buildPlots();
   buildTable();
   buildDetails();
+  buildRun();
   buildLegend();
   bindControls();
+  addViewButtons(invalidate);
   resetCamera();
   const hash = (key) => {
     const m = new RegExp('(?:^#|&)' + key + '=([0-9.eE+-]+)').exec(location.hash);
@@ -130,12 +132,20 @@ function init() {
   if (hash('t') !== null) state.t = clampT(hash('t') + T0);
   if (hash('az') !== null) cam.az = hash('az');
   if (hash('el') !== null) cam.el = Math.max(-1.45, Math.min(1.45, hash('el')));
+  const view = /(?:^#|&)view=(top|front|fit)/.exec(location.hash);
+  if (view) setView(view[1]);
+  if (/(?:^#|&)keys=1/.test(location.hash)) {
+    state.keys = true;
+    $('btn-keys').classList.add('on');
+  }
   const drawn = render();
   const r = canvas.getBoundingClientRect();
   document.body.dataset.canvas = [r.left + window.scrollX, r.top + window.scrollY, r.width,
     r.height].map(Math.round).join(',');
   document.body.dataset.drawn = String(drawn.shapes);
   document.body.dataset.cables = String(drawn.cables);
+  document.body.dataset.objects = String(drawn.objects);
+  document.body.dataset.keylabels = String(drawn.labels);
   if (document.body.dataset.status !== 'error') document.body.dataset.status = 'ok';
 }
 try {

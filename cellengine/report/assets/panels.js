@@ -1,10 +1,10 @@
 // report.html's script (see base.js): the panels; 'now' (time, step, grippers, joints), the
 // step timeline, the steps table, the header's chips, the run's details, the 3D legend.
-/* global $, armColor, DASH, DATA, DUR, el, fmt, grippersAt, isNum, lastStarted, locate,
-   MISSION_COLORS, niceTicks, pairText, RE, RP, seek, seriesAt, setPlaying, shortJoint, state,
+/* global $, armColor, DASH, DATA, DUR, el, fmt, grippersAt, isNum, jointUnit, lastStarted,
+   locate, MISSION_COLORS, niceTicks, pairText, RE, RP, seek, seriesAt, setPlaying, shortJoint, state,
    STEP_COLORS, STRATEGY_COLORS, T0, T1, valueText */
-/* exported buildDetails, buildHeader, buildLegend, buildNow, buildTable, buildTimeline, updateNow,
-   updateTable, updateTimeline */
+/* exported buildDetails, buildHeader, buildLegend, buildNow, buildTable, buildTimeline, pct,
+   updateNow, updateTable, updateTimeline */
 
 // ---------------------------------------------------------------- panels
 const nowCells = {};
@@ -31,11 +31,10 @@ function buildNow() {
       el('h2', {}, el('span', { class: 'dot', style: 'background:' + armColor[arm] }),
         arm + ' joints'));
     const table = el('table', { class: 'joints' },
-      el('tr', {}, el('th', {}, 'joint'), el('th', { class: 'num' }, 'rad'),
-        el('th', { class: 'num' }, 'deg'), el('th', { class: 'num' }, 'rad/s')));
+      el('tr', {}, el('th', {}, 'joint'), el('th', { class: 'num' }, 'position'),
+        el('th', { class: 'num' }, 'velocity')));
     for (const j of RP.arm_joints[arm]) {
-      const cells = [el('td', { class: 'num' }), el('td', { class: 'num' }),
-        el('td', { class: 'num' })];
+      const cells = [el('td', { class: 'num' }), el('td', { class: 'num' })];
       table.append(el('tr', {}, el('td', {}, shortJoint(RP.joint_names[j], arm)), ...cells));
       nowCells.joints[j] = cells;
     }
@@ -50,8 +49,8 @@ function updateNow() {
   const seg = lastStarted(RP.segments, t);
   const segReport = seg ? RE.segments[seg.index] || {} : {};
   nowCells.time.textContent = fmt(t, 3, 's') + ' / ' + fmt(T1, 3, 's');
-  nowCells.step.textContent = step ? '#' + step.step + ' ' + step.label : DASH;
-  nowCells.segment.textContent = seg ? seg.label : DASH;
+  nowCells.step.textContent = step ? stepTitle(step) : DASH;
+  nowCells.segment.textContent = seg ? segName(seg) : DASH;
   nowCells.strategy.textContent = seg
     ? seg.strategy + (segReport.merge ? ' \u00b7 merge ' + valueText(segReport.merge) : '')
     : DASH;
@@ -65,15 +64,13 @@ function updateNow() {
       ? g.mode + (g.holds ? ' \u00b7 holds ' + g.holds : '') : DASH;
   }
   for (const [j, cells] of Object.entries(nowCells.joints)) {
-    const q = seriesAt(RP.q[j], i, f);
-    cells[0].textContent = q.toFixed(3);
-    cells[1].textContent = (q * 180 / Math.PI).toFixed(1);
-    cells[2].textContent = seriesAt(RP.qd[j], i, f).toFixed(3);
+    const u = jointUnit(j);
+    cells[0].textContent = fmt(u.k * seriesAt(RP.q[j], i, f), 1, u.pos);
+    cells[1].textContent = fmt(u.k * seriesAt(RP.qd[j], i, f), 1, u.vel);
   }
   const hud = $('hud-step');
-  hud.replaceChildren(el('div', { class: 'lbl' }, step ? '#' + step.step + ' ' + step.label
-    : 'no step'), el('div', { class: 'muted' }, seg ? seg.label + ' \u00b7 ' + seg.strategy
-    : ''));
+  hud.replaceChildren(el('div', { class: 'lbl' }, step ? stepTitle(step) : 'no step'),
+    el('div', { class: 'muted' }, seg ? segName(seg) + ' \u00b7 ' + seg.strategy : ''));
 }
 
 const tl = { steps: [], segments: [], cursor: null };
@@ -103,7 +100,7 @@ function buildTimeline() {
   };
   const steps = lane('', 'Steps');
   RP.steps.forEach((s, k) => bar(steps, s, STEP_COLORS[k % STEP_COLORS.length],
-    '#' + s.step + ' ' + s.label, '#' + s.step + ' ' + s.label + ': ' + fmt(s.start, 2) +
+    stepTitle(s), stepTitle(s) + ': ' + fmt(s.start, 2) +
     ' to ' + fmt(s.end, 2) + ' s', tl.steps));
   if (RE.mission && RE.mission.length) {
     // one lane per robot: which steps it works on, when, and what was inserted
@@ -124,8 +121,8 @@ function buildTimeline() {
     key.append(el('span', { style: 'margin-left:12px' },
       el('span', { class: 'dot', style: 'background:' + color }), name));
   }
-  RP.segments.forEach((s) => bar(segs, s, STRATEGY_COLORS[s.strategy] || '#64748b', s.label,
-    s.label + ' [' + s.strategy + ']: ' + fmt(s.end - s.start, 2) + ' s', tl.segments));
+  RP.segments.forEach((s) => bar(segs, s, STRATEGY_COLORS[s.strategy] || '#64748b', segName(s),
+    segName(s) + ' [' + s.strategy + ']: ' + fmt(s.end - s.start, 2) + ' s', tl.segments));
   if (RP.events.length) {
     const ev = lane('events', 'Gripper events');
     for (const e of RP.events) {
@@ -189,7 +186,8 @@ function buildTable() {
   const td = (v, cls) => el('td', cls ? { class: cls } : {}, v);
   const mm = (d) => (isNum(d) ? fmt(1000 * d, 1) : DASH);
   for (const st of RE.steps) {
-    const row = el('tr', { class: 'step-row clickable' }, td('#' + st.step + ' ' + st.label),
+    const shown = RP.steps.find((x) => x.step === st.step) || st;
+    const row = el('tr', { class: 'step-row clickable' }, td(stepTitle(shown)),
       td((st.strategies || []).join(', ')), td(''), td(fmt(st.start_s, 2), 'num'),
       td(fmt(st.duration_s, 2), 'num'), td(''), td(fmt(st.planning_time_s, 3), 'num'),
       td(mm(st.min_arm_distance_m), 'num'), td(pairText(st.closest_pair)), td(''),
@@ -199,7 +197,7 @@ function buildTable() {
     rows.push([st, row, 'step']);
     for (const k of st.segments) {
       const sg = RE.segments[k];
-      const r = el('tr', { class: 'clickable' }, td(sg.label, 'indent'), td(sg.strategy),
+      const r = el('tr', { class: 'clickable' }, td(segName(RP.segments[k] || sg), 'indent'), td(sg.strategy),
         td(valueText(sg.merge)), td(fmt(sg.start_s, 2), 'num'), td(fmt(sg.duration_s, 2), 'num'),
         td(fractions(sg.cartesian_fraction), 'nowrap'), td(fmt(sg.planning_time_s, 3), 'num'),
         td(mm(sg.min_arm_distance_m), 'num'), td(pairText(sg.closest_pair)),
@@ -219,6 +217,20 @@ function updateTable() {
     row.classList.toggle('active', Boolean(on));
   }
 }
+// under the cell's clearance: bad; within half of it again: a warning
+function clearanceClass(d) {
+  const limit = RE.clearance_m;
+  if (!isNum(limit) || !isNum(d)) return '';
+  return d < limit ? 'bad' : d < 1.5 * limit ? 'warn' : '';
+}
+// a step counted from 1, by its plan name, with the object a runtime choice of the run picked;
+// a segment without its step's part (replay.py)
+function stepTitle(s) {
+  const title = s.title || 'step ' + (s.step + 1) + ' ' + s.label;
+  const chosen = ((RE.run || {}).choices || []).find((c) => c.step === s.step && c.chose);
+  return chosen ? title + ' \u2192 ' + chosen.chose : title;
+}
+function segName(s) { return s.name || s.label; }
 function buildHeader() {
   $('title').textContent = DATA.title;
   const tot = RE.totals || {};
@@ -237,17 +249,23 @@ function buildHeader() {
   for (const [kind, label] of [['arms', 'arms'], ['environment', 'environment']]) {
     const c = (tot.clearance || {})[kind];
     if (!c || !isNum(c.distance_m)) continue;
-    const under = isNum(RE.clearance_m) && c.distance_m < RE.clearance_m;
     chip('min. clearance, ' + label, fmt(1000 * c.distance_m, 1, 'mm') + ' (' +
-      pairText(c.pair) + ')', under ? 'bad' : '');
+      pairText(c.pair) + ')', clearanceClass(c.distance_m));
+    const pill = chips.lastChild;
+    if (isNum(c.time_s)) {
+      pill.classList.add('clickable');
+      pill.title = 'at ' + fmt(c.time_s, 2, 's') + ': click to go there';
+      pill.addEventListener('click', () => { setPlaying(false); seek(c.time_s); });
+    }
   }
   if (isNum(RE.clearance_m)) chip("cell's clearance", fmt(1000 * RE.clearance_m, 0, 'mm'));
-  if (tot.checks_passed === true) chip('checks', 'passed', 'ok');
-  else if (tot.checks_passed === false) chip('checks', 'FAILED', 'bad');
+  const checks = RE.run ? 'plan checks' : 'checks'; // a run's own outcome is its status chip
+  if (tot.checks_passed === true) chip(checks, 'passed', 'ok');
+  else if (tot.checks_passed === false) chip(checks, 'FAILED', 'bad');
 }
 function buildDetails() {
   const own = new Set(['format', 'joint_names', 'arms', 'totals', 'steps', 'segments',
-    'events']);
+    'events', 'run']);
   const dl = $('details');
   let shown = 0;
   for (const [k, v] of Object.entries(RE)) {

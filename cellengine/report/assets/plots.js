@@ -1,7 +1,8 @@
 // report.html's script (see base.js): the joint plots (positions; velocities against their
 // limits; the distance between the arms).
-/* global $, capture, DUR, el, fitCanvas, fmt, isNum, JOINT_COLORS, locate, N, pairText, RE, RP,
-   seek, segment, seriesAt, shortJoint, state, T, T0, T1 */
+/* global $, capture, closestMarks, drawMarks, DUR, el, fitCanvas, fmt, isNum, JOINT_COLORS,
+   jointKind, JOINT_UNITS, locate, N, pairText, RE, RP, seek, segment, seriesAt, shortJoint, state,
+   T, T0, T1 */
 /* exported buildPlots */
 
 // ---------------------------------------------------------------- plots
@@ -73,6 +74,7 @@ function makePlot(parent, title, info, lines, opts) {
       segment(b, M.l, y, w - M.r, y);
     }
     b.setLineDash([]);
+    drawMarks(b, opts.marks, (t) => xOf(t, w), M.t, h - M.b);
     b.lineWidth = 1.3; b.lineJoin = 'round';
     for (const l of lines) {
       b.strokeStyle = l.color;
@@ -113,27 +115,34 @@ function legend(parent, items) {
   parent.append(el('div', { class: 'legend' }, ...items.map(([label, color]) =>
     el('span', {}, el('span', { class: 'dot', style: 'background:' + color }), label))));
 }
+// per arm and joint type (lengths and angles apart), in the type's units
 function buildPlots() {
   const box = $('plots');
   for (const arm of RP.arms) {
-    const idx = RP.arm_joints[arm];
+    const all = RP.arm_joints[arm];
     const card = el('div', {});
     box.append(card);
-    const colors = idx.map((_, k) => JOINT_COLORS[k % JOINT_COLORS.length]);
-    const names = idx.map((j) => shortJoint(RP.joint_names[j], arm));
-    const q = idx.map((j, k) => ({ values: RP.q[j], color: colors[k] }));
-    const qd = idx.map((j, k) => ({ values: RP.qd[j], color: colors[k] }));
-    const vmax = Math.max(...idx.map((j) => RP.limits.velocity[j]));
-    let peak = 0;
-    idx.forEach((j) => {
-      const lim = RP.limits.velocity[j];
-      for (const v of RP.qd[j]) if (lim > 0) peak = Math.max(peak, Math.abs(v) / lim);
-    });
-    makePlot(card, arm + ': joint positions (rad)', '', q, {});
-    makePlot(card, arm + ': joint velocities (rad/s)',
-      'peak ' + fmt(100 * peak, 0) + ' % of limit', qd,
-      { symmetric: true, minSpan: 0.1, limits: [vmax, -vmax] });
-    legend(card, names.map((n, k) => [n, colors[k]]));
+    const colors = all.map((_, k) => JOINT_COLORS[k % JOINT_COLORS.length]);
+    const kinds = [...new Set(all.map(jointKind))];
+    for (const kind of kinds) {
+      const u = JOINT_UNITS[kind];
+      const idx = all.filter((j) => jointKind(j) === kind);
+      const color = (j) => colors[all.indexOf(j)];
+      const q = idx.map((j) => ({ values: RP.q[j].map((v) => v * u.k), color: color(j) }));
+      const qd = idx.map((j) => ({ values: RP.qd[j].map((v) => v * u.k), color: color(j) }));
+      const vmax = Math.max(...idx.map((j) => RP.limits.velocity[j])) * u.k;
+      let peak = 0;
+      idx.forEach((j) => {
+        const lim = RP.limits.velocity[j];
+        for (const v of RP.qd[j]) if (lim > 0) peak = Math.max(peak, Math.abs(v) / lim);
+      });
+      const what = arm + ': ' + (kinds.length > 1 ? kind + ' joint ' : 'joint ');
+      makePlot(card, what + 'positions (' + u.pos + ')', '', q, { marks: closestMarks() });
+      makePlot(card, what + 'velocities (' + u.vel + ')',
+        'peak ' + fmt(100 * peak, 0) + ' % of limit', qd,
+        { symmetric: true, minSpan: 0.1 * u.k, limits: [vmax, -vmax], marks: closestMarks() });
+    }
+    legend(card, all.map((j, k) => [shortJoint(RP.joint_names[j], arm), colors[k]]));
   }
   if (RP.arm_distance) {
     const card = el('div', {});
@@ -145,6 +154,6 @@ function buildPlots() {
       : '';
     makePlot(card, 'Distance between the arms (mm)', info,
       [{ values: RP.arm_distance.map((d) => 1000 * d), color: '#475569' }],
-      { include: [0], limits: [0] });
+      { include: [0], limits: [0], marks: closestMarks() });
   }
 }

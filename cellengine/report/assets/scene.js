@@ -1,7 +1,7 @@
 // report.html's script (see base.js): the 3D scene; the orbiting camera and its projection,
 // the static meshes as shaded triangles, the arms' links at a time, cables and fingertips.
 /* global $, armColor, css, FOV, GROUP_COLORS, linkAt, mix, NEAR, rgb, RP, state, tcpAt */
-/* exported addKeypoints, addLinks, addStatic, drawCables, handsAt, makeView, resetCamera,
+/* exported addKeypoints, addLinks, addShape, addStatic, sceneBounds, drawCables, handsAt, makeView, resetCamera,
    statics */
 
 // ---------------------------------------------------------------- camera
@@ -111,24 +111,27 @@ function addStatic(V, s, out) {
 // ---------------------------------------------------------------- moving shapes
 function addLinks(V, i, f, out) {
   for (const link of RP.links) {
-    const p = linkAt(link, i, f);
     const own = rgb(armColor[link.arm] || '#777777');
     const color = /\/tool(#\d+)?$/.test(link.name) ? mix(own, [55, 60, 70], 0.6) : own;
-    if (link.kind === 'capsule' || link.kind === 'cylinder') {
-      const a = project(V, p[0], p[1], p[2]);
-      const b = project(V, p[3], p[4], p[5]);
-      if (a[2] < NEAR || b[2] < NEAR) continue;
-      const z = (a[2] + b[2]) / 2;
-      out.push({ type: 'cap', z, ax: a[0], ay: a[1], bx: b[0] + 0.01, by: b[1],
-        w: 2 * link.radius * V.focal / z, color, round: link.kind === 'capsule' });
-    } else if (link.kind === 'sphere') {
-      const c = project(V, p[0], p[1], p[2]);
-      if (c[2] < NEAR) continue;
-      out.push({ type: 'ball', z: c[2], x: c[0], y: c[1], r: link.radius * V.focal / c[2],
-        color });
-    } else {
-      addBox(V, p, color, out);
-    }
+    addShape(V, link, linkAt(link, i, f), color, out);
+  }
+}
+// a link-like shape (replay.py's layout) at its points p; round: a cylinder drawn capsule-ended
+function addShape(V, link, p, color, out, round) {
+  if (link.kind === 'capsule' || link.kind === 'cylinder') {
+    const a = project(V, p[0], p[1], p[2]);
+    const b = project(V, p[3], p[4], p[5]);
+    if (a[2] < NEAR || b[2] < NEAR) return;
+    const z = (a[2] + b[2]) / 2;
+    out.push({ type: 'cap', z, ax: a[0], ay: a[1], bx: b[0] + 0.01, by: b[1],
+      w: 2 * link.radius * V.focal / z, color, round: round || link.kind === 'capsule' });
+  } else if (link.kind === 'sphere') {
+    const c = project(V, p[0], p[1], p[2]);
+    if (c[2] < NEAR) return;
+    out.push({ type: 'ball', z: c[2], x: c[0], y: c[1], r: link.radius * V.focal / c[2],
+      color });
+  } else {
+    addBox(V, p, color, out);
   }
 }
 function addBox(V, p, color, out) {
