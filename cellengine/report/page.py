@@ -40,7 +40,16 @@ from numpy.typing import NDArray
 ASSETS = files("cellengine.report") / "assets"
 STYLE = "page.css"
 GUARD = "guard.js"  # runs first: catches the errors of the page's script into the DOM
-SCRIPTS = ("base.js", "time.js", "scene.js", "draw.js", "plots.js", "panels.js", "main.js")
+SCRIPTS = (
+    "base.js",
+    "time.js",
+    "scene.js",
+    "draw.js",
+    "plots.js",
+    "panels.js",
+    "failure.js",
+    "main.js",
+)
 
 
 def asset(name: str) -> str:
@@ -65,6 +74,7 @@ BODY = r"""
   <div class="chips" id="chips"></div>
 </header>
 <div class="wrap">
+  <section class="panel fail" id="failure-panel" hidden></section>
   <div class="row1">
     <section class="panel">
       <div id="view-wrap">
@@ -88,6 +98,7 @@ BODY = r"""
         <button id="btn-keys" title="keypoints">keypoints</button>
         <button id="btn-wire" title="static meshes as wireframe">wire</button>
         <button id="btn-reset" title="reset the view">view</button>
+        <button id="btn-fail" title="the pose where the compile stopped" hidden>failure</button>
       </div>
     </section>
     <aside class="panel" id="now"></aside>

@@ -1,7 +1,8 @@
 // report.html's script (see base.js): drawing the 3D view; shapes back to front (painter's
 // algorithm), the ground grid, fingertip paths, axes and arm labels.
 /* global addKeypoints, addLinks, addStatic, armColor, BG, cam, canvas, css, ctx, drawCables,
-   handsAt, lastStarted, locate, makeView, mix, N, NEAR, project, rgb, RP, state, statics, WHITE */
+   failurePose, handsAt, lastStarted, locate, makeView, markFailure, mix, N, NEAR, project, rgb,
+   RP, state, statics, WHITE */
 /* exported drawView */
 
 // ---------------------------------------------------------------- drawing
@@ -158,12 +159,14 @@ function drawView() {
   drawGrid(V);
   if (state.trails) drawTrails(V);
   const [i, f] = locate(state.t);
-  addLinks(V, i, f, prims);
+  const failing = failurePose(); // a failed plan's pose, shown instead of the replay's
+  addLinks(V, i, f, prims, failing && failing.links);
   if (state.keys) addKeypoints(V, prims);
   prims.sort((a, b) => b.z - a.z);
   for (const p of prims) drawPrim(p);
-  const cables = drawCables(V, handsAt(i, f));
+  const cables = drawCables(V, failing ? failing.tcp : handsAt(i, f));
   drawAxes(V);
   drawArmLabels(V);
-  return { shapes: ground.length + prims.length, cables };
+  const highlighted = failing ? markFailure(V, failing) : 0;
+  return { shapes: ground.length + prims.length, cables, highlighted };
 }

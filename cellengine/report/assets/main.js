@@ -1,8 +1,9 @@
 // report.html's script (see base.js): playback, the controls (slider, buttons, orbit, pan,
 // zoom, keys) and start-up.
-/* global $, buildDetails, buildHeader, buildLegend, buildNow, buildPlots, buildTable,
-   buildTimeline, cam, canvas, capture, clampT, drawView, fmt, makeView, N, plots, resetCamera,
-   state, T, T0, T1, updateNow, updateTable, updateTimeline */
+/* global $, buildDetails, buildFailure, buildHeader, buildLegend, buildNow, buildPlots,
+   buildTable, buildTimeline, cam, canvas, capture, clampT, drawView, failurePose, fmt, makeView,
+   N, plots, RE, resetCamera, showFailure, state, T, T0, T1, updateFailureHud, updateNow,
+   updateTable, updateTimeline */
 
 // ---------------------------------------------------------------- interaction
 const slider = $('slider');
@@ -11,6 +12,7 @@ const playBtn = $('play');
 function render() {
   const drawn = drawView();
   updateNow();
+  updateFailureHud();
   for (const p of plots) p.draw();
   updateTimeline();
   updateTable();
@@ -28,6 +30,7 @@ function invalidate() {
   requestAnimationFrame(() => { pending = false; render(); });
 }
 function seek(t) {
+  showFailure(-1); // a time asked for: the replay, not a failed plan's pose
   state.t = clampT(t);
   updateClock(); // at once; the drawing waits for the next frame
   invalidate();
@@ -121,13 +124,18 @@ function init() {
   buildTable();
   buildDetails();
   buildLegend();
+  buildFailure();
   bindControls();
   resetCamera();
+  if (RE.failure) state.t = T1; // where the compile stopped
   const hash = (key) => {
     const m = new RegExp('(?:^#|&)' + key + '=([0-9.eE+-]+)').exec(location.hash);
     return m ? Number(m[1]) : null;
   };
-  if (hash('t') !== null) state.t = clampT(hash('t') + T0);
+  if (hash('t') !== null) {
+    state.t = clampT(hash('t') + T0);
+    showFailure(-1);
+  }
   if (hash('az') !== null) cam.az = hash('az');
   if (hash('el') !== null) cam.el = Math.max(-1.45, Math.min(1.45, hash('el')));
   const drawn = render();
@@ -136,6 +144,12 @@ function init() {
     r.height].map(Math.round).join(',');
   document.body.dataset.drawn = String(drawn.shapes);
   document.body.dataset.cables = String(drawn.cables);
+  if (RE.failure) {
+    const pose = failurePose();
+    document.body.dataset.failures = String(RE.failure.failures.length);
+    document.body.dataset.failurePair = pose && pose.pair ? pose.pair.join(',') : '';
+    document.body.dataset.failureDrawn = String(drawn.highlighted);
+  }
   if (document.body.dataset.status !== 'error') document.body.dataset.status = 'ok';
 }
 try {

@@ -242,12 +242,13 @@ function buildHeader() {
       pairText(c.pair) + ')', under ? 'bad' : '');
   }
   if (isNum(RE.clearance_m)) chip("cell's clearance", fmt(1000 * RE.clearance_m, 0, 'mm'));
+  if (RE.failure) chip('plan', 'FAILED', 'bad');
   if (tot.checks_passed === true) chip('checks', 'passed', 'ok');
   else if (tot.checks_passed === false) chip('checks', 'FAILED', 'bad');
 }
 function buildDetails() {
   const own = new Set(['format', 'joint_names', 'arms', 'totals', 'steps', 'segments',
-    'events']);
+    'events', 'failure']);
   const dl = $('details');
   let shown = 0;
   for (const [k, v] of Object.entries(RE)) {

@@ -1,6 +1,7 @@
 // report.html's script (see base.js): the 3D scene; the orbiting camera and its projection,
 // the static meshes as shaded triangles, the arms' links at a time, cables and fingertips.
-/* global $, armColor, css, FOV, GROUP_COLORS, linkAt, mix, NEAR, rgb, RP, state, tcpAt */
+/* global $, armColor, css, FAIL_COLOR, failureColor, FOV, GROUP_COLORS, linkAt, mix, NEAR, rgb, RP,
+   state, tcpAt */
 /* exported addKeypoints, addLinks, addStatic, drawCables, handsAt, makeView, resetCamera,
    statics */
 
@@ -88,6 +89,7 @@ const statics = RP.static.map((s) => {
 });
 
 function addStatic(V, s, out) {
+  const color = failureColor(s.name) || s.color;
   const v = s.v;
   const pv = s.pv;
   const tr = s.tr;
@@ -104,16 +106,19 @@ function addStatic(V, s, out) {
     const lam = lambert(V, [n[t], n[t + 1], n[t + 2]]);
     out.push({ type: 'poly', wire: state.wire, z: (pv[a + 2] + pv[b + 2] + pv[c + 2]) / 3,
       pts: [pv[a], pv[a + 1], pv[b], pv[b + 1], pv[c], pv[c + 1]],
-      fill: css(s.color, 0.62 + 0.45 * lam) });
+      fill: css(color, 0.62 + 0.45 * lam) });
   }
 }
 
 // ---------------------------------------------------------------- moving shapes
-function addLinks(V, i, f, out) {
-  for (const link of RP.links) {
+// the links at sample i + f of the replay, or ``links`` (each one sample: a failing pose, its
+// pair highlighted)
+function addLinks(V, i, f, out, links) {
+  for (const link of links || RP.links) {
     const p = linkAt(link, i, f);
     const own = rgb(armColor[link.arm] || '#777777');
-    const color = /\/tool(#\d+)?$/.test(link.name) ? mix(own, [55, 60, 70], 0.6) : own;
+    let color = /\/tool(#\d+)?$/.test(link.name) ? mix(own, [55, 60, 70], 0.6) : own;
+    if (link.highlight) color = FAIL_COLOR;
     if (link.kind === 'capsule' || link.kind === 'cylinder') {
       const a = project(V, p[0], p[1], p[2]);
       const b = project(V, p[3], p[4], p[5]);
