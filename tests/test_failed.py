@@ -117,3 +117,76 @@ def test_a_folder_with_an_unfinished_run_is_left_as_it_is(
     )
     after = {p.name: p.read_bytes() for p in out.iterdir() if p.name != ".lock"}
     assert after == before
+
+
+def test_a_folder_with_an_ended_run_keeps_its_journal_and_loses_its_trajectory(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    plan = walled_lab(tmp_path / "cell")
+    out = tmp_path / "run"
+    out.mkdir()
+    ended = '{"entry": "start", "run": {"plan": "x"}}\n{"entry": "end"}\n'
+    (out / "journal.jsonl").write_text(ended)
+    (out / "trajectory.json").write_text("{}\n")
+    assert main(["plan", str(plan), "--out", str(out), "-q"]) == 1
+    assert capsys.readouterr().err == (
+        f"{out}: replacing the trajectory and report of the run that ended there "
+        "(journal.jsonl keeps its record)\n" + MESSAGE.format(plan=plan)
+    )
+    assert sorted(p.name for p in out.iterdir()) == [
+        ".lock",
+        "journal.jsonl",
+        "report.html",
+        "report.json",
+    ]
+    assert (out / "journal.jsonl").read_text() == ended
+
+
+def test_a_refused_step_gets_the_motion_failure_of_the_steps_before_it() -> None:
+    """A family whose second step is refused (found first: candidates are grown before they
+    are compiled) and whose first step runs the left fingertip into the table: both are
+    found, the compile's error first, and the pose is the first step's."""
+    from collections.abc import Iterator
+
+    from cellengine.context import build_context
+    from cellengine.errors import Problem, StepError
+    from cellengine.execute.candidates import compile_candidates
+    from cellengine.execute.compile import Compiler
+    from cellengine.failed import examine
+    from cellengine.family import Candidate
+    from cellengine.info.load import load_plan
+    from cellengine.pipeline import CompileFailed
+    from cellengine.program import ArmPath, Segment
+    from tests.conftest import CELLS
+
+    plan = CELLS / "cable_routing" / "plan_straight.yaml"
+    loaded = load_plan(plan)
+    ctx = build_context(loaded.world)
+    into_table = np.diag([1.0, -1.0, -1.0, 1.0])
+    into_table[:3, 3] = [0.3, 0.35, -0.005]
+    down = Segment(0, "PickCable: down", (ArmPath("left", "transit", into_table[None]),))
+
+    def refused() -> Iterator[Candidate]:
+        raise StepError(Problem("steps[1] PlaceConnector: refused"), 1)
+        yield  # a generator: the family refuses when asked for the step's candidates
+
+    first = iter([Candidate((down,), then=refused)])
+    compiler = Compiler(ctx.world, ctx.cell, ctx.checker, ctx.home, clearance=ctx.clearance)
+    with pytest.raises(StepError) as e:
+        compile_candidates(compiler, first)
+    failed = examine(CompileFailed(loaded.plan.locate(e.value), loaded, ctx, "split"))
+    assert [(p.file, p.line, p.col, p.message) for p in failed.problems] == [
+        (str(plan), 12, 5, "steps[1] PlaceConnector: refused"),
+        (
+            str(plan),
+            9,
+            5,
+            "step 1 (PickCable: down): every IK solution of the transit goal of left is in "
+            "collision (the nearest: left/tool/finger_left / table: collision)",
+        ),
+    ]
+    refusal, motion = failed.found
+    assert refusal.failure is not None and refusal.failure.segment is None
+    assert motion.failure is not None and motion.failure.at is not None
+    assert motion.failure.at.pair == ("left/tool/finger_left", "table")
+    assert failed.program.segments == ()  # nothing compiled before the first segment
