@@ -258,3 +258,32 @@ def test_a_failed_plans_report_shows_the_failing_pose(failed_page: Path, tmp_pat
         body["data-canvas"],
     )
     assert shown > 3000 and replay < 300, (shown, replay)
+
+
+FAIL_CLICKS = """
+<script>
+(function () {
+  const btn = document.getElementById('btn-fail');
+  const shown = () => btn.classList.contains('on');
+  const seen = [shown()];
+  btn.click(); seen.push(shown());  // off: the replay
+  document.querySelector('#failure-panel li.clickable').click(); seen.push(shown());
+  document.getElementById('play').click(); seen.push(shown());  // playing leaves the pose
+  btn.click(); seen.push(shown());
+  setTimeout(function () { document.body.dataset.seen = seen.join(','); }, 500);
+})();
+</script>
+"""
+
+
+def test_the_failing_pose_is_left_for_the_replay_and_shown_again(
+    failed_page: Path, tmp_path: Path
+) -> None:
+    """The 'failure' button and the failure's entry show the pose; the button, the slider and
+    play leave it for the replay; no error on the way."""
+    page = tmp_path / "clicks.html"
+    text = failed_page.read_text(encoding="utf-8")
+    page.write_text(text.replace("</body>", FAIL_CLICKS + "</body>"), encoding="utf-8")
+    attrs, errors = dump_dom(page, tmp_path / "profile")
+    assert attrs.get("data-status") == "ok", errors
+    assert attrs["data-seen"] == "true,false,true,false,true"

@@ -50,6 +50,7 @@ function setPlaying(on) {
   state.last = null;
   playBtn.textContent = on ? '\u275a\u275a Pause' : '\u25b6 Play';
   if (on) {
+    showFailure(-1); // playing the replay, not a failed plan's pose
     if (state.t >= T1 - 1e-9) state.t = T0;
     requestAnimationFrame(tick);
   }
