@@ -1,6 +1,6 @@
 // report.html's script (see base.js): a plan that failed to compile; the failures panel, and
 // the 3D view at the pose where the compile stopped, the colliding pair highlighted and named.
-/* global $, ctx, DASH, el, fmt, invalidate, NEAR, pairText, project, RE, RP, state */
+/* global $, ctx, DASH, el, fmt, invalidate, NEAR, nowCells, pairText, project, RE, RP, state */
 /* exported buildFailure, FAIL_COLOR, failureColor, failurePose, markFailure, showFailure,
    updateFailureHud */
 
@@ -88,10 +88,17 @@ function markFailure(V, pose) {
   }
   return named.length;
 }
+// the HUD and the 'now' panel at the pose shown (its joints, no velocities)
 function updateFailureHud() {
   const pose = failurePose();
   if (!pose) return;
   const f = FAILED.failures[pose.failure];
   $('hud-step').replaceChildren(el('div', { class: 'lbl fail-text' }, 'FAILED: ' +
     (f.segment || f.step_label || '')), el('div', {}, poseWords(pose)));
+  nowCells.segment.textContent = f.segment || DASH;
+  for (const [j, cells] of Object.entries(nowCells.joints)) {
+    cells[0].textContent = f.q[j].toFixed(3);
+    cells[1].textContent = (f.q[j] * 180 / Math.PI).toFixed(1);
+    cells[2].textContent = DASH;
+  }
 }
