@@ -49,11 +49,10 @@ def gate(
 def _shown(traj: Trajectory, violations: Sequence[Violation]) -> FailedAt:
     """The violation the report shows: a collision first, then a clearance shortfall, then
     a limit; the cell's configuration at its time."""
-    order = {"collision": 0, "clearance": 1}
-    v = min(violations, key=lambda v: (order.get(v.kind, 2), v.time))
+    kinds: dict[str, Kind] = {"collision": "collision", "clearance": "clearance"}
+    v = min(violations, key=lambda v: (list(kinds).index(v.kind) if v.kind in kinds else 2, v.time))
     q, _, _ = traj.sample(np.array([v.time]))
-    kind: Kind = v.kind if v.kind in ("collision", "clearance") else "limit"  # type: ignore[assignment]
-    return FailedAt(kind, q[0], v.pair, v.time)
+    return FailedAt(kinds.get(v.kind, "limit"), q[0], v.pair, v.time)
 
 
 @dataclass(frozen=True)

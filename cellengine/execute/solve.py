@@ -332,7 +332,7 @@ def cartesian(
     result = cartesian_path(cell.arms[arm], poses, seed, check=ArmInCell(checker, cell, arm, q))
     reached = q.copy()
     reached[cell.slices[arm]] = result.q[-1] if len(result.q) else seed
-    _refuse_short(result, f"the {arm} arm's Cartesian path", reached)
+    _refuse_short(result, f"the {arm} arm's Cartesian path", reached, {arm: poses})
     return np.vstack([seed, result.q]), result.fraction
 
 
@@ -343,9 +343,8 @@ def dual_cartesian(
     (each arm at the same fraction of its own path length)."""
     result = dual_cartesian_path(cell, poses, q, check=checker)
     reached = result.q[-1] if len(result.q) else q
-    _refuse_short(
-        result, f"the Cartesian paths of {_names(tuple(poses))}, followed together,", reached
-    )
+    what = f"the Cartesian paths of {_names(tuple(poses))}, followed together,"
+    _refuse_short(result, what, reached, poses)
     return np.vstack([q, result.q]), result.fraction
 
 
@@ -356,28 +355,35 @@ def closed_chain(
     the relative pose it has at ``q`` (both hands on one object)."""
     result = closed_chain_path(cell, leader, follower, poses, q, check=checker)
     reached = result.q[-1] if len(result.q) else q
-    _refuse_short(result, f"the closed chain of {leader} (leading) and {follower}", reached)
+    what = f"the closed chain of {leader} (leading) and {follower}"
+    _refuse_short(result, what, reached, {leader: poses})
     return np.vstack([q, result.q]), result.fraction
 
 
-def _refuse_short(result: CartesianResult, what: str, at: Vec) -> None:
+def _refuse_short(result: CartesianResult, what: str, at: Vec, poses: Mapping[str, Poses]) -> None:
     """Refused when the path stops short; ``at``: the whole cell's last configuration
-    reached (the report shows the colliding one, for a collision)."""
+    reached (the report shows the colliding one, for a collision); ``poses``: each arm's
+    waypoints (the report marks the first not reached)."""
     stop = result.stop
     if stop is not None:
         raise Refused(
             f"{what} stops at {100.0 * result.fraction:.0f} % of its length: {stop.message}",
             _own(stop),
-            _stopped_at(stop, at),
+            _stopped_at(stop, at, poses),
         )
 
 
-def _stopped_at(stop: Stop, q: Vec) -> FailedAt:
+def _stopped_at(stop: Stop, q: Vec, poses: Mapping[str, Poses]) -> FailedAt:
     contact = stop.contact
     if stop.kind == "collision" and isinstance(contact, Contact):
         return FailedAt("collision", contact.q, contact.pair)
     kind: Kind = "limit" if stop.kind in ("limit", "joint_jump") else "unreachable"
-    return FailedAt(kind, q)
+    targets = {
+        arm: P[min(stop.waypoints.get(arm, stop.waypoint), len(P) - 1)][:3, 3]
+        for arm, P in poses.items()
+        if stop.arm is None or arm == stop.arm
+    }
+    return FailedAt(kind, q, targets=targets)
 
 
 def _own(stop: Stop) -> bool:
