@@ -1,8 +1,8 @@
 // report.html's script (see base.js): a plan that failed to compile; the failures panel, and
 // the 3D view at the pose where the compile stopped, the colliding pair highlighted and named.
-/* global $, ctx, DASH, el, fmt, invalidate, NEAR, nowCells, pairText, project, RE, RP, state */
-/* exported buildFailure, FAIL_COLOR, failureColor, failurePose, markFailure, showFailure,
-   updateFailureHud */
+/* global $, cam, ctx, DASH, el, fmt, invalidate, NEAR, nowCells, pairText, project, RE, RP, state */
+/* exported buildFailure, FAIL_COLOR, failureColor, failurePose, focusFailure, markFailure,
+   showFailure, updateFailureHud */
 
 const FAILED = RE.failure || null;
 const POSES = (RP.failure && RP.failure.poses) || [];
@@ -73,13 +73,7 @@ function markFailure(V, pose) {
     ctx.moveTo(q[0] + 7, q[1] - 7); ctx.lineTo(q[0] - 7, q[1] + 7);
     ctx.stroke();
   }
-  const named = pose.links.filter((l) => l.highlight).map((l) => [l.name, l.points]);
-  for (const s of RP.static.filter((m) => pose.statics.includes(m.name))) {
-    const v = s.vertices;
-    const c = [0, 0, 0];
-    for (let k = 0; k < v.length; k++) c[k % 3] += 3 * v[k] / v.length;
-    named.push([s.name, c]);
-  }
+  const named = namedShapes(pose);
   ctx.font = '600 12px system-ui, sans-serif';
   ctx.fillStyle = red;
   for (const [name, p] of named) {
@@ -87,6 +81,25 @@ function markFailure(V, pose) {
     if (q[2] >= NEAR) ctx.fillText(name, q[0] + 8, q[1] - 8);
   }
   return named.length;
+}
+// the pose's highlighted shapes: [name, a point of it (a link's first, a mesh's centroid)]
+function namedShapes(pose) {
+  const named = pose.links.filter((l) => l.highlight).map((l) => [l.name, l.points]);
+  for (const s of RP.static.filter((m) => pose.statics.includes(m.name))) {
+    const v = s.vertices;
+    const c = [0, 0, 0];
+    for (let k = 0; k < v.length; k++) c[k % 3] += 3 * v[k] / v.length;
+    named.push([s.name, c]);
+  }
+  return named;
+}
+// the camera closer, on the pair (after resetCamera: a double-click goes back to the cell)
+function focusFailure() {
+  const pose = failurePose();
+  const named = pose ? namedShapes(pose) : [];
+  if (!named.length) return;
+  cam.target = [0, 1, 2].map((k) => named.reduce((sum, [, p]) => sum + p[k], 0) / named.length);
+  cam.dist = Math.max(0.6, 0.6 * cam.dist);
 }
 // the HUD and the 'now' panel at the pose shown (its joints, no velocities)
 function updateFailureHud() {

@@ -1,9 +1,9 @@
 // report.html's script (see base.js): playback, the controls (slider, buttons, orbit, pan,
 // zoom, keys) and start-up.
 /* global $, buildDetails, buildFailure, buildHeader, buildLegend, buildNow, buildPlots,
-   buildTable, buildTimeline, cam, canvas, capture, clampT, drawView, failurePose, fmt, makeView,
-   N, plots, RE, resetCamera, showFailure, state, T, T0, T1, updateFailureHud, updateNow,
-   updateTable, updateTimeline */
+   buildTable, buildTimeline, cam, canvas, capture, clampT, drawView, failurePose, fmt,
+   focusFailure, makeView, N, plots, RE, resetCamera, showFailure, state, T, T0, T1,
+   updateFailureHud, updateNow, updateTable, updateTimeline */
 
 // ---------------------------------------------------------------- interaction
 const slider = $('slider');
@@ -128,7 +128,10 @@ function init() {
   buildFailure();
   bindControls();
   resetCamera();
-  if (RE.failure) state.t = T1; // where the compile stopped
+  if (RE.failure) {
+    state.t = T1; // where the compile stopped
+    focusFailure();
+  }
   const hash = (key) => {
     const m = new RegExp('(?:^#|&)' + key + '=([0-9.eE+-]+)').exec(location.hash);
     return m ? Number(m[1]) : null;

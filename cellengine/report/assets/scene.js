@@ -112,28 +112,32 @@ function addStatic(V, s, out) {
 
 // ---------------------------------------------------------------- moving shapes
 // the links at sample i + f of the replay, or ``links`` (each one sample: a failing pose, its
-// pair highlighted)
+// pair highlighted and drawn over everything: seen through what stands before it)
 function addLinks(V, i, f, out, links) {
   for (const link of links || RP.links) {
-    const p = linkAt(link, i, f);
-    const own = rgb(armColor[link.arm] || '#777777');
-    let color = /\/tool(#\d+)?$/.test(link.name) ? mix(own, [55, 60, 70], 0.6) : own;
-    if (link.highlight) color = FAIL_COLOR;
-    if (link.kind === 'capsule' || link.kind === 'cylinder') {
-      const a = project(V, p[0], p[1], p[2]);
-      const b = project(V, p[3], p[4], p[5]);
-      if (a[2] < NEAR || b[2] < NEAR) continue;
-      const z = (a[2] + b[2]) / 2;
-      out.push({ type: 'cap', z, ax: a[0], ay: a[1], bx: b[0] + 0.01, by: b[1],
-        w: 2 * link.radius * V.focal / z, color, round: link.kind === 'capsule' });
-    } else if (link.kind === 'sphere') {
-      const c = project(V, p[0], p[1], p[2]);
-      if (c[2] < NEAR) continue;
-      out.push({ type: 'ball', z: c[2], x: c[0], y: c[1], r: link.radius * V.focal / c[2],
-        color });
-    } else {
-      addBox(V, p, color, out);
-    }
+    const start = out.length;
+    addLink(V, link, linkAt(link, i, f), out);
+    if (link.highlight) for (let k = start; k < out.length; k++) out[k].z *= 1e-3;
+  }
+}
+function addLink(V, link, p, out) {
+  const own = rgb(armColor[link.arm] || '#777777');
+  let color = /\/tool(#\d+)?$/.test(link.name) ? mix(own, [55, 60, 70], 0.6) : own;
+  if (link.highlight) color = FAIL_COLOR;
+  if (link.kind === 'capsule' || link.kind === 'cylinder') {
+    const a = project(V, p[0], p[1], p[2]);
+    const b = project(V, p[3], p[4], p[5]);
+    if (a[2] < NEAR || b[2] < NEAR) return;
+    const z = (a[2] + b[2]) / 2;
+    out.push({ type: 'cap', z, ax: a[0], ay: a[1], bx: b[0] + 0.01, by: b[1],
+      w: 2 * link.radius * V.focal / z, color, round: link.kind === 'capsule' });
+  } else if (link.kind === 'sphere') {
+    const c = project(V, p[0], p[1], p[2]);
+    if (c[2] < NEAR) return;
+    out.push({ type: 'ball', z: c[2], x: c[0], y: c[1], r: link.radius * V.focal / c[2],
+      color });
+  } else {
+    addBox(V, p, color, out);
   }
 }
 function addBox(V, p, color, out) {
