@@ -12,7 +12,10 @@ from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Self
+from typing import TYPE_CHECKING, Self
+
+if TYPE_CHECKING:  # types only: errors are the bottom layer
+    from cellengine.execute.failure import Failure
 
 EXIT_OK = 0
 EXIT_INVALID = 1
@@ -110,6 +113,8 @@ class InputError(CellError):
     <cellengine.family.Candidate.decides>`, e.g. which arm does what), or None."""
 
     blames: str | None = None
+    # a compile that stopped here: where, as data, for the report of the failed plan
+    failure: Failure | None = None
 
 
 class StepError(InputError):
@@ -128,14 +133,17 @@ class StepError(InputError):
             return error
         wrapped = cls(error.problems, step)
         wrapped.blames = getattr(error, "blames", None)
+        wrapped.failure = getattr(error, "failure", None)
         return wrapped
 
     def located(self, file: str | Path, line: int | None, col: int | None) -> InputError:
         """The problems placed at the step in its plan file (a problem placed already keeps
         its place)."""
-        return InputError(
+        out = InputError(
             p if p.file else Problem(p.message, str(file), line, col) for p in self.problems
         )
+        out.failure = self.failure
+        return out
 
 
 @contextmanager

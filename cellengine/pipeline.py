@@ -141,7 +141,25 @@ def compile_loaded(
                 report.update(candidate.report(program))
         return Compiled(loaded, ctx, program, chosen, report)
 
-    return _in_plan(plan, search)
+    try:
+        return _in_plan(plan, search)
+    except InputError as e:
+        raise CompileFailed(e, loaded, ctx, chosen) from None
+
+
+class CompileFailed(InputError):
+    """A loaded plan that cannot run: ``error``'s problems (as printed), with what a report
+    of the failure needs (the loaded plan, its planning context, the execution)."""
+
+    def __init__(
+        self, error: InputError, loaded: LoadedPlan, context: PlanningContext, strategy: str
+    ) -> None:
+        super().__init__(error.problems)
+        self.blames = error.blames
+        self.failure = error.failure
+        self.loaded = loaded
+        self.context = context
+        self.strategy = strategy
 
 
 def _in_plan(plan: Plan, make: Callable[[], T]) -> T:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from types import MappingProxyType
 
 import numpy as np
@@ -62,3 +63,24 @@ def Path_(p: str):
     from pathlib import Path
 
     return Path(p)
+
+
+# A wall across the lab bench at x = 880 mm, between the shared racks (x 400) and the free
+# places (x 1000), up to 380 mm: no robot gets a vial past it (robot1's home, x 750, is clear).
+WALL = "  wall: {box: [20, 1300, 360], pose: {xyz: [880, 650, 200]}}\n"
+
+
+def walled_lab(folder: Path) -> Path:
+    """The lab bench copied into ``folder`` with the wall above in cell.yaml: its
+    plan_relocate.yaml (returned) fails to compile in ~3 s, robot2 finding no transit to carry
+    vial5 past the wall, after the 3 segments that pick it."""
+    import shutil
+
+    from tests.conftest import CELLS
+
+    shutil.copytree(CELLS / "lab_bench", folder)
+    cell = folder / "cell.yaml"
+    text = cell.read_text()
+    table = next(line for line in text.splitlines(keepends=True) if line.startswith("  table:"))
+    cell.write_text(text.replace(table, table + WALL, 1))
+    return folder / "plan_relocate.yaml"

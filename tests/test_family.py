@@ -95,7 +95,9 @@ def test_every_candidate_failing_gives_the_first_error(site: Path, tmp_path: Pat
     done = cellengine(site, "plan", str(plan), "--out", str(tmp_path / "out"), "-q")
     assert done.returncode == 1
     assert f"{plan}:4:5: step 1 (Hover routing.guide1: 1500 mm over): " in done.stderr
-    assert not (tmp_path / "out").exists()
+    # the report of the failure, nothing to run
+    assert not (tmp_path / "out" / "trajectory.json").exists()
+    assert (tmp_path / "out" / "report.html").is_file()
 
 
 def test_a_plan_mixing_families_is_refused_at_the_step(tmp_path: Path) -> None:

@@ -75,6 +75,19 @@ def compile_from_args(args: argparse.Namespace) -> Compiled:
     return compiled
 
 
+def compile_reporting(args: argparse.Namespace) -> Compiled:
+    """:func:`compile_from_args`; a plan that cannot run gets the report of its failure in
+    ``--out`` (cellengine/failed.py), and every failure found is raised."""
+    from cellengine.pipeline import CompileFailed
+
+    try:
+        return compile_from_args(args)
+    except CompileFailed as e:
+        from cellengine.failed import report_failure
+
+        raise report_failure(e, args.out, args.quiet) from None
+
+
 def _progress() -> Progress:
     t0 = time.perf_counter()
 
@@ -89,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
     from cellengine.pipeline import write_plan_outputs
     from cellengine.runfolder import using
 
-    compiled = compile_from_args(args)
+    compiled = compile_reporting(args)
     with using(args.out):
         if (replaced := refuse_unfinished(args.out)) is not None:
             print(printable(replaced), file=sys.stderr)

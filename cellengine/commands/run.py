@@ -8,7 +8,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from cellengine.commands.plan import add_common, compile_from_args
+from cellengine.commands.plan import add_common, compile_from_args, compile_reporting
 from cellengine.errors import EXIT_OK, UsageError, known
 
 # The drivers' names (cellengine/drivers/registry.py DRIVERS, which a test keeps equal): here so
@@ -75,5 +75,5 @@ def run(args: argparse.Namespace) -> int:
     if args.resume is not None:  # compiled only if the run has something left to do
         resume_run(args.resume, lambda: compile_from_args(args), options, args.yes, args.quiet)
     else:
-        run_plan(compile_from_args(args), args.out, options, args.yes, args.quiet, args.cycles)
+        run_plan(compile_reporting(args), args.out, options, args.yes, args.quiet, args.cycles)
     return EXIT_OK

@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from cellengine.errors import InputError
+from cellengine.execute.failure import Failure
 from cellengine.execute.search import add_all
 from cellengine.program import Segment
 
@@ -67,6 +68,7 @@ def compile_candidates(
     # the error of the attempt that got furthest (the first of those), and how far: (the
     # choice, the place in it) of the segment it stopped at
     reported: tuple[tuple[int, int], InputError] | None = None
+    ahead: tuple[Segment, ...] = ()  # a refused choice's: the segments of those before it
     recompiled: set[tuple[int, ...]] = set()  # the combinations compiled again from the start
     for _ in range(MAX_TRIES + 1):
         # the choice of the segment being compiled; the choice, and the place in it, of the
@@ -79,6 +81,7 @@ def compile_candidates(
         except _Grown as e:  # the choice after the last one taken offered nothing
             if e.error is not None and (reported is None or (len(chosen), -1) > reported[0]):
                 reported = (len(chosen), -1), e.error
+                ahead = tuple(s for c in chosen for s in c.taken.segments)
             failed, blames = len(chosen), e.error.blames if e.error is not None else None
         except InputError as e:
             # the choice of the furthest segment compiled: going back to earlier transits
@@ -113,7 +116,10 @@ def compile_candidates(
         pending = then() if then is not None else None
     if reported is None:  # a family that offered no candidate at all
         raise InputError.at("the skill family offered no way to do the plan", None)
-    raise reported[1]
+    error = reported[1]
+    if error.failure is None:  # the family refused a choice: nothing of it was compiled
+        error.failure = Failure(getattr(error, "step", None), ahead=ahead)
+    raise error
 
 
 class _Grown(Exception):

@@ -9,15 +9,17 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
 from cellengine.arrays import Vec
+from cellengine.execute.failure import FailedAt, Kind
 from cellengine.execute.refused import Refused
 from cellengine.motion.collision import CollisionChecker
-from cellengine.motion.gate import GateReport, check_cell_trajectory
+from cellengine.motion.gate import GateReport, Violation, check_cell_trajectory
 from cellengine.motion.robot import CellModel
 from cellengine.motion.scene import Pair
 from cellengine.motion.trajectory import Trajectory
@@ -40,8 +42,17 @@ def gate(
         unsafe = [str(v) for v in report.violations if v.kind != "clearance"]
         short = [str(v) for v in report.violations if v.kind == "clearance"]
         failed = ["the trajectory fails the gate: " + "; ".join(unsafe)] if unsafe else []
-        raise Refused("; ".join(failed + short))
+        raise Refused("; ".join(failed + short), at=_shown(traj, report.violations))
     return report
+
+
+def _shown(traj: Trajectory, violations: Sequence[Violation]) -> FailedAt:
+    """The violation the report shows: a collision first, then a clearance shortfall, then
+    a limit; the cell's configuration at its time."""
+    kinds: dict[str, Kind] = {"collision": "collision", "clearance": "clearance"}
+    v = min(violations, key=lambda v: (list(kinds).index(v.kind) if v.kind in kinds else 2, v.time))
+    q, _, _ = traj.sample(np.array([v.time]))
+    return FailedAt(kinds.get(v.kind, "limit"), q[0], v.pair, v.time)
 
 
 @dataclass(frozen=True)
@@ -64,7 +75,8 @@ def kept_distance(traj: Trajectory, cell: CellModel, arms: tuple[str, str]) -> K
         raise Refused(
             f"the distance between the {a} and {b} fingertips must stay "
             f"{1000 * kept.distance:.1f} mm (within {1000 * KEEP_DISTANCE_TOLERANCE:g} mm) "
-            f"but is {1000 * d[worst]:.1f} mm at t={t[worst]:.3f} s"
+            f"but is {1000 * d[worst]:.1f} mm at t={t[worst]:.3f} s",
+            at=FailedAt("limit", q[worst], time=float(t[worst])),
         )
     return kept
 

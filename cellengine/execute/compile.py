@@ -29,6 +29,7 @@ from numpy.typing import ArrayLike
 from cellengine.arrays import Vec
 from cellengine.execute import winding
 from cellengine.execute.checks import gate, kept_distance
+from cellengine.execute.failure import FailedAt
 from cellengine.execute.following import required
 from cellengine.execute.held import Held, Holding
 from cellengine.execute.merge import MERGES, Merge, Merged, merge_rows, on_one_axis
@@ -113,7 +114,9 @@ class Compiler:
             compiled = self._compile(segment, following, choice)
         except Refused as e:
             self.restore(mark)
-            raise in_plan_terms(segment, e) from None
+            if e.at is None:  # nothing more known: the arms where the segment began
+                e.at = FailedAt("segment", np.array(self.q))
+            raise in_plan_terms(segment, e, self.program()) from None
         self.segments.append(compiled)
         self.q = np.array(compiled.trajectory.q[-1])
         self.t = compiled.trajectory.end_time
@@ -304,7 +307,10 @@ class Compiler:
             try:
                 self.holding.set(e.arm, e.holds, T_cell_tcp, e.mode)
             except (ValueError, KeyError) as err:
-                raise Refused(f"the {e.arm} gripper cannot hold '{e.holds}': {err}") from None
+                raise Refused(
+                    f"the {e.arm} gripper cannot hold '{e.holds}': {err}",
+                    at=FailedAt("segment", np.array(q)),
+                ) from None
             self.events.append(TimedEvent(t, e))
 
     def _timed(

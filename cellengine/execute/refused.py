@@ -10,18 +10,23 @@ it at the step's line in the plan file.
 from __future__ import annotations
 
 from cellengine.errors import Problem, StepError
-from cellengine.program import Segment
+from cellengine.execute.failure import FailedAt, Failure
+from cellengine.program import Program, Segment
 
 
 class Refused(Exception):
     """A segment that cannot be compiled; the message says why, without the step.
     ``configuration``: an arm's own configuration is to blame (a joint limit or jump, its IK
     branch's reach, its links meeting each other): the transit that chose its branch and
-    turns, not the path, may be what has to change."""
+    turns, not the path, may be what has to change. ``at``: where, as data (the report
+    draws it), when the raiser knows more than the configuration the segment started from."""
 
-    def __init__(self, message: str, configuration: bool = False) -> None:
+    def __init__(
+        self, message: str, configuration: bool = False, at: FailedAt | None = None
+    ) -> None:
         super().__init__(message)
         self.configuration = configuration
+        self.at = at
 
 
 class NoMoreChoices(Refused):
@@ -39,10 +44,12 @@ def step_name(segment: Segment) -> str:
     return f"step {segment.step + 1} ({segment.label})"
 
 
-def in_plan_terms(segment: Segment, why: Refused) -> StepError:
+def in_plan_terms(segment: Segment, why: Refused, before: Program | None = None) -> StepError:
     """The error a user sees: the step and segment, then why; carrying the step's index, so
-    whoever has the plan puts it at the step's line."""
+    whoever has the plan puts it at the step's line, and where it failed (``before``: what
+    was compiled before it) for the report."""
     cls = ChoicesExhausted if isinstance(why, NoMoreChoices) else StepError
     error = cls(Problem(f"{step_name(segment)}: {why}"), segment.step)
     error.blames = "configuration" if why.configuration else None
+    error.failure = Failure(segment.step, segment, why.at, before)
     return error

@@ -22,6 +22,7 @@ from typing import NamedTuple
 import numpy as np
 
 from cellengine.arrays import Poses, Vec
+from cellengine.execute.failure import FailedAt, Kind
 from cellengine.execute.following import followable
 from cellengine.execute.refused import NoMoreChoices, Refused
 from cellengine.execute.retime import fastest, thinned
@@ -34,7 +35,7 @@ from cellengine.motion.cartesian import (
     closed_chain_path,
     dual_cartesian_path,
 )
-from cellengine.motion.collision import CollisionChecker
+from cellengine.motion.collision import CollisionChecker, Contact
 from cellengine.motion.ik import arm_ik
 from cellengine.motion.margins import keeping_clearance
 from cellengine.motion.robot import CellModel
@@ -118,11 +119,13 @@ def transit(
     ]
     tiers = _goal_configurations(cell, arms, per_arm, q, follows)
     free = [[g for g in tier if not checker.in_collision(g)] for tier in tiers]
+    targets = {arm: goals[arm][:3, 3] for arm in arms}
     if not any(free):
         contact = checker.check(tiers[0][0])
         raise Refused(
             f"every IK solution of the transit goal of {_names(arms)} is in collision "
-            f"(the nearest: {contact})"
+            f"(the nearest: {contact})",
+            at=FailedAt("collision", tiers[0][0], _pair(contact), targets=targets),
         )
     order = _looking_ahead(free, accept)
     if choice > 0:
@@ -133,12 +136,32 @@ def transit(
                 f"({len(every)} in all)"
             )
         order = iter([[every[choice]]])
-    reason = ""
+    reason, first = "", None
     for tier in order:
+        first = tier[0] if first is None else first
         rows, reason = _reach(cell, checker, arms, q, tier, clearance)
         if rows is not None:
             return rows
-    raise Refused(f"no collision-free transit for {_names(arms)}: {reason}")
+    raise Refused(
+        f"no collision-free transit for {_names(arms)}: {reason}",
+        at=_blocked(checker, q, first, targets),
+    )
+
+
+def _blocked(
+    checker: CollisionChecker, q: Vec, goal: Vec | None, targets: Mapping[str, Vec]
+) -> FailedAt:
+    """Where a transit that found no path shows best: the first contact on the straight
+    joint-space line from ``q`` to its nearest goal (the start itself, when it is in
+    collision), else the start."""
+    contact = None if goal is None else checker.check_segment(q, goal)
+    if contact is None:
+        return FailedAt("transit", q, targets=targets)
+    return FailedAt("transit", contact.q, contact.pair, targets=targets)
+
+
+def _pair(contact: Contact | None) -> tuple[str, str] | None:
+    return None if contact is None else contact.pair
 
 
 def to_configuration(
@@ -241,7 +264,8 @@ def _ik_goals(cell: CellModel, arm: str, T_cell_tcp: Poses, q: Vec) -> Vec:
         x, y, z = (1000.0 * T_cell_tcp[:3, 3]).tolist()
         raise Refused(
             f"the {arm} arm cannot reach its transit goal at ({x:.1f}, {y:.1f}, {z:.1f}) mm: "
-            "no IK solution within its joint limits"
+            "no IK solution within its joint limits",
+            at=FailedAt("unreachable", q, targets={arm: T_cell_tcp[:3, 3]}),
         )
     return sols
 
@@ -326,7 +350,9 @@ def cartesian(
     ``q``; and the fraction reached (always 1: short paths are refused)."""
     seed = q[cell.slices[arm]]
     result = cartesian_path(cell.arms[arm], poses, seed, check=ArmInCell(checker, cell, arm, q))
-    _refuse_short(result, f"the {arm} arm's Cartesian path")
+    reached = q.copy()
+    reached[cell.slices[arm]] = result.q[-1] if len(result.q) else seed
+    _refuse_short(result, f"the {arm} arm's Cartesian path", reached, {arm: poses})
     return np.vstack([seed, result.q]), result.fraction
 
 
@@ -336,7 +362,9 @@ def dual_cartesian(
     """Whole-cell rows (``q`` first) moving every arm along its poses at once, on one grid
     (each arm at the same fraction of its own path length)."""
     result = dual_cartesian_path(cell, poses, q, check=checker)
-    _refuse_short(result, f"the Cartesian paths of {_names(tuple(poses))}, followed together,")
+    reached = result.q[-1] if len(result.q) else q
+    what = f"the Cartesian paths of {_names(tuple(poses))}, followed together,"
+    _refuse_short(result, what, reached, poses)
     return np.vstack([q, result.q]), result.fraction
 
 
@@ -346,17 +374,36 @@ def closed_chain(
     """Whole-cell rows (``q`` first): the leader's TCP along ``poses``, the follower's keeping
     the relative pose it has at ``q`` (both hands on one object)."""
     result = closed_chain_path(cell, leader, follower, poses, q, check=checker)
-    _refuse_short(result, f"the closed chain of {leader} (leading) and {follower}")
+    reached = result.q[-1] if len(result.q) else q
+    what = f"the closed chain of {leader} (leading) and {follower}"
+    _refuse_short(result, what, reached, {leader: poses})
     return np.vstack([q, result.q]), result.fraction
 
 
-def _refuse_short(result: CartesianResult, what: str) -> None:
+def _refuse_short(result: CartesianResult, what: str, at: Vec, poses: Mapping[str, Poses]) -> None:
+    """Refused when the path stops short; ``at``: the whole cell's last configuration
+    reached (the report shows the colliding one, for a collision); ``poses``: each arm's
+    waypoints (the report marks the first not reached)."""
     stop = result.stop
     if stop is not None:
         raise Refused(
             f"{what} stops at {100.0 * result.fraction:.0f} % of its length: {stop.message}",
             _own(stop),
+            _stopped_at(stop, at, poses),
         )
+
+
+def _stopped_at(stop: Stop, q: Vec, poses: Mapping[str, Poses]) -> FailedAt:
+    contact = stop.contact
+    if stop.kind == "collision" and isinstance(contact, Contact):
+        return FailedAt("collision", contact.q, contact.pair)
+    kind: Kind = "limit" if stop.kind in ("limit", "joint_jump") else "unreachable"
+    targets = {
+        arm: P[min(stop.waypoints.get(arm, stop.waypoint), len(P) - 1)][:3, 3]
+        for arm, P in poses.items()
+        if stop.arm is None or arm == stop.arm
+    }
+    return FailedAt(kind, q, targets=targets)
 
 
 def _own(stop: Stop) -> bool:

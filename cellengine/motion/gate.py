@@ -52,6 +52,7 @@ class Violation:
     what: str  # the joint, or the colliding pair
     value: float | None = None
     limit: float | None = None
+    pair: tuple[str, str] | None = None  # collision, clearance: the two objects' names
 
     def __str__(self) -> str:
         at = f"t={self.time:.3f} s"
@@ -172,7 +173,9 @@ def _collisions(t: Vec, q: Vec, checker: Checker) -> list[Violation]:
         return []
     i = int(colliding[0])
     contact = checker.check(q[i])
-    return [Violation("collision", float(t[i]), str(contact) if contact else "unknown objects")]
+    what = str(contact) if contact else "unknown objects"
+    pair = getattr(contact, "pair", None)
+    return [Violation("collision", float(t[i]), what, pair=None if pair is None else tuple(pair))]
 
 
 def _arm_distance(
@@ -242,7 +245,7 @@ def _with_clearance(
         near = near | {pair_key(*c.pair) for c in leaving}
         found = measure(checker.scene, t, q, near)
     short = [
-        Violation("clearance", c.time, why, c.distance, clearance)
+        Violation("clearance", c.time, why, c.distance, clearance, c.pair)
         for c, why in found.shortfalls(clearance)
     ]
     arms = measured.arms

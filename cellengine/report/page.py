@@ -54,6 +54,7 @@ SCRIPTS = (
     "reach.js",  # the cell page's (cell_page.py); nothing without the replay's ``reach``
     "run.js",
     "camera.js",
+    "failure.js",
     "main.js",
 )
 
@@ -80,6 +81,7 @@ BODY = r"""
   <div class="chips" id="chips"></div>
 </header>
 <div class="wrap">
+  <section class="panel fail" id="failure-panel" hidden></section>
   <div class="row1">
     <section class="panel">
       <div id="view-wrap">
@@ -103,6 +105,7 @@ BODY = r"""
         <button id="btn-keys" title="keypoints">keypoints</button>
         <button id="btn-wire" title="static meshes as wireframe">wire</button>
         <button id="btn-reset" title="reset the view">view</button>
+        <button id="btn-fail" title="the pose where the compile stopped" hidden>failure</button>
       </div>
     </section>
     <aside class="panel" id="now"></aside>

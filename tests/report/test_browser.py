@@ -206,3 +206,84 @@ def test_interactions_do_not_fail(report_page: Path, tmp_path: Path) -> None:
     assert "Pause" in attrs["data-play"]
     now, total = (float(v.strip(" s")) for v in attrs["data-clock"].split("/"))
     assert total == 6.0 and 1.0 <= now < 3.5, attrs["data-clock"]
+
+
+FAIL_RED = (225, 29, 72)  # assets/failure.js FAIL_COLOR: the failing pair
+
+
+def red_pixels(shot: Path, canvas: str) -> int:
+    """Pixels of the 3D view in the failing pair's red, however shaded (not the right arm's
+    orange, whose green is half its red)."""
+    x, y, w, h = (int(v) for v in canvas.split(","))
+    image = read_png(shot.read_bytes(), rows=y + h)[y : y + h, x : x + w, :3].astype(int)
+    r, g, b = (image[..., k] for k in range(3))
+    return int(((r > 120) & (g < 0.3 * r) & (b < 0.5 * r)).sum())
+
+
+@pytest.fixture(scope="module")
+def failed_page(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The report of the walled lab's plan, which fails (tests/helpers.py)."""
+    from cellengine.cli import main
+    from tests.helpers import walled_lab
+
+    base = tmp_path_factory.mktemp("failed")
+    out = base / "run"
+    assert main(["plan", str(walled_lab(base / "cell")), "--out", str(out), "-q"]) == 1
+    return out / "report.html"
+
+
+def test_a_failed_plans_report_shows_the_failing_pose(failed_page: Path, tmp_path: Path) -> None:
+    """The page opens on the pose where the compile stopped: the pair is named in the page
+    and drawn in red (the wall and robot2's gripper); the replay at a time (#t=0) draws no
+    red."""
+    dom = run_chromium(failed_page.as_uri(), tmp_path / "profile", "--dump-dom").stdout
+    body = dict(re.findall(r'([\w-]+)="([^"]*)"', re.search(r"<body([^>]*)>", dom).group(1)))
+    assert body["data-status"] == "ok", dom[:2000]
+    assert body["data-failures"] == "1"
+    assert body["data-failure-pair"] == "robot2/gripper,wall"
+    assert body["data-failure-drawn"] == "2"  # the gripper and the wall, each named by it
+    panel = html_lib.unescape(
+        re.search(r'<section[^>]*id="failure-panel"[^>]*>(.*?)</section>', dom, re.S).group(1)
+    )
+    assert "Plan failed: 1 failure; 3 segments compiled before it" in panel
+    assert "no collision-free transit for robot2" in panel
+    assert "in the way: robot2/gripper \u2194 wall" in panel
+    assert "plan <b>FAILED</b>" in dom
+
+    shown = red_pixels(
+        screenshot(failed_page, tmp_path / "profile", tmp_path / "fail.png"), body["data-canvas"]
+    )
+    replay = red_pixels(
+        screenshot(failed_page, tmp_path / "profile", tmp_path / "t0.png", "#t=0"),
+        body["data-canvas"],
+    )
+    assert shown > 3000 and replay < 300, (shown, replay)
+
+
+FAIL_CLICKS = """
+<script>
+(function () {
+  const btn = document.getElementById('btn-fail');
+  const shown = () => btn.classList.contains('on');
+  const seen = [shown()];
+  btn.click(); seen.push(shown());  // off: the replay
+  document.querySelector('#failure-panel li.clickable').click(); seen.push(shown());
+  document.getElementById('play').click(); seen.push(shown());  // playing leaves the pose
+  btn.click(); seen.push(shown());
+  setTimeout(function () { document.body.dataset.seen = seen.join(','); }, 500);
+})();
+</script>
+"""
+
+
+def test_the_failing_pose_is_left_for_the_replay_and_shown_again(
+    failed_page: Path, tmp_path: Path
+) -> None:
+    """The 'failure' button and the failure's entry show the pose; the button, the slider and
+    play leave it for the replay; no error on the way."""
+    page = tmp_path / "clicks.html"
+    text = failed_page.read_text(encoding="utf-8")
+    page.write_text(text.replace("</body>", FAIL_CLICKS + "</body>"), encoding="utf-8")
+    attrs, errors = dump_dom(page, tmp_path / "profile")
+    assert attrs.get("data-status") == "ok", errors
+    assert attrs["data-seen"] == "true,false,true,false,true"

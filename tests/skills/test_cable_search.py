@@ -256,10 +256,11 @@ def test_a_hand_coming_in_at_an_angle_approaches_along_the_guide(tmp_path: Path)
 
 
 def refused(path: Path, out: Path, capsys: pytest.CaptureFixture[str]) -> str:
-    """What `cellengine plan` prints when it refuses the plan: exit 1, nothing in ``out``."""
+    """What `cellengine plan` prints when it refuses the plan: exit 1, the report of the
+    failure in ``out`` and nothing to run (no trajectory.json)."""
     capsys.readouterr()
     assert plan(path, out) == 1
-    assert not out.exists()
+    assert sorted(p.name for p in out.iterdir()) == [".lock", "report.html", "report.json"]
     captured = capsys.readouterr()
     assert captured.out == ""
     return captured.err

@@ -1,8 +1,9 @@
 // report.html's script (see base.js): drawing the 3D view; shapes back to front (painter's
 // algorithm), the ground grid, fingertip paths, axes and arm labels.
 /* global addKeypoints, addLinks, addObjects, addStatic, armColor, BG, cam, canvas, css, ctx,
-   drawCables, drawClosest, drawKeyLabels, drawObjectLabels, drawZones, handsAt, lastStarted,
-   locate, makeView, mix, N, NEAR, project, rgb, RP, state, statics, WHITE */
+   drawCables, drawClosest, drawKeyLabels, drawObjectLabels, drawZones, failurePose, handsAt,
+   lastStarted, locate, makeView, markFailure, mix, N, NEAR, project, rgb, RP, state, statics,
+   WHITE */
 /* exported drawView */
 /* global drawReach */
 
@@ -161,19 +162,21 @@ function drawView() {
   drawZones(V);
   if (state.trails) drawTrails(V);
   const [i, f] = locate(state.t);
-  addLinks(V, i, f, prims);
+  const failing = failurePose(); // a failed plan's pose, shown instead of the replay's
+  addLinks(V, i, f, prims, failing && failing.links);
   const before = prims.length;
   addObjects(V, i, f, prims);
   const objects = prims.length - before;
   if (state.keys) addKeypoints(V, prims);
   prims.sort((a, b) => b.z - a.z);
   for (const p of prims) drawPrim(p);
-  const cables = drawCables(V, handsAt(i, f));
+  const cables = drawCables(V, failing ? failing.tcp : handsAt(i, f));
   drawObjectLabels(V, i, f);
   const labels = state.keys ? drawKeyLabels(V) : 0;
   drawClosest(V, i, f);
   drawAxes(V);
   drawArmLabels(V);
   if (RP.reach) drawReach(V);
-  return { shapes: ground.length + prims.length, cables, objects, labels };
+  const highlighted = failing ? markFailure(V, failing) : 0;
+  return { shapes: ground.length + prims.length, cables, objects, labels, highlighted };
 }

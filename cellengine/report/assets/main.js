@@ -1,8 +1,9 @@
 // report.html's script (see base.js): playback, the controls (slider, buttons, orbit, pan,
 // zoom, keys) and start-up.
-/* global $, addViewButtons, buildDetails, buildHeader, buildLegend, buildNow, buildPlots,
-   buildRun, buildTable, buildTimeline, setView, cam, canvas, capture, clampT, drawView, fmt, makeView, N, plots, resetCamera,
-   state, T, T0, T1, updateNow, updateTable, updateTimeline */
+/* global $, addViewButtons, buildDetails, buildFailure, buildHeader, buildLegend, buildNow,
+   buildPlots, buildRun, buildTable, buildTimeline, cam, canvas, capture, clampT, drawView,
+   failurePose, fmt, focusFailure, makeView, N, plots, RE, resetCamera, setView, showFailure,
+   state, T, T0, T1, updateFailureHud, updateNow, updateTable, updateTimeline */
 
 // ---------------------------------------------------------------- interaction
 const slider = $('slider');
@@ -11,6 +12,7 @@ const playBtn = $('play');
 function render() {
   const drawn = drawView();
   updateNow();
+  updateFailureHud();
   for (const p of plots) p.draw();
   updateTimeline();
   updateTable();
@@ -28,6 +30,7 @@ function invalidate() {
   requestAnimationFrame(() => { pending = false; render(); });
 }
 function seek(t) {
+  showFailure(-1); // a time asked for: the replay, not a failed plan's pose
   state.t = clampT(t);
   updateClock(); // at once; the drawing waits for the next frame
   invalidate();
@@ -47,6 +50,7 @@ function setPlaying(on) {
   state.last = null;
   playBtn.textContent = on ? '\u275a\u275a Pause' : '\u25b6 Play';
   if (on) {
+    showFailure(-1); // playing the replay, not a failed plan's pose
     if (state.t >= T1 - 1e-9) state.t = T0;
     requestAnimationFrame(tick);
   }
@@ -122,14 +126,22 @@ function init() {
   buildDetails();
   buildRun();
   buildLegend();
+  buildFailure();
   bindControls();
   addViewButtons(invalidate);
   resetCamera();
+  if (RE.failure) {
+    state.t = T1; // where the compile stopped
+    focusFailure();
+  }
   const hash = (key) => {
     const m = new RegExp('(?:^#|&)' + key + '=([0-9.eE+-]+)').exec(location.hash);
     return m ? Number(m[1]) : null;
   };
-  if (hash('t') !== null) state.t = clampT(hash('t') + T0);
+  if (hash('t') !== null) {
+    state.t = clampT(hash('t') + T0);
+    showFailure(-1);
+  }
   if (hash('az') !== null) cam.az = hash('az');
   if (hash('el') !== null) cam.el = Math.max(-1.45, Math.min(1.45, hash('el')));
   const view = /(?:^#|&)view=(top|front|fit)/.exec(location.hash);
@@ -146,6 +158,12 @@ function init() {
   document.body.dataset.cables = String(drawn.cables);
   document.body.dataset.objects = String(drawn.objects);
   document.body.dataset.keylabels = String(drawn.labels);
+  if (RE.failure) {
+    const pose = failurePose();
+    document.body.dataset.failures = String(RE.failure.failures.length);
+    document.body.dataset.failurePair = pose && pose.pair ? pose.pair.join(',') : '';
+    document.body.dataset.failureDrawn = String(drawn.highlighted);
+  }
   if (document.body.dataset.status !== 'error') document.body.dataset.status = 'ok';
 }
 try {

@@ -260,12 +260,13 @@ function buildHeader() {
   }
   if (isNum(RE.clearance_m)) chip("cell's clearance", fmt(1000 * RE.clearance_m, 0, 'mm'));
   const checks = RE.run ? 'plan checks' : 'checks'; // a run's own outcome is its status chip
+  if (RE.failure) chip('plan', 'FAILED', 'bad');
   if (tot.checks_passed === true) chip(checks, 'passed', 'ok');
   else if (tot.checks_passed === false) chip(checks, 'FAILED', 'bad');
 }
 function buildDetails() {
   const own = new Set(['format', 'joint_names', 'arms', 'totals', 'steps', 'segments',
-    'events', 'run']);
+    'events', 'run', 'failure']);
   const dl = $('details');
   let shown = 0;
   for (const [k, v] of Object.entries(RE)) {

@@ -1,7 +1,9 @@
 // report.html's script (see base.js): the 3D scene; the orbiting camera and its projection,
 // the static meshes as shaded triangles, the arms' links at a time, cables and fingertips.
-/* global $, armColor, css, FOV, GROUP_COLORS, linkAt, mix, NEAR, rgb, RP, state, tcpAt */
-/* exported addKeypoints, addLinks, addShape, addStatic, sceneBounds, drawCables, handsAt, makeView, resetCamera,
+/* global $, armColor, css, FAIL_COLOR, failureColor, FOV, GROUP_COLORS, linkAt, mix, NEAR, rgb,
+   RP, state, tcpAt */
+/* exported addKeypoints, addLinks, addShape, addStatic, sceneBounds, drawCables, handsAt,
+   makeView, resetCamera,
    statics */
 
 // ---------------------------------------------------------------- camera
@@ -88,6 +90,7 @@ const statics = RP.static.map((s) => {
 });
 
 function addStatic(V, s, out) {
+  const color = failureColor(s.name) || s.color;
   const v = s.v;
   const pv = s.pv;
   const tr = s.tr;
@@ -104,16 +107,21 @@ function addStatic(V, s, out) {
     const lam = lambert(V, [n[t], n[t + 1], n[t + 2]]);
     out.push({ type: 'poly', wire: state.wire, z: (pv[a + 2] + pv[b + 2] + pv[c + 2]) / 3,
       pts: [pv[a], pv[a + 1], pv[b], pv[b + 1], pv[c], pv[c + 1]],
-      fill: css(s.color, 0.62 + 0.45 * lam) });
+      fill: css(color, 0.62 + 0.45 * lam) });
   }
 }
 
 // ---------------------------------------------------------------- moving shapes
-function addLinks(V, i, f, out) {
-  for (const link of RP.links) {
+// the links at sample i + f of the replay, or ``links`` (each one sample: a failing pose, its
+// pair highlighted and drawn over everything: seen through what stands before it)
+function addLinks(V, i, f, out, links) {
+  for (const link of links || RP.links) {
+    const start = out.length;
     const own = rgb(armColor[link.arm] || '#777777');
-    const color = /\/tool(#\d+)?$/.test(link.name) ? mix(own, [55, 60, 70], 0.6) : own;
+    let color = /\/tool(#\d+)?$/.test(link.name) ? mix(own, [55, 60, 70], 0.6) : own;
+    if (link.highlight) color = FAIL_COLOR;
     addShape(V, link, linkAt(link, i, f), color, out);
+    if (link.highlight) for (let k = start; k < out.length; k++) out[k].z *= 1e-3;
   }
 }
 // a link-like shape (replay.py's layout) at its points p; round: a cylinder drawn capsule-ended
