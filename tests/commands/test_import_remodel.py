@@ -304,7 +304,7 @@ def test_without_harness_two_cables_is_an_error(
 ) -> None:
     (src / "WH_configuration.xml").unlink()
     with (src / "Components_definition.csv").open("a") as f:
-        f.write("Cable;;;CA2;Red;300;4;;;;\r\n")
+        f.write("Cable;;;CA2;Red;600;4;;;;\r\n")  # long enough to lie in both combs
     monkeypatch.chdir(src)
     assert run(src, tmp_path / "cell") == 1
     message = (
@@ -528,7 +528,7 @@ def test_connector_on_two_cables_needs_the_cable_label(
     src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     with (src / "Components_definition.csv").open("a") as f:
-        f.write("Cable;;;CA2;Red;300;4;;;;\r\n")
+        f.write("Cable;;;CA2;Red;600;4;;;;\r\n")  # long enough to lie in both combs
     harness(
         src,
         '<wiring_harness first_connector="CON1"><end_connector label="Free">'
@@ -547,7 +547,7 @@ def test_connector_on_two_cables_needs_the_cable_label(
     # both leave the harness's first connector
     assert cables["CA1"]["connector"] == cables["CA2"]["connector"]
     assert cables["CA2"] == {
-        "length": 300,
+        "length": 600,
         "diameter": 4,
         "color": "Red",
         "connector": {"type": "VGA", "length": 46.55, "width": 32.9, "height": 14.64},
