@@ -21,7 +21,7 @@ stands on a 10 mm pad. The cable's length is the route (connector slot to last s
 
 Rejected (and the walk drawn again from the next draws of the same generator), exactly:
 a guide's footprint (+2 mm) overlapping another guide's or the holder plate's; the straight
-cable between two consecutive guides crossing the footprint of a third or the holder plate
+cable between two consecutive guides crossing the footprint of a third or of a holder comb
 (cellengine refuses such a route); a guide more than 700 mm horizontally from either base
 (out of that arm's reach: the dual-arm method works every guide with both hands, one holding
 the pivot before it while the other lays the cable in) or within 150 mm of one (inside the
@@ -48,6 +48,8 @@ BASE_KEEP_OUT = 150.0  # mm: the robot's own base
 CLEARANCE = 2.0  # mm between footprints
 PAD = 10.0  # mm: thickness of the pad every guide stands on (as the reference plate)
 HOLDER_BOX = (150.0, 250.0, -190.0, 30.0)  # the reference holder plate: x0, x1, y0, y1 (mm)
+# its two combs (10..80 mm high: taller than any slot here, so a cable across one runs through it)
+COMB_BOXES = ((195.0, 205.0, -167.0, -113.0), (195.0, 205.0, -47.0, 7.0))
 TABLE_BOX = (-200.0, 1200.0, -700.0, 700.0)
 COMB_GAP = 6.5  # mm: the reference combs' slots
 
@@ -182,8 +184,8 @@ def rejection(cg: Guide, guides: tuple[Guide, ...], base_distance: float) -> str
         for k, g in enumerate(every):
             if k not in (i, i + 1) and _segment_hits(p, q, _corners(g, 0.0)):
                 return f"the cable from {every[i].name} to {every[i + 1].name} crosses {g.name}"
-        if _segment_hits(p, q, _box_corners(HOLDER_BOX)):
-            return f"the cable from {every[i].name} to {every[i + 1].name} crosses the holder"
+        if any(_segment_hits(p, q, _box_corners(box)) for box in COMB_BOXES):
+            return f"the cable from {every[i].name} to {every[i + 1].name} crosses a comb"
     return None
 
 
