@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import stat
 from pathlib import Path
 
 import pytest
@@ -24,3 +26,15 @@ def test_a_failure_leaves_the_old_files_and_no_temporaries(tmp_path: Path) -> No
         write_files(tmp_path, bad)  # type: ignore[dict-item]
     assert (tmp_path / "a.json").read_text() == "old"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.json"]
+
+
+@pytest.mark.parametrize(("umask", "mode"), [(0o022, 0o644), (0o077, 0o600)])
+def test_files_get_the_mode_open_gives(tmp_path: Path, umask: int, mode: int) -> None:
+    """Not mkstemp's 0600 always: a report is for the cell's team, and the umask decides, as
+    for any file the user's tools write."""
+    before = os.umask(umask)
+    try:
+        paths = write_files(tmp_path / "run", {"report.json": "{}"})
+    finally:
+        os.umask(before)
+    assert stat.S_IMODE(paths["report.json"].stat().st_mode) == mode
