@@ -229,7 +229,8 @@ def test_an_unmapped_cad_part_is_an_obstacle(tmp_path: Path) -> None:
     x3d = folder / "routing" / "routing.x3d"
     text = x3d.read_text()
     i = text.index('<Transform DEF="Guide_U_001"')
-    stray = '<Transform DEF="Stray_Guide" translation="150 205 10" rotation="0 0 1 1.570796">'
+    # a 60 mm box centred 40 mm up: standing on the plate like the guides
+    stray = '<Transform DEF="Stray_Guide" translation="150 205 40" rotation="0 0 1 1.570796">'
     stray += '<Shape><Box size="10 24 60"/></Shape></Transform>\n'
     x3d.write_text(text[:i] + stray + text[i:])
     world = load_world(folder / "cell.yaml")

@@ -40,6 +40,8 @@ from tests.conftest import CELLS
 X3D = Path("routing") / "routing.x3d"
 GUIDE4 = "Guide_U_003"  # routing.guide4 (routing/map.csv)
 GUIDE1 = "Guide_U"  # routing.guide1
+GUIDE2 = "Guide_U_001"  # routing.guide2
+GUIDE3 = "Guide_U_002"  # routing.guide3
 
 
 def board(tmp_path: Path, moves: dict[str, tuple[float, float]], cable_mm: int = 650) -> Path:
@@ -269,18 +271,19 @@ def refused(path: Path, out: Path, capsys: pytest.CaptureFixture[str]) -> str:
 def test_a_cable_too_short_for_the_route_is_refused_at_the_step(
     tmp_path: Path, watch: Watch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """plan_straight with a 110 mm cable: guide1 needs 58.5 mm laid from the connector's rear
+    """plan_straight with a 121 mm cable (just longer than the combs it lies in are apart):
+    guide1 needs 58.5 mm laid from the connector's rear
     face to its approach point, R_cable 68 mm, the pull 1.36 mm and 9 mm for the fingers:
-    136.9 mm (the ways stopping closer to the guide need less, but more than 110 mm too). No
+    136.9 mm (the ways stopping closer to the guide need less, but more than 121 mm too). No
     way of any choice helps; the first error is printed at the RouteCable step
     (plan_straight.yaml line 15, column 5)."""
-    cell = board(tmp_path, {}, cable_mm=110)
+    cell = board(tmp_path, {}, cable_mm=121)  # just longer than the combs are apart
     path = cell / "plan_straight.yaml"
     assert refused(path, tmp_path / "out", capsys) == (
         f"{path}:15:5: steps[2] RouteCable routing.guide1: cable 'cable1' is too short for the "
         "route: this guide needs 136.9 mm (58.5 mm laid from the connector's rear face to the "
         "approach point, R_cable 68.0 mm slid past it, 1.4 mm pulled to tension, 9.0 mm for "
-        "the fingers to hold) but the cable is 110.0 mm long\n"
+        "the fingers to hold) but the cable is 121.0 mm long\n"
     )
     # guide1 had no way: the search went back to PlaceConnector's ways (10 holds x 3 orders x
     # 2 retracts) one by one until the search's budget (MAX_TRIES) ran out
@@ -292,14 +295,16 @@ def test_a_cable_too_short_for_the_route_is_refused_at_the_step(
 def test_a_guide_out_of_reach_of_both_arms_is_refused_at_the_step(
     tmp_path: Path, watch: Watch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """plan_straight with guide1 at (1150, 0) mm in the cell: 1.2 m from both bases. Neither
-    arm can route it (the left arm as published, the right one after a hand-over); the first
-    error is printed."""
-    cell = board(tmp_path, {GUIDE1: (870.0, 210.0)})
+    """plan_straight with guides 1-3 moved on along the route (+y) to (430, 1490) mm in the
+    cell and on, 1.2 m from the left base and farther from the right one, and a cable long
+    enough for it. Neither arm can route guide1 (the left arm as published, the right one
+    after a hand-over); the first error is printed."""
+    moves = {GUIDE1: (150.0, 1700.0), GUIDE2: (150.0, 1810.0), GUIDE3: (150.0, 1920.0)}
+    cell = board(tmp_path, moves, cable_mm=3000)
     path = cell / "plan_straight.yaml"
     assert refused(path, tmp_path / "out", capsys) == (
         f"{path}:15:5: steps[2] RouteCable routing.guide1: out of reach of arm 'left': the "
-        "approach pose at (1150.0, -34.0, 65.0) mm has no inverse kinematics solution within "
+        "approach pose at (430.0, 1456.0, 65.0) mm has no inverse kinematics solution within "
         "its joint limits\n"
     )
     # PickCable's ways: 3 tips x the far hand as published or turned; those giving the

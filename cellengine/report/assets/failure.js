@@ -1,6 +1,7 @@
 // report.html's script (see base.js): a plan that failed to compile; the failures panel, and
 // the 3D view at the pose where the compile stopped, the colliding pair highlighted and named.
-/* global $, cam, ctx, DASH, el, fmt, invalidate, NEAR, nowCells, pairText, project, RE, RP, state */
+/* global $, cam, ctx, DASH, el, fmt, invalidate, jointUnit, NEAR, nowCells, pairText, project, RE,
+   RP, state */
 /* exported buildFailure, FAIL_COLOR, failureColor, failurePose, focusFailure, markFailure,
    showFailure, updateFailureHud */
 
@@ -110,8 +111,8 @@ function updateFailureHud() {
     (f.segment || f.step_label || '')), el('div', {}, poseWords(pose)));
   nowCells.segment.textContent = f.segment || DASH;
   for (const [j, cells] of Object.entries(nowCells.joints)) {
-    cells[0].textContent = f.q[j].toFixed(3);
-    cells[1].textContent = (f.q[j] * 180 / Math.PI).toFixed(1);
-    cells[2].textContent = DASH;
+    const u = jointUnit(j); // mm for a prismatic joint, deg for a revolute one
+    cells[0].textContent = fmt(u.k * f.q[j], 1, u.pos);
+    cells[1].textContent = DASH; // a pose: no velocity
   }
 }
