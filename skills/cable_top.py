@@ -159,8 +159,9 @@ def _plan(
         cg.tcp_frame(push_point, axis, up, tip_o, way.push_lean),
         state.wound.get(o_arm, 0.0),
     )
-    # over the draped cable: it crosses the guide's near face at most at its top
-    above = cg.lifted(T_push, up, b.rise + cg.Z_OFFSET)
+    # over the draped cable (it crosses the guide's near face at most at its top) and the
+    # cell's clearance over the guides, where the transit leaves it
+    above = cg.lifted(T_push, up, max(cg.APPROACH_HEIGHT, b.rise + cg.Z_OFFSET + ctx.clearance))
     after_k = (cg.element_of(step.guides[k + 1]),) if k + 1 < len(step.guides) else ()
     beside = (*c._beside(state, guide), *after_k, *c._under(ctx, slot, up))
     return TopPlan(
@@ -220,12 +221,13 @@ def _check(ctx: PlanningContext, cable: str, tp: TopPlan, r_arm: str, o_arm: str
         )
     c._check_reach(ctx, r_arm, [("over the top", tp.lay[-1]), ("insert", tp.insert[-1])], tp.where)
     c._check_reach(ctx, o_arm, [("push", tp.push[-1]), ("over the push", tp.above)], tp.where)
-    for arm, what, mode, poses in (
-        (r_arm, "laying the cable over the top", SLIDE, tp.lay),
-        (o_arm, "pushing the cable down", GRASP, tp.push),
-        (r_arm, "inserting", GRASP, tp.insert),
+    for arm, what, mode, poses, beside in (
+        (o_arm, "coming over the cable", GRASP, tp.push[:1], ()),  # a transit's end
+        (r_arm, "laying the cable over the top", SLIDE, tp.lay, tp.beside),
+        (o_arm, "pushing the cable down", GRASP, tp.push, tp.beside),
+        (r_arm, "inserting", GRASP, tp.insert, tp.beside),
     ):
-        found = c._env_near(ctx, arm, poses, mode, tp.beside)
+        found = c._env_near(ctx, arm, poses, mode, beside)
         if found is not None:
             near, limit, own = found
             raise c._Blocked.of(
