@@ -24,9 +24,10 @@ far enough for the circle to clear the guide's top by Z_offset (R_lift).
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -85,10 +86,11 @@ def top_ways(
     r_arm, o_arm = step.arms(ctx, state)
     closest: tuple[float, InputError] | None = None
     found = False
+    memo: Memo = {}
     for way in _ways(ctx, state, step, k, r_arm, o_arm):
         try:
             tp = _plan(ctx, state, step, k, r_arm, o_arm, way)
-            _check(ctx, step.cable, tp, r_arm, o_arm)
+            _check(ctx, step.cable, tp, (r_arm, o_arm), memo)
         except InputError as e:
             score = e.distance if isinstance(e, c._Blocked) else -math.inf
             if closest is None or score > closest[0]:
@@ -207,10 +209,18 @@ def _check_straight(
         )
 
 
-def _check(ctx: PlanningContext, cable: str, tp: TopPlan, r_arm: str, o_arm: str) -> None:
+# What a check found of the poses it was given (the ways share most of their paths): why not,
+# or None
+Memo = dict[tuple[object, ...], InputError | None]
+
+
+def _check(
+    ctx: PlanningContext, cable: str, tp: TopPlan, arms: tuple[str, str], memo: Memo
+) -> None:
     """Reach, the cable's length, each hand's clearances (cg.CLEARANCE from the elements it
-    works between, the cell's from everything else) and the two hands' from each other."""
-    world = ctx.world
+    works between, the cell's from everything else) and the two hands' from each other;
+    each check made once for the poses it looks at (``memo``)."""
+    world, (r_arm, o_arm) = ctx.world, arms
     hand = c._hand(world, r_arm)
     need = tp.laid + tp.radius + hand.end_margin
     length = world.cable(cable).length
@@ -219,33 +229,87 @@ def _check(ctx: PlanningContext, cable: str, tp: TopPlan, r_arm: str, o_arm: str
             f"{tp.where}: cable '{cable}' is too short to lay it over the guide's top: "
             f"{c._mm(need)} mm needed, {c._mm(length)} mm long"
         )
-    c._check_reach(ctx, r_arm, [("over the top", tp.lay[-1]), ("insert", tp.insert[-1])], tp.where)
-    c._check_reach(ctx, o_arm, [("push", tp.push[-1]), ("over the push", tp.above)], tp.where)
-    for arm, what, mode, poses, beside in (
-        (o_arm, "coming over the cable", GRASP, tp.push[:1], ()),  # a transit's end
-        (r_arm, "laying the cable over the top", SLIDE, tp.lay, tp.beside),
-        (o_arm, "pushing the cable down", GRASP, tp.push, tp.beside),
-        (r_arm, "inserting", GRASP, tp.insert, tp.beside),
-    ):
-        found = c._env_near(ctx, arm, poses, mode, beside)
-        if found is not None:
-            near, limit, own = found
-            raise c._Blocked.of(
-                near.distance - limit,
-                f"{tp.where}: {near.tool} {c._passes(near, limit)} {what} over the top; "
-                + c._env_fix(ctx, near, own, limit),
+    checks: list[tuple[tuple[object, ...], Callable[[], InputError | None]]] = [
+        *(
+            ((arm, what, T.tobytes()), functools.partial(_reach, ctx, arm, what, T, tp.where))
+            for arm, what, T in (
+                (o_arm, "over the push", tp.above),
+                (o_arm, "push", tp.push[-1]),
+                (r_arm, "over the top", tp.lay[-1]),
+                (r_arm, "insert", tp.insert[-1]),
             )
-    for arm, what, mode, path, other, T_other in (
-        (o_arm, "pushing the cable down", GRASP, tp.push, r_arm, tp.lay[-1]),
-        (r_arm, "inserting", GRASP, tp.insert, o_arm, tp.push[-1]),
-    ):
-        pair = ctx.probe.between(arm, [*path[::2], path[-1]], mode, other, T_other, GRASP)
-        if pair is not None and pair.distance < ctx.clearance:
-            raise c._Blocked.of(
-                pair.distance - ctx.clearance,
-                f"{tp.where}: {pair.tool} {c._passes(pair, ctx.clearance)} {what} over the "
-                f"top; the cell's clearance is {c._mm(ctx.clearance)} mm between the hands",
+        ),
+        *(
+            (
+                (arm, what, poses.tobytes(), beside),
+                functools.partial(_env, ctx, tp, arm, what, mode, poses, beside),
             )
+            for arm, what, mode, poses, beside in (
+                (o_arm, "coming over the cable", GRASP, tp.push[:1], ()),  # a transit's end
+                (o_arm, "pushing the cable down", GRASP, tp.push, tp.beside),
+                (r_arm, "laying the cable over the top", SLIDE, tp.lay, tp.beside),
+                (r_arm, "inserting", GRASP, tp.insert, tp.beside),
+            )
+        ),
+        *(
+            (
+                (arm, what, path.tobytes(), T_other.tobytes()),
+                functools.partial(_hands, ctx, tp, (arm, other), what, path, T_other),
+            )
+            for arm, what, path, other, T_other in (
+                (o_arm, "pushing the cable down", tp.push, r_arm, tp.lay[-1]),
+                (r_arm, "inserting", tp.insert, o_arm, tp.push[-1]),
+            )
+        ),
+    ]
+    for key, check in checks:
+        if key not in memo:
+            memo[key] = check()
+        if (why := memo[key]) is not None:
+            raise why
+
+
+def _reach(ctx: PlanningContext, arm: str, what: str, T: Mat, where: str) -> InputError | None:
+    try:
+        c._check_reach(ctx, arm, [(what, T)], where)
+    except InputError as e:
+        return e
+    return None
+
+
+def _env(
+    ctx: PlanningContext,
+    tp: TopPlan,
+    arm: str,
+    what: str,
+    mode: str,
+    poses: Poses,
+    beside: tuple[str, ...],
+) -> InputError | None:
+    found = c._env_near(ctx, arm, poses, mode, beside)
+    if found is None:
+        return None
+    near, limit, own = found
+    return c._Blocked.of(
+        near.distance - limit,
+        f"{tp.where}: {near.tool} {c._passes(near, limit)} {what} over the top; "
+        + c._env_fix(ctx, near, own, limit),
+    )
+
+
+def _hands(
+    ctx: PlanningContext, tp: TopPlan, arms: tuple[str, str], what: str, path: Poses, T_other: Mat
+) -> InputError | None:
+    """The hands' clearance from each other (both closed: the pusher and the routing hand)."""
+    arm, other = arms
+    pair = ctx.probe.between(arm, [*path[::2], path[-1]], GRASP, other, T_other, GRASP)
+    if pair is None or pair.distance >= ctx.clearance:
+        return None
+    return c._Blocked.of(
+        pair.distance - ctx.clearance,
+        f"{tp.where}: {pair.tool} {c._passes(pair, ctx.clearance)} {what} over the top; the "
+        f"cell's clearance is {c._mm(ctx.clearance)} mm between the hands",
+    )
 
 
 def _emit(
