@@ -46,18 +46,24 @@ if TYPE_CHECKING:
     from cellengine.context import PlanningContext
 
 GRASP, SLIDE = c.GRASP, c.SLIDE
+# The pusher holds nothing between its closed fingers: it may press with them turned about
+# the vertical, its fingers then along the cable rather than across it (beside a guide that
+# stands at an angle, a corner may come nearer its fingers across than along): every eighth
+# of a turn, across first.
+PUSH_YAWS = tuple(math.radians(a) for a in (0.0, 90.0, 45.0, -45.0))
 LABEL = "over the top"  # the way's name in its segments' facts (RouteCable's "way")
 
 
 @dataclass(frozen=True)
 class TopWay:
-    """The free parameters: where the pusher stands, where the routing hand ends, the
-    pusher's tip."""
+    """The free parameters: where the pusher stands, where the routing hand ends, how the
+    pusher tips and turns."""
 
     push_gap: float  # the pusher's fingers end this far before the guide's near face
     after: float  # the routing hand's fingers begin this far past the far face (at least)
     push_lean: float  # the pusher's flange tipped back along the cable by this much
     towards_base: float  # and towards its base (1) or not (0)
+    push_yaw: float  # its jaw axis turned about the vertical from across the cable
 
 
 @dataclass(frozen=True)
@@ -108,16 +114,18 @@ def _ways(
 ) -> Iterator[TopWay]:
     """The pusher's stops (the published A's, then centred in the room before the guide),
     the routing hand's ends (X_offset past, then centred in the room after, then the other
-    stops), the pusher's tips (cg.PIVOT_LEANS, then upright first if not among them), towards
-    its base or not: in that order, the pusher's stop varying slowest."""
+    stops), the pusher's turns (PUSH_YAWS) and tips (cg.PIVOT_LEANS), towards its base or
+    not: in that order, the pusher's stop varying slowest."""
     world, guide = ctx.world, step.guides[k]
     b_o = c._basics(world, state, guide, o_arm)
     b_r = c._basics(world, state, guide, r_arm)
     pushes = (*cg.APPROACH_GAPS, *c._centred_gap(world, guide, b_o, after=False))
     afters = (cg.APPROACH_GAP, *c._centred_gap(world, guide, b_r, after=True))
     afters += tuple(a for a in (*cg.APPROACH_GAPS, *cg.INSERT_PASTS) if a not in afters)
-    for push, after, lean, base in itertools.product(pushes, afters, cg.PIVOT_LEANS, (1.0, 0.0)):
-        yield TopWay(push, after, lean, base)
+    for push, after, yaw, lean, base in itertools.product(
+        pushes, afters, PUSH_YAWS, cg.PIVOT_LEANS, (1.0, 0.0)
+    ):
+        yield TopWay(push, after, lean, base, yaw)
 
 
 def _plan(
@@ -156,9 +164,10 @@ def _plan(
     lay = ip.concatenate([cg.line(T_r0, T_up), cg.line(T_up, T_top)])
     insert = cg.arc(T_top, push_point, np.cross(axis, up), -elevation, turn=False)
     tip_o = g.unit(-axis + way.towards_base * c._towards_base(world, o_arm, slot, up))
+    turned = g.axis_angle_to_matrix(up, way.push_yaw) @ axis
     T_push = cg.nearer_turn(
         state.tcp[o_arm],
-        cg.tcp_frame(push_point, axis, up, tip_o, way.push_lean),
+        cg.tcp_frame(push_point, turned, up, tip_o, way.push_lean),
         state.wound.get(o_arm, 0.0),
     )
     # over the draped cable (it crosses the guide's near face at most at its top) and the
