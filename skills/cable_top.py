@@ -93,17 +93,33 @@ def top_ways(
     closest: tuple[float, InputError] | None = None
     found = False
     memo: Memo = {}
+    # why the pusher cannot stand where a way puts it, or the routing hand end where it does:
+    # the ways that share it are not built
+    blocked: dict[tuple[object, ...], InputError] = {}
     for way in _ways(ctx, state, step, k, r_arm, o_arm):
-        try:
-            tp = _plan(ctx, state, step, k, r_arm, o_arm, way)
-            _check(ctx, step.cable, tp, (r_arm, o_arm), memo)
-        except InputError as e:
-            score = e.distance if isinstance(e, c._Blocked) else -math.inf
-            if closest is None or score > closest[0]:
-                closest = (score, e)
-            continue
-        found = True
-        yield _emit(state, tp, r_arm, o_arm, step.cable)
+        parts = {
+            "pusher": (way.push_gap, way.push_yaw, way.push_lean, way.towards_base),
+            "routing": (way.push_gap, way.after),
+        }
+        known = [blocked.get((part, key)) for part, key in parts.items()]
+        why = next((e for e in known if e is not None), None)
+        if why is None:
+            try:
+                tp = _plan(ctx, state, step, k, r_arm, o_arm, way)
+            except InputError as e:
+                why = e
+            else:
+                failed = _check(ctx, step.cable, tp, (r_arm, o_arm), memo)
+                if failed is None:
+                    found = True
+                    yield _emit(state, tp, r_arm, o_arm, step.cable)
+                    continue
+                part, why = failed
+                if part in parts:
+                    blocked[(part, parts[part])] = why
+        score = why.distance if isinstance(why, c._Blocked) else -math.inf
+        if closest is None or score > closest[0]:
+            closest = (score, why)
     if not found:
         where = f"steps[{state.step}] RouteCable {step.guides[k]}"
         raise closest[1] if closest is not None else c._error(f"{where}: no way over the top")
@@ -225,43 +241,48 @@ Memo = dict[tuple[object, ...], InputError | None]
 
 def _check(
     ctx: PlanningContext, cable: str, tp: TopPlan, arms: tuple[str, str], memo: Memo
-) -> None:
-    """Reach, the cable's length, each hand's clearances (cg.CLEARANCE from the elements it
-    works between, the cell's from everything else) and the two hands' from each other;
-    each check made once for the poses it looks at (``memo``)."""
+) -> tuple[str, InputError] | None:
+    """Why not, and what it depends on ("pusher": where the pusher stands; "routing": where
+    the routing hand ends; "hands": both): reach, the cable's length, each hand's
+    clearances (cg.CLEARANCE from the elements it works between, the cell's from everything
+    else) and the two hands' from each other; each check made once for the poses it looks
+    at (``memo``)."""
     world, (r_arm, o_arm) = ctx.world, arms
     hand = c._hand(world, r_arm)
     need = tp.laid + tp.radius + hand.end_margin
     length = world.cable(cable).length
     if need > length + 1e-9:
-        raise c._error(
+        return "routing", c._error(
             f"{tp.where}: cable '{cable}' is too short to lay it over the guide's top: "
             f"{c._mm(need)} mm needed, {c._mm(length)} mm long"
         )
-    checks: list[tuple[tuple[object, ...], Callable[[], InputError | None]]] = [
+    Check = tuple[str, tuple[object, ...], Callable[[], InputError | None]]
+    checks: list[Check] = [
         *(
-            ((arm, what, T.tobytes()), functools.partial(_reach, ctx, arm, what, T, tp.where))
-            for arm, what, T in (
-                (o_arm, "over the push", tp.above),
-                (o_arm, "push", tp.push[-1]),
-                (r_arm, "over the top", tp.lay[-1]),
-                (r_arm, "insert", tp.insert[-1]),
+            (part, (arm, what, T.tobytes()), functools.partial(_reach, ctx, arm, what, T, tp.where))
+            for part, arm, what, T in (
+                ("pusher", o_arm, "over the push", tp.above),
+                ("pusher", o_arm, "push", tp.push[-1]),
+                ("routing", r_arm, "over the top", tp.lay[-1]),
+                ("routing", r_arm, "insert", tp.insert[-1]),
             )
         ),
         *(
             (
+                part,
                 (arm, what, poses.tobytes(), beside),
                 functools.partial(_env, ctx, tp, arm, what, mode, poses, beside),
             )
-            for arm, what, mode, poses, beside in (
-                (o_arm, "coming over the cable", GRASP, tp.push[:1], ()),  # a transit's end
-                (o_arm, "pushing the cable down", GRASP, tp.push, tp.beside),
-                (r_arm, "laying the cable over the top", SLIDE, tp.lay, tp.beside),
-                (r_arm, "inserting", GRASP, tp.insert, tp.beside),
+            for part, arm, what, mode, poses, beside in (
+                ("pusher", o_arm, "coming over the cable", GRASP, tp.push[:1], ()),  # transit end
+                ("pusher", o_arm, "pushing the cable down", GRASP, tp.push, tp.beside),
+                ("routing", r_arm, "laying the cable over the top", SLIDE, tp.lay, tp.beside),
+                ("routing", r_arm, "inserting", GRASP, tp.insert, tp.beside),
             )
         ),
         *(
             (
+                "hands",
                 (arm, what, path.tobytes(), T_other.tobytes()),
                 functools.partial(_hands, ctx, tp, (arm, other), what, path, T_other),
             )
@@ -271,11 +292,12 @@ def _check(
             )
         ),
     ]
-    for key, check in checks:
+    for part, key, check in checks:
         if key not in memo:
             memo[key] = check()
         if (why := memo[key]) is not None:
-            raise why
+            return part, why
+    return None
 
 
 def _reach(ctx: PlanningContext, arm: str, what: str, T: Mat, where: str) -> InputError | None:
