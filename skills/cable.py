@@ -19,6 +19,11 @@ PlaceConnector first offers to hand the cable over once the connector is seated:
 connector arm then routes and the other one pivots, so the arms do not reach across each
 other for the whole route.
 
+A guide that stands too close to the one before for the published slide and pivot is laid
+over its top by the routing hand and pushed into its slot by the other hand
+(:mod:`cellengine.skills.cable_top`, REMODEL's route_top), a way offered after all the
+published ones.
+
 Feasibility comes first: each skill computes all its poses and checks them (cable length,
 reach of every key pose by inverse kinematics, a sliding angle that clears the guide) before
 it returns any segment, and raises :class:`~cellengine.errors.InputError` naming the step

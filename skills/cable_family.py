@@ -13,7 +13,7 @@ from cellengine.errors import InputError, Problem, StepError, at_step
 from cellengine.family import Candidate
 from cellengine.program import Segment
 from cellengine.skill import Skill
-from cellengine.skills import cable_meaning
+from cellengine.skills import cable_meaning, cable_top
 from cellengine.skills.cable import (
     PickCable,
     PlaceConnector,
@@ -117,7 +117,7 @@ def _guide(
             if (error := failed[key]) is not None:
                 raise error
             return
-        ways = step.ways(ctx, state, k)
+        ways = _ways(ctx, step, state, k)
         offered, stranded = False, set[str]()
         while True:
             try:
@@ -145,6 +145,26 @@ def _guide(
                 else functools.partial(_guide, ctx, steps, i, after, k + 1, failed)
             )
             yield Candidate(tuple(segments), then=then)
+
+
+def _ways(
+    ctx: PlanningContext, step: RouteCable, state: CableState, k: int
+) -> Iterator[tuple[list[Segment], CableState]]:
+    """Guide ``k``'s ways: the published slide and pivot's (RouteCable.ways), then, after all
+    of them, laying the cable over the guide's top and pushing it in (cable_top, for a guide
+    too close to the one before): a plan that compiles with the first never reaches the
+    second. When neither has a way, the first's error (it says what blocks the published
+    way)."""
+    first: InputError | None = None
+    try:
+        yield from step.ways(ctx, state, k)
+    except InputError as e:
+        first = e
+    try:
+        yield from cable_top.top_ways(ctx, step, state, k)
+    except InputError:
+        if first is not None:
+            raise first from None
 
 
 def _stranded(i: int, step: Skill, arms: set[str]) -> InputError:

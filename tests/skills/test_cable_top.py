@@ -1,0 +1,77 @@
+"""RouteCable over the top (skills/cable_top.py): a guide too close to the one before for
+the published slide and pivot, laid over its top and pushed in, on a copy of the reference
+cell with guide2 moved close behind guide1."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bench.board_check import check_compiled
+from cellengine.errors import InputError
+from cellengine.pipeline import compile_plan
+from cellengine.skills import cable_family
+from tests.skills.test_cable_search import board
+
+GUIDE2, GUIDE3 = "Guide_U_001", "Guide_U_002"  # routing.guide2, routing.guide3 (map.csv)
+TOP = (
+    "lay the cable over the top",
+    "pusher over the cable",
+    "push into the slot",
+    "insert",
+)
+
+
+def close_board(tmp_path: Path) -> Path:
+    """plan_straight with guide2 32 mm after guide1 (slot to slot; the guides are 10 mm
+    thick, so 22 mm between them for 8 mm fingers that keep 5 mm from each) and guide3
+    118 mm after guide2, as far as the reference run's spacing (110 mm)."""
+    cell = board(tmp_path, {GUIDE2: (150.0, 182.0), GUIDE3: (150.0, 300.0)})
+    return cell / "plan_straight.yaml"
+
+
+def test_a_guide_close_behind_the_last_is_laid_over_the_top_and_pushed_in(
+    tmp_path: Path,
+) -> None:
+    """guide1 and guide3 are routed the published way; guide2 over the top: the routing
+    hand lays the cable over it, the other hand's closed fingers push it down behind the
+    guide, the routing hand lays it along the slot on the circle about them. The program
+    passes the benchmark's independent check (each slot between the fingertips at its
+    insert, in order, limits)."""
+    compiled = compile_plan(close_board(tmp_path), "split")
+    segments = [s.segment for s in compiled.program.segments]
+    labels = [s.label for s in segments]
+    guide2 = [s.removeprefix("RouteCable routing.guide2: ") for s in labels if "guide2" in s]
+    assert guide2 == ["release the previous guide", *TOP]
+    for guide in ("guide1", "guide3"):
+        assert f"RouteCable routing.{guide}: slide R_cable" in labels
+    over = [s for s in segments if s.facts.get("way") == "over the top"]
+    assert [s.label.split(": ")[1] for s in over] == [TOP[0], TOP[2], TOP[3]]
+    (push,) = [s for s in segments if s.label.endswith("push into the slot")]
+    (path,) = push.paths
+    (event,) = push.after
+    assert (event.arm, event.mode, event.holds) == (path.arm, "grasp", "cable1")
+    # the pusher's fingers work by guide2 and guide1 (declared), and come straight down
+    assert {(path.arm, "routing.guide2"), (path.arm, "routing.guide1")} <= set(push.near)
+    drop = path.poses[0][:3, 3] - path.poses[-1][:3, 3]
+    assert np.linalg.norm(drop[:2]) < 1e-9 and drop[2] > 0.0
+    result = check_compiled(compiled)
+    assert result.ok, result.failures
+
+
+def test_without_it_the_close_guide_is_refused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The same board with the over-the-top way taken away: the published ways alone cannot
+    route guide2 (so the plan above compiles only through the new way)."""
+
+    def none(*_: object) -> object:
+        raise InputError.at("no way over the top", None)
+        yield  # a generator, as top_ways
+
+    monkeypatch.setattr(cable_family.cable_top, "top_ways", none)
+    with pytest.raises(InputError) as e:
+        compile_plan(close_board(tmp_path), "split")
+    assert "RouteCable routing.guide2" in str(e.value)
