@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 from types import MappingProxyType
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -12,6 +13,10 @@ from cellengine.info.cell import Cell
 from cellengine.info.objects import Objects
 from cellengine.info.platform import Element, Keypoint, Platform
 from cellengine.world import World
+
+if TYPE_CHECKING:
+    from cellengine.drivers.sim import SimDriver
+    from cellengine.pipeline import Compiled
 
 
 def element(
@@ -84,3 +89,16 @@ def walled_lab(folder: Path) -> Path:
     table = next(line for line in text.splitlines(keepends=True) if line.startswith("  table:"))
     cell.write_text(text.replace(table, table + WALL, 1))
     return folder / "plan_relocate.yaml"
+
+
+def vial1_heavier_sim(compiled: Compiled) -> SimDriver:
+    """The simulated cell of a compiled lab plan, at its first pose, whose load cell weighs
+    vial1 at 50 g (objects.yaml says vial2 is the heavier): a run that weighs replans."""
+    from cellengine.drivers.sim import SimDriver
+
+    objects = compiled.world.objects
+    heavy = objects.containers["vial1"].model_copy(update={"mass": 0.050})
+    truth = objects.model_copy(update={"containers": {**objects.containers, "vial1": heavy}})
+    joints = {name: arm.joint_names for name, arm in compiled.cell.arms.items()}
+    q0 = compiled.program.segments[0].trajectory.q[0]
+    return SimDriver(compiled.world.cell, joints, objects=truth, q0=q0)

@@ -17,6 +17,7 @@ import cellengine.skills.lab  # noqa: F401  (registers the lab skills)
 from cellengine.cli import main
 from cellengine.pipeline import Compiled, compile_plan
 from tests.conftest import CELLS
+from tests.helpers import vial1_heavier_sim
 
 LAB = CELLS / "lab_bench"
 CELL_FILES = {"cartesian": LAB / "cell.yaml", "ur": LAB / "cell_ur.yaml"}
@@ -175,17 +176,11 @@ def test_a_measured_mass_that_changes_the_choice_replans_the_rest(tmp_path: Path
     """objects.yaml says vial2 is the heavier; the load cell finds vial1 heavier (its mass
     in the simulated cell is 50 g): after the weighings the run is planned again and pours
     vial1, the segments already sent unchanged."""
-    from cellengine.drivers.sim import SimDriver
     from cellengine.runner.play import play as _play
 
     c = compile_plan(LAB / "plan_pour_heavier.yaml")
-    objects = c.world.objects
-    heavy = objects.containers["vial1"].model_copy(update={"mass": 0.050})
-    truth = objects.model_copy(update={"containers": {**objects.containers, "vial1": heavy}})
-    joints = {name: arm.joint_names for name, arm in c.cell.arms.items()}
-    q0 = c.program.segments[0].trajectory.q[0]
     with (
-        SimDriver(c.world.cell, joints, objects=truth, q0=q0) as driver,
+        vial1_heavier_sim(c) as driver,
         (tmp_path / "journal.jsonl").open("w") as journal,
     ):
         driver.configure()

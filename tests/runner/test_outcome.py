@@ -23,6 +23,7 @@ from cellengine.runner.identity import run_identity
 from cellengine.runner.outcome import journaled, timed
 from cellengine.runner.play import play
 from tests.conftest import CELLS
+from tests.helpers import vial1_heavier_sim
 
 PLAN = CELLS / "cable_routing" / "plan_straight.yaml"
 LAB_PLAN = CELLS / "lab_bench" / "plan_pour_heavier.yaml"
@@ -84,13 +85,8 @@ def test_masses_measured_and_the_choice_they_changed_are_in_the_report(tmp_path:
     the report gives both readings, the run's replanning and heavier_of resolved to vial1."""
     c = compile_plan(LAB_PLAN)
     write_plan_outputs(c, tmp_path)
-    objects = c.world.objects
-    heavy = objects.containers["vial1"].model_copy(update={"mass": 0.050})
-    truth = objects.model_copy(update={"containers": {**objects.containers, "vial1": heavy}})
-    joints = {name: arm.joint_names for name, arm in c.cell.arms.items()}
-    q0 = c.program.segments[0].trajectory.q[0]
     with (
-        SimDriver(c.world.cell, joints, objects=truth, q0=q0) as driver,
+        vial1_heavier_sim(c) as driver,
         (tmp_path / "journal.jsonl").open("a") as journal,
     ):
         append(journal, Entry.START, run=run_identity(c))
