@@ -28,11 +28,19 @@ from collections import Counter
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+import numpy as np  # noqa: E402
+
 from bench.boards import make_board, remodel_placements  # noqa: E402
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from cellengine.arrays import Mat
 
 STRATEGIES = ("split", "sync", "async")
 
@@ -149,19 +157,69 @@ def make_boards(n: int, seed: int, remodel: bool, out: Path) -> dict[str, Path]:
 
 
 def _remodel_boards(out: Path) -> dict[str, Path]:
-    from cellengine.info.load import load_world
     from tests.conftest import REMODEL
 
+    # imported 20 m away: its keypoints' poses, and a cell whose arms meet only themselves
     probe = out / "boards" / "remodel_probe"
-    _import_remodel(REMODEL, probe, "0 0 0 0 0 0")
-    kps = load_world(probe / "cell.yaml").keypoints()
+    _import_remodel(REMODEL, probe, f"{PROBE_AWAY * 1000} 0 0 0 0 0")
+    keypoints, reaches = _probe_reach(probe / "cell.yaml")
     shutil.rmtree(probe)
     plans = {}
-    for name, pose in remodel_placements([(float(T[0, 3]) * 1000, float(T[1, 3]) * 1000)
-                                          for T in kps.values()]):  # fmt: skip
+    for name, pose in remodel_placements(keypoints, reaches):
         _import_remodel(REMODEL, out / "boards" / name, pose)
         plans[name] = out / "boards" / name / "plan.yaml"
     return plans
+
+
+PROBE_AWAY = 20.0  # m: where the probe's platforms are, out of the arms' way
+REACH_MARGIN = 0.050  # m: how far inside both arms' workspaces every keypoint is
+
+
+def _probe_reach(cell_yaml: Path) -> tuple[list[Mat], Callable[[Mat], bool]]:
+    """The probe's keypoints as if imported at the origin, and whether both arms reach a
+    keypoint pose: each with the tool coming down its z (cellengine.reach.approach) at it and
+    RETRACT_HEIGHT above it (the skills come down onto a keypoint and leave upwards), and so
+    REACH_MARGIN away on every side (the hands work around it: no keypoint on the edge of an
+    arm's workspace), each on an IK branch clear of the arm itself and of the other arm at
+    home."""
+    from cellengine.context import build_context
+    from cellengine.info.load import load_world
+    from cellengine.reach import approach
+    from cellengine.skills.cable_geometry import RETRACT_HEIGHT
+
+    ctx = build_context(load_world(cell_yaml))
+    home, slices = ctx.home, ctx.cell.slices
+    keypoints = []
+    for T in ctx.world.keypoints().values():
+        T = T.copy()
+        T[0, 3] -= PROBE_AWAY
+        keypoints.append(T)
+
+    def arm_reaches(arm: str, T: Mat) -> bool:
+        q = home.copy()
+        for T_tcp in approach(T):
+            for sol in ctx.iks[arm].solve_all(T_tcp):
+                q[slices[arm]] = sol
+                if not ctx.checker.in_collision(q):
+                    return True
+        return False
+
+    # at the keypoint, and REACH_MARGIN from it horizontally in the cell's x and y either way
+    shifts = [np.zeros(3)] + [
+        sign * REACH_MARGIN * axis for axis in np.eye(3)[:2] for sign in (1, -1)
+    ]
+
+    def reaches(T: Mat) -> bool:
+        for arm in ctx.cell.arms:
+            for height in (0.0, RETRACT_HEIGHT):
+                for shift in shifts:
+                    P = T.copy()
+                    P[:3, 3] += height * T[:3, 2] + shift
+                    if not arm_reaches(arm, P):
+                        return False
+        return True
+
+    return keypoints, reaches
 
 
 def _import_remodel(src: Path, dest: Path, pose: str) -> None:

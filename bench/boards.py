@@ -30,7 +30,10 @@ robot's base); a guide off the table (x -200..1200, |y| <= 700 mm).
 ``remodel_placements()`` are the 8 poses at which the REMODEL sample is imported instead:
 yaw 0, 90, 180, 270 deg, its keypoints' centre at the nearest and the farthest x (10 mm
 steps; y within 200 mm of 0 in 10 mm steps, the nearest to 0) where every keypoint is in
-front of the bases (x >= 150 mm) and within 700 mm of both bases.
+front of the bases (x >= 150 mm) and both arms reach it, as bench_boards.py's probe finds
+with the import's robots: the tool coming down the keypoint's z, at it and 100 mm above it,
+on an IK branch clear of the arm itself and of the other arm at home. (The sample is 507 mm
+long: turned 0 or 180 deg it does not fit within 700 mm of both bases.)
 """
 
 from __future__ import annotations
@@ -39,8 +42,14 @@ import itertools
 import math
 import random
 import shutil
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
+
+import numpy as np
+
+from cellengine.arrays import Mat, Vec
+from cellengine.geometry import rot_z
 
 REFERENCE = Path(__file__).resolve().parent.parent / "cells" / "cable_routing"
 REACH = 700.0  # mm, horizontally from a base
@@ -443,36 +452,36 @@ _PRISM_FACES = ((0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7
 # ------------------------------------------------------------------------------ REMODEL
 
 
-def remodel_placements(keypoints: list[tuple[float, float]]) -> list[tuple[str, str]]:
-    """(name, --pose) of the 8 REMODEL placements, from its keypoints (x, y in mm) imported at
-    the origin: yaw 0/90/180/270, the centre at the nearest and farthest feasible x
-    (module docstring)."""
-    cx = sum(p[0] for p in keypoints) / len(keypoints)
-    cy = sum(p[1] for p in keypoints) / len(keypoints)
+def remodel_placements(
+    keypoints: Sequence[Mat], reaches: Callable[[Mat], bool]
+) -> list[tuple[str, str]]:
+    """(name, --pose) of the 8 REMODEL placements, from its keypoints' poses (4x4, m) imported
+    at the origin: yaw 0/90/180/270, the centre at the nearest and the farthest feasible x
+    (module docstring); ``reaches(T_cell_keypoint)``: both arms reach it."""
+    centre = np.mean([T[:3, 3] for T in keypoints], axis=0)
     out = []
+    xs = range(0, 1000, 10)
+    ys = sorted(range(-200, 201, 10), key=lambda y: (abs(y), y))  # nearest 0 first
     for yaw in (0, 90, 180, 270):
-        c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
-        turned = [(c * (x - cx) - s * (y - cy), s * (x - cx) + c * (y - cy)) for x, y in keypoints]
-        ok = [
-            (float(x), float(y))
-            for x in range(0, 1000, 10)
-            for y in range(-200, 201, 10)
-            if _placement_ok(turned, float(x), float(y))
-        ]
-        if not ok:
-            continue
-        near = min(ok, key=lambda p: (p[0], abs(p[1])))
-        far = min(ok, key=lambda p: (-p[0], abs(p[1])))
-        for tag, (x, y) in (("near", near), ("far", far)):
-            # pose: rotate about the origin, then shift so the centre lands at (x, y)
-            tx, ty = x - (c * cx - s * cy), y - (s * cx + c * cy)
-            out.append((f"remodel_{yaw}_{tag}", f"{tx:.1f} {ty:.1f} 0 0 0 {yaw}"))
+        turn = np.eye(4)
+        turn[:3, :3] = rot_z(math.radians(yaw))
+        turned = [turn @ T for T in keypoints]
+        c = turn[:3, :3] @ centre
+
+        def placed(x: int, y: int, c: Vec = c, turned: list[Mat] = turned) -> Mat | None:
+            shift = np.eye(4)
+            shift[:2, 3] = np.array([x, y]) / 1000 - c[:2]
+            ok = all(
+                (shift @ T)[0, 3] * 1000 >= BASE_KEEP_OUT and reaches(shift @ T) for T in turned
+            )
+            return shift if ok else None
+
+        for tag, order in (("near", xs), ("far", reversed(xs))):
+            found = next(
+                ((x, s) for x in order for y in ys if (s := placed(x, y)) is not None), None
+            )
+            if found is None:
+                continue
+            t = found[1][:3, 3] * 1000
+            out.append((f"remodel_{yaw}_{tag}", f"{t[0]:.1f} {t[1]:.1f} 0 0 0 {yaw}"))
     return out
-
-
-def _placement_ok(turned: list[Pt], x: float, y: float) -> bool:
-    bases = ((0.0, 350.0), (0.0, -350.0))  # the import's default robots
-    return all(
-        px + x >= BASE_KEEP_OUT and max(math.dist((px + x, py + y), b) for b in bases) <= REACH
-        for px, py in turned
-    )
