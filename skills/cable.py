@@ -130,10 +130,10 @@ class PickCable(Skill):
         found = False
         for c_arm in c_arms:
             f_arm = _other(arms, c_arm)
-            for lean, flip in itertools.product(cg.LEANS, (False, True)):
+            for meet, lean, flip in itertools.product(cg.PICK_MEETS, cg.LEANS, (False, True)):
                 s = replace(state, lean=lean)
                 geo = _pick_geometry(
-                    world, s, self.cable, conn_ref, free_ref, c_arm, f_arm, lean, flip
+                    world, s, self.cable, conn_ref, free_ref, c_arm, f_arm, lean, flip, meet
                 )
                 try:
                     _check_reach(ctx, c_arm, geo.reach(c_arm), where)
@@ -748,6 +748,7 @@ class _PickGeometry:
     grasp: Mapping[str, Mat]  # each hand's grasp pose
     retracted: Mapping[str, Mat]
     faced: Mapping[str, Poses]  # each hand turned along the cable
+    meet: Poses | None  # then the connector hand towards the far hand (cg.PICK_MEETS)
     lower: Poses  # the far hand down on a circle about the connector hand
     slide: Poses  # then up the cable to it
     raise_: Poses  # and back up on a circle
@@ -762,6 +763,8 @@ class _PickGeometry:
         out = [("pick approach", cg.lifted(self.grasp[arm], self.up, cg.APPROACH_HEIGHT))]
         out += [("pick grasp", self.grasp[arm]), ("pick retract", self.retracted[arm])]
         out += [("turn along the cable", self.faced[arm][-1])]
+        if arm == self.connector_arm and self.meet is not None:
+            out += [("carried towards the other end", self.meet[-1])]
         if arm == self.far_arm:
             out += [("slide start", self.lower[-1]), ("slide end", self.slide[-1])]
             out += [("raised", self.raise_[-1])]
@@ -783,6 +786,7 @@ def _pick_geometry(
     f_arm: str,
     lean: float,
     flip: bool = False,
+    meet: float = 0.0,
 ) -> _PickGeometry:
     cable = world.cable(name)
     up = cg.platform_up(world, conn_ref)
@@ -813,10 +817,16 @@ def _pick_geometry(
     chord = cg.horizontal(T_f_up[:3, 3] - T_c_up[:3, 3], up)
     faced_c = cg.turn_in_place(T_c_up, cg.tcp_frame(T_c_up[:3, 3], chord, up, -chord, lean))
     faced_f = cg.turn_in_place(T_f_up, cg.tcp_frame(T_f_up[:3, 3], chord, up, chord, lean))
+    met = None
+    if meet > 0.0:  # the cable slackens between the hands: no tension to keep
+        T_met = faced_c[-1].copy()
+        span = float((T_f_up[:3, 3] - T_c_up[:3, 3]) @ chord)  # between the hands, level
+        T_met[:3, 3] += meet * span * chord
+        met = cg.line(faced_c[-1], T_met)
     # Down on a circle about the connector hand, turning with it (the hand leans away from
     # the connector hand, its x staying along the chord), so the cable slides back against
     # gravity when the hand then moves up the chord (paper, section III-B).
-    centre = faced_c[-1][:3, 3]
+    centre = (faced_c if met is None else met)[-1][:3, 3]
     axis = np.cross(chord, up)
     down = cg.slide_down_angle(float(np.linalg.norm(faced_f[-1][:3, 3] - centre)))
     lower = cg.arc(faced_f[-1], centre, axis, -down, turn=True)
@@ -824,12 +834,14 @@ def _pick_geometry(
     towards = g.unit(lower[-1][:3, 3] - centre)
     slide = cg.line(lower[-1], cg.at(lower[-1], centre + spacing * towards))
     raise_ = cg.arc(slide[-1], centre, axis, down, turn=True)
-    align = _align_z(world, state.place_guide, faced_c[-1], raise_[-1], up, lean)
+    T_c_last = (faced_c if met is None else met)[-1]
+    align = _align_z(world, state.place_guide, T_c_last, raise_[-1], up, lean)
     return _PickGeometry(
         up=up,
         grasp={c_arm: T_c, f_arm: T_f},
         retracted={c_arm: T_c_up, f_arm: T_f_up},
         faced={c_arm: faced_c, f_arm: faced_f},
+        meet=met,
         lower=lower,
         slide=slide,
         raise_=raise_,
@@ -904,6 +916,8 @@ def _emit_pick(
         near=combs,
     )
     b.add(f"{label}: turn along the cable", [_cartesian(a, geo.faced[a]) for a in arms])
+    if geo.meet is not None:
+        b.add(f"{label}: carry the connector towards the other end", [_cartesian(c_arm, geo.meet)])
     b.add(f"{label}: down", [_cartesian(f_arm, geo.lower)], keep_distance=(c_arm, f_arm))
     b.add(
         f"{label}: slide to the connector",
@@ -2092,13 +2106,16 @@ def _check_both_free(
     and with the cell: else the way is not handed to the compiler."""
     above = {a: cg.lifted(geo.grasp[a], geo.up, cg.APPROACH_HEIGHT) for a in (c_arm, f_arm)}
     turned = {a: geo.faced[a][-1] for a in (c_arm, f_arm)}
+    met = turned[c_arm] if geo.meet is None else geo.meet[-1]
     configurations = (
         (f"the pick configuration ({c_arm} over {geo.end(c_arm)}, {f_arm} over "
          f"{geo.end(f_arm)})", above),
         ("both hands turned along the cable", turned),
-        (f"{f_arm} slid to the connector hand", {c_arm: turned[c_arm], f_arm: geo.slide[-1]}),
-        (f"{f_arm} raised beside the connector hand",
-         {c_arm: turned[c_arm], f_arm: geo.raise_[-1]}),
+        *(() if geo.meet is None else (
+            (f"{c_arm} carried towards the other end", {c_arm: met, f_arm: turned[f_arm]}),
+        )),
+        (f"{f_arm} slid to the connector hand", {c_arm: met, f_arm: geo.slide[-1]}),
+        (f"{f_arm} raised beside the connector hand", {c_arm: met, f_arm: geo.raise_[-1]}),
     )  # fmt: skip
     for what, poses in configurations:
         why = _pair_blocked(ctx, poses)

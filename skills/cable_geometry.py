@@ -112,6 +112,10 @@ PLACE_HOLDS = tuple(
     (math.radians(roll), farther) for farther in (0.0, 0.040) for roll in (0, 30, -30, 45, -45)
 )
 LEANS = (LEAN, math.radians(25.0), math.radians(5.0))
+# PickCable: how far along the chord to the far hand the connector hand first carries its end
+# (0: the far hand slides all the way to where the connector was picked, as published). Combs
+# far apart leave the sliding arm reaching across the other's; meeting between them does not.
+PICK_MEETS = (0.0, 0.5)
 # between guides a short span apart, a leaning pivot hand's closed fingers reach back over
 # the guide before: upright ones stay between the two
 PIVOT_LEANS = (PIVOT_LEAN, math.radians(20.0), math.radians(40.0), math.radians(10.0), 0.0)

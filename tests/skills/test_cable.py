@@ -831,7 +831,10 @@ def test_pick_cable_ways_vary_the_tip_then_the_arm() -> None:
     home = replace(CableState.at_home(context(world)), connector_arm="right")
     pick = steps[0]
     assert isinstance(pick, PickCable)
-    one = list(pick.ways(context(world), home))
+    every = list(pick.ways(context(world), home))
+    meeting = [any(s.label.endswith(MEET) for s in segs) for segs, _ in every]
+    one = every[: meeting.index(True)]  # as published: the far hand slides all the way
+    assert all(meeting[len(one) :])  # then the ways meeting between the combs
     # each tip with the far hand as published, then turned half a turn; tipped 5 deg, the
     # far hand raised beside the connector hand puts the left upper arm into the right
     # forearm in every pair of IK solutions: not offered
@@ -845,9 +848,45 @@ def test_pick_cable_ways_vary_the_tip_then_the_arm() -> None:
     assert {s.connector_arm for _, s in one} == {"right"}
     both = list(pick.ways(context(world), home, either_arm=True))
     arms = [s.connector_arm for _, s in both]
-    assert arms[: len(one)] == ["right"] * len(one) and set(arms[len(one) :]) <= {"left"}
+    assert arms[: len(every)] == ["right"] * len(every) and set(arms[len(every) :]) <= {"left"}
     first, _ = one[0]
     assert [s.label for s in first] == [s.label for s in pick.plan(context(world), home)[0]]
+
+
+MEET = ": carry the connector towards the other end"
+
+
+def test_pick_cable_meeting_ways_carry_the_connector_half_way() -> None:
+    """After the published ways, the connector hand first carries its end half the level
+    span towards the far hand; the far hand then goes down about it and slides to the
+    connector's spacing from it, with the same grasps as the published way."""
+    world, steps = _world()
+    ctx = context(world)
+    home = replace(CableState.at_home(ctx), connector_arm="right")
+    pick = steps[0]
+    assert isinstance(pick, PickCable)
+    every = list(pick.ways(ctx, home))
+    published, segs = (
+        next(segs for segs, _ in every if any(s.label.endswith(MEET) for s in segs) == met)
+        for met in (False, True)
+    )
+    labels = [s.label.split(": ", 1)[1] for s in segs]
+    turned = {p.arm: p.poses[-1] for p in segs[labels.index("turn along the cable")].paths}
+    (carry,) = segs[labels.index(MEET[2:])].paths
+    assert carry.arm == "right"
+    up = np.array([0.0, 0.0, 1.0])
+    span = turned["left"][:3, 3] - turned["right"][:3, 3]
+    span -= up * float(span @ up)
+    assert np.allclose(carry.poses[-1][:3, 3], turned["right"][:3, 3] + span / 2, atol=1e-9)
+    assert np.allclose(carry.poses[-1][:3, :3], turned["right"][:3, :3], atol=1e-9)
+    (slide,) = segs[labels.index("slide to the connector")].paths
+    spacing = segs[labels.index("slide to the connector")].facts["spacing"]
+    gap = slide.poses[-1][:3, 3] - carry.poses[-1][:3, 3]
+    assert float(np.linalg.norm(gap)) == pytest.approx(spacing, abs=1e-9)
+    grasp = labels.index("approach and grasp")
+    assert [p.poses[-1].tolist() for p in segs[grasp].paths] == [
+        p.poses[-1].tolist() for p in published[grasp].paths
+    ]
 
 
 def test_route_cable_first_way_is_the_published_one() -> None:
