@@ -100,7 +100,9 @@ class PickCable(Skill):
         the look-ahead chose takes the connector end (``either_arm``: the PlaceConnector
         that follows lets either arm place it, so then the other arm too), with each tip of
         the hands (cg.LEANS, the default first), the far hand grasping as published, then
-        turned half a turn; the first way's error when none reaches. ``then``: where the
+        turned half a turn; all of those first as published, then with the hands meeting
+        between the combs before the slide (cg.PICK_MEETS); the first way's error when none
+        reaches. ``then``: where the
         connector arm, and the routing arm, work after the pick (the connector guide, the
         route's last guide): with either arm, the arms not crossing there either first."""
         world = ctx.world
@@ -748,7 +750,7 @@ class _PickGeometry:
     grasp: Mapping[str, Mat]  # each hand's grasp pose
     retracted: Mapping[str, Mat]
     faced: Mapping[str, Poses]  # each hand turned along the cable
-    meet: Poses | None  # then the connector hand towards the far hand (cg.PICK_MEETS)
+    meet: Mapping[str, Poses]  # then the hands that move to meet (cg.PICK_MEETS; {}: none)
     lower: Poses  # the far hand down on a circle about the connector hand
     slide: Poses  # then up the cable to it
     raise_: Poses  # and back up on a circle
@@ -763,8 +765,8 @@ class _PickGeometry:
         out = [("pick approach", cg.lifted(self.grasp[arm], self.up, cg.APPROACH_HEIGHT))]
         out += [("pick grasp", self.grasp[arm]), ("pick retract", self.retracted[arm])]
         out += [("turn along the cable", self.faced[arm][-1])]
-        if arm == self.connector_arm and self.meet is not None:
-            out += [("carried towards the other end", self.meet[-1])]
+        if arm in self.meet:
+            out += [("met", self.meet[arm][-1])]
         if arm == self.far_arm:
             out += [("slide start", self.lower[-1]), ("slide end", self.slide[-1])]
             out += [("raised", self.raise_[-1])]
@@ -786,7 +788,7 @@ def _pick_geometry(
     f_arm: str,
     lean: float,
     flip: bool = False,
-    meet: float = 0.0,
+    meet: tuple[float, float] = (0.0, 0.0),
 ) -> _PickGeometry:
     cable = world.cable(name)
     up = cg.platform_up(world, conn_ref)
@@ -817,31 +819,28 @@ def _pick_geometry(
     chord = cg.horizontal(T_f_up[:3, 3] - T_c_up[:3, 3], up)
     faced_c = cg.turn_in_place(T_c_up, cg.tcp_frame(T_c_up[:3, 3], chord, up, -chord, lean))
     faced_f = cg.turn_in_place(T_f_up, cg.tcp_frame(T_f_up[:3, 3], chord, up, chord, lean))
-    met = None
-    if meet > 0.0:  # the cable slackens between the hands: no tension to keep
-        T_met = faced_c[-1].copy()
-        span = float((T_f_up[:3, 3] - T_c_up[:3, 3]) @ chord)  # between the hands, level
-        T_met[:3, 3] += meet * span * chord
-        met = cg.line(faced_c[-1], T_met)
+    moves, chord = _meet(faced_c[-1], faced_f[-1], chord, up, lean, meet)
+    met = {{"c": c_arm, "f": f_arm}[k]: v for k, v in moves.items()}
+    T_c_last = met[c_arm][-1] if c_arm in met else faced_c[-1]
+    T_f_last = met[f_arm][-1] if f_arm in met else faced_f[-1]
     # Down on a circle about the connector hand, turning with it (the hand leans away from
     # the connector hand, its x staying along the chord), so the cable slides back against
     # gravity when the hand then moves up the chord (paper, section III-B).
-    centre = (faced_c if met is None else met)[-1][:3, 3]
+    centre = T_c_last[:3, 3]
     axis = np.cross(chord, up)
-    down = cg.slide_down_angle(float(np.linalg.norm(faced_f[-1][:3, 3] - centre)))
-    lower = cg.arc(faced_f[-1], centre, axis, -down, turn=True)
+    down = cg.slide_down_angle(float(np.linalg.norm(T_f_last[:3, 3] - centre)))
+    lower = cg.arc(T_f_last, centre, axis, -down, turn=True)
     spacing = _connector_spacing(world, state.place_guide, conn_len, hand_f)
     towards = g.unit(lower[-1][:3, 3] - centre)
     slide = cg.line(lower[-1], cg.at(lower[-1], centre + spacing * towards))
     raise_ = cg.arc(slide[-1], centre, axis, down, turn=True)
-    T_c_last = (faced_c if met is None else met)[-1]
     align = _align_z(world, state.place_guide, T_c_last, raise_[-1], up, lean)
     return _PickGeometry(
         up=up,
         grasp={c_arm: T_c, f_arm: T_f},
         retracted={c_arm: T_c_up, f_arm: T_f_up},
         faced={c_arm: faced_c, f_arm: faced_f},
-        meet=met,
+        meet={a: met[a] for a in (c_arm, f_arm) if a in met},
         lower=lower,
         slide=slide,
         raise_=raise_,
@@ -855,6 +854,27 @@ def _pick_geometry(
         connector_arm=c_arm,
         far_arm=f_arm,
     )
+
+
+def _meet(
+    T_c: Mat, T_f: Mat, chord: Vec, up: Vec, lean: float, meet: tuple[float, float]
+) -> tuple[dict[str, Poses], Vec]:
+    """The hands' paths to where they meet ("c", "f": those that move) and the chord after:
+    the connector hand carries its end ``meet[0]`` of the level span towards the far hand,
+    and the far hand comes round to the rest of the span from it, the chord turned by
+    ``meet[1]`` (rad) about ``up``. The hands never move apart: the cable only slackens."""
+    fraction, swing = meet
+    if fraction == 0.0 and swing == 0.0:
+        return {}, chord
+    span = float((T_f[:3, 3] - T_c[:3, 3]) @ chord)
+    centre = T_c[:3, 3] + fraction * span * chord
+    turned = g.axis_angle_to_matrix(up, swing) @ chord
+    T_c1 = cg.tcp_frame(centre, turned, up, -turned, lean)
+    T_f1 = cg.tcp_frame(centre + (1.0 - fraction) * span * turned, turned, up, turned, lean)
+    paths = {"c": cg.line(T_c, T_c1)}  # turning its connector with it
+    if swing != 0.0:  # the far hand holds only the cable: either way along it
+        paths["f"] = cg.line(T_f, cg.nearer_turn(T_f, T_f1))
+    return paths, turned
 
 
 def _connector_spacing(world: World, guide: str | None, conn_len: float, hand: cg.Hand) -> float:
@@ -916,8 +936,8 @@ def _emit_pick(
         near=combs,
     )
     b.add(f"{label}: turn along the cable", [_cartesian(a, geo.faced[a]) for a in arms])
-    if geo.meet is not None:
-        b.add(f"{label}: carry the connector towards the other end", [_cartesian(c_arm, geo.meet)])
+    if geo.meet:
+        b.add(f"{label}: meet", [_cartesian(a, poses) for a, poses in geo.meet.items()])
     b.add(f"{label}: down", [_cartesian(f_arm, geo.lower)], keep_distance=(c_arm, f_arm))
     b.add(
         f"{label}: slide to the connector",
@@ -2106,16 +2126,15 @@ def _check_both_free(
     and with the cell: else the way is not handed to the compiler."""
     above = {a: cg.lifted(geo.grasp[a], geo.up, cg.APPROACH_HEIGHT) for a in (c_arm, f_arm)}
     turned = {a: geo.faced[a][-1] for a in (c_arm, f_arm)}
-    met = turned[c_arm] if geo.meet is None else geo.meet[-1]
+    met = {a: geo.meet[a][-1] if a in geo.meet else turned[a] for a in (c_arm, f_arm)}
     configurations = (
         (f"the pick configuration ({c_arm} over {geo.end(c_arm)}, {f_arm} over "
          f"{geo.end(f_arm)})", above),
         ("both hands turned along the cable", turned),
-        *(() if geo.meet is None else (
-            (f"{c_arm} carried towards the other end", {c_arm: met, f_arm: turned[f_arm]}),
-        )),
-        (f"{f_arm} slid to the connector hand", {c_arm: met, f_arm: geo.slide[-1]}),
-        (f"{f_arm} raised beside the connector hand", {c_arm: met, f_arm: geo.raise_[-1]}),
+        *((("the hands met between the combs", met),) if geo.meet else ()),
+        (f"{f_arm} slid to the connector hand", {c_arm: met[c_arm], f_arm: geo.slide[-1]}),
+        (f"{f_arm} raised beside the connector hand",
+         {c_arm: met[c_arm], f_arm: geo.raise_[-1]}),
     )  # fmt: skip
     for what, poses in configurations:
         why = _pair_blocked(ctx, poses)

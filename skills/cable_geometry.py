@@ -112,10 +112,14 @@ PLACE_HOLDS = tuple(
     (math.radians(roll), farther) for farther in (0.0, 0.040) for roll in (0, 30, -30, 45, -45)
 )
 LEANS = (LEAN, math.radians(25.0), math.radians(5.0))
-# PickCable: how far along the chord to the far hand the connector hand first carries its end
-# (0: the far hand slides all the way to where the connector was picked, as published). Combs
-# far apart leave the sliding arm reaching across the other's; meeting between them does not.
-PICK_MEETS = (0.0, 0.5)
+# PickCable: where the hands meet before the far hand slides to the connector hand: (how far
+# along the level span to the far hand the connector hand first carries its end, how far the
+# far hand then comes round it, turning the chord about the vertical); (0, 0): where the
+# connector was picked, as published. Combs far apart leave the sliding arm reaching across
+# the other's; meeting between them, the pair across the robots' line of sight, does not.
+PICK_MEETS = tuple(
+    (fraction, math.radians(swing)) for fraction, swing in ((0, 0), (0.5, 0), (0.5, 90), (0.5, -90))
+)
 # between guides a short span apart, a leaning pivot hand's closed fingers reach back over
 # the guide before: upright ones stay between the two
 PIVOT_LEANS = (PIVOT_LEAN, math.radians(20.0), math.radians(40.0), math.radians(10.0), 0.0)

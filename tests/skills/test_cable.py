@@ -853,7 +853,7 @@ def test_pick_cable_ways_vary_the_tip_then_the_arm() -> None:
     assert [s.label for s in first] == [s.label for s in pick.plan(context(world), home)[0]]
 
 
-MEET = ": carry the connector towards the other end"
+MEET = ": meet"
 
 
 def test_pick_cable_meeting_ways_carry_the_connector_half_way() -> None:
