@@ -1,7 +1,7 @@
 """Success rate of the cable skills on generated boards nobody tuned for (issue #13, point 5).
 
 Run: .venv/bin/python bench/bench_boards.py --boards 50 --seed 1 [--strategies split,sync,async]
-     [--remodel] [--out DIR] [--jobs 2]
+     [--remodel] [--out DIR] [--jobs 2] [--timeout 900]
 
 Board k is drawn from seed S + k by bench/boards.py (its docstring says what a board is and
 what is rejected); with --remodel the REMODEL sample is added at 8 placements. Each board
@@ -9,7 +9,8 @@ is compiled with each strategy by ``cellengine.pipeline.compile_plan`` and each 
 program checked by bench/board_check.py (independent of the skills). Printed and written to
 DIR/results.json: the success rate per strategy, a histogram of the failure reasons
 (messages normalised into classes) and the compile times; each outcome is also appended to
-DIR/outcomes.jsonl as it finishes (a run cut short keeps its figures). The folders of the
+DIR/outcomes.jsonl as it finishes (a run cut short keeps its figures). A compile still running
+after --timeout seconds is stopped and counted a failure ("not done in time"). The folders of the
 boards that failed with some strategy stay in DIR/boards/; the others are deleted. Results
 do not depend on --jobs: every task is a pure function of its board and strategy.
 """
@@ -20,6 +21,7 @@ import argparse
 import json
 import re
 import shutil
+import signal
 import statistics
 import subprocess
 import sys
@@ -110,16 +112,31 @@ def _part_kind(name: str) -> str:
 # ------------------------------------------------------------------------------- tasks
 
 
-def run_one(plan: str, board: str, strategy: str) -> Outcome:
-    """Compile and check one board with one strategy (in a worker process)."""
+class _OutOfTime(Exception):
+    pass
+
+
+def _out_of_time(signum: int, frame: object) -> None:
+    raise _OutOfTime
+
+
+def run_one(plan: str, board: str, strategy: str, timeout: float = 0.0) -> Outcome:
+    """Compile and check one board with one strategy (in a worker process); a compile still
+    running after ``timeout`` s (0: none) is stopped and counted a failure."""
     import cellengine.skills.cable  # noqa: F401  (registers the cable skills)
     from bench.board_check import check_compiled
     from cellengine.errors import InputError
     from cellengine.pipeline import compile_plan
 
     t0 = time.perf_counter()
+    signal.signal(signal.SIGALRM, _out_of_time)
+    signal.setitimer(signal.ITIMER_REAL, timeout)
     try:
         compiled = compile_plan(Path(plan), strategy)
+    except _OutOfTime:
+        dt = time.perf_counter() - t0
+        msg = f"not compiled within {timeout:g} s (stopped)"
+        return Outcome(board, strategy, False, "not done in time", msg, dt, None)
     except InputError as e:
         dt = time.perf_counter() - t0
         msg = str(e).split("\n")[0]
@@ -128,6 +145,8 @@ def run_one(plan: str, board: str, strategy: str) -> Outcome:
         dt = time.perf_counter() - t0
         msg = f"{type(e).__name__}: {e}".split("\n")[0]
         return Outcome(board, strategy, False, f"crash: {type(e).__name__}", msg, dt, None)
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
     dt = time.perf_counter() - t0
     try:
         result = check_compiled(compiled)
@@ -265,14 +284,16 @@ def _print(summary: dict[str, object], outcomes: list[Outcome]) -> None:
         print(f"  {n:4d}  {reason}   e.g. {example.board} {example.strategy}")
 
 
-def _run_all(tasks: list[tuple[str, str, str]], jobs: int, log: Path) -> list[Outcome]:
+def _run_all(
+    tasks: list[tuple[str, str, str]], jobs: int, log: Path, timeout: float
+) -> list[Outcome]:
     """Every task's outcome in the tasks' order; each is also appended to ``log`` (one JSON
     line) as it finishes, so that a run cut short still leaves its figures."""
     log.parent.mkdir(parents=True, exist_ok=True)
     log.unlink(missing_ok=True)
     done: dict[int, Outcome] = {}
     with ProcessPoolExecutor(max_workers=jobs) as pool, log.open("a") as f:
-        futures = {pool.submit(run_one, *t): i for i, t in enumerate(tasks)}
+        futures = {pool.submit(run_one, *t, timeout): i for i, t in enumerate(tasks)}
         for fut in as_completed(futures):
             o = done[futures[fut]] = fut.result()
             f.write(json.dumps(asdict(o)) + "\n")
@@ -290,13 +311,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--remodel", action="store_true")
     ap.add_argument("--out", type=Path, default=Path("bench_boards_out"))
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--timeout", type=float, default=900.0, help="s per compile; 0: none")
     args = ap.parse_args(argv)
     strategies = tuple(args.strategies.split(","))
     shutil.rmtree(args.out / "boards", ignore_errors=True)
     plans = make_boards(args.boards, args.seed, args.remodel, args.out)
     tasks = [(str(p), b, s) for b, p in plans.items() for s in strategies]
     t0 = time.perf_counter()
-    outcomes = _run_all(tasks, args.jobs, args.out / "outcomes.jsonl")
+    outcomes = _run_all(tasks, args.jobs, args.out / "outcomes.jsonl", args.timeout)
     wall = time.perf_counter() - t0
     summary = summarise(outcomes, strategies)
     _print(summary, outcomes)

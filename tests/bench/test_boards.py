@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 import cellengine.skills.cable  # noqa: F401  (the real skills package registers the cable skills)
-from bench.bench_boards import classify
+from bench.bench_boards import classify, run_one
 from bench.board_check import check_compiled
 from bench.boards import Guide, make_board, rejection
 from cellengine.info.load import load_plan
@@ -99,3 +99,12 @@ def test_failure_classes() -> None:
     assert classify("x: no sliding angle clears the guide: theta 3") == (
         "no sliding angle clears the guide"
     )
+
+
+def test_a_compile_out_of_time_is_a_failure() -> None:
+    """bench_boards --timeout: a compile still running then is stopped and counted."""
+    plan = str(ROUTING / "plan_straight.yaml")
+    out = run_one(plan, "straight", "split", timeout=0.05)
+    assert (out.ok, out.reason, out.message) == (
+        False, "not done in time", "not compiled within 0.05 s (stopped)"
+    )  # fmt: skip
