@@ -12,7 +12,7 @@ import pytest
 import cellengine.skills.cable  # noqa: F401  (the real skills package registers the cable skills)
 from bench.bench_boards import classify, run_one
 from bench.board_check import check_compiled
-from bench.boards import Guide, make_board, rejection
+from bench.boards import Guide, make_board, rejection, remodel_placements
 from cellengine.info.load import load_plan
 from cellengine.pipeline import Compiled, compile_plan
 from tests.conftest import CELLS
@@ -108,3 +108,30 @@ def test_a_compile_out_of_time_is_a_failure() -> None:
     assert (out.ok, out.reason, out.message) == (
         False, "not done in time", "not compiled within 0.05 s (stopped)"
     )  # fmt: skip
+
+
+def test_remodel_placements_nearest_and_farthest_each_way_round() -> None:
+    """With an arm reach test of 700 mm from both bases, a 200 x 20 mm sample along x fits
+    turned every way: near at 150 mm in front of the bases (plus half its length along x),
+    far where its farthest point is at the reach; the poses put the centre there."""
+    import numpy as np
+
+    def kp(x: float, y: float) -> np.ndarray:
+        T = np.eye(4)
+        T[:2, 3] = x / 1000, y / 1000
+        return T
+
+    sample = [kp(-300, 40), kp(-100, 40), kp(-100, 60)]  # centre (-166.7, 46.7) mm
+
+    def reaches(T: np.ndarray) -> bool:
+        p = T[:2, 3] * 1000
+        return all(np.hypot(*(p - b)) <= 700 for b in ((0, 350), (0, -350)))
+
+    placed = dict(remodel_placements(sample, reaches))
+    names = [f"remodel_{yaw}_{tag}" for yaw in (0, 90, 180, 270) for tag in ("near", "far")]
+    assert list(placed) == names
+    # turned 0, centre at (290, 0): its nearest point 156.7 mm in front of the bases; at
+    # (530, 0) its farthest (596.7, 13.3) is 698.6 mm from the right base (540: 707 mm)
+    assert placed["remodel_0_near"] == "456.7 -46.7 0 0 0 0"
+    assert placed["remodel_0_far"] == "696.7 -46.7 0 0 0 0"
+    assert placed["remodel_90_near"].endswith(" 0 0 0 90")
