@@ -24,6 +24,7 @@ A checker preallocates pinocchio and coal data: not thread-safe; one per thread.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -41,6 +42,10 @@ STEP_GROWTH = 2.0  # after a passed step
 # with so few objects, testing every pair of boxes beats maintaining a tree.
 BROAD_PHASE = pin.BroadPhaseManager_NaiveCollisionManager
 DEFAULT_CLEARANCE = 1e-3  # m: check_segment refuses a segment passing closer than this
+# distance's and apart's answers kept per checker (states): the cable skills measure the same
+# pairs of IK solutions again for each way sharing a path (about a third of their calls);
+# emptied when full
+ANSWERS = 16384
 
 
 @dataclass(frozen=True)
@@ -92,8 +97,9 @@ class CollisionChecker:
         self._exact = _Checked(model, scene.geometry)
         self._segments: tuple[_Checked, Any] | None = None
         self._selections: dict[tuple[str, ...] | None, tuple[Any, NDArray[np.bool_]]] = {}
-        self._apart: dict[tuple[tuple[str, ...], float], _Checked] = {}
+        self._kept_apart: dict[tuple[tuple[str, str], float], _Checked] = {}
         self._n_pairs = len(scene.pairs)
+        self._answers: dict[tuple[object, ...], Any] = {}  # distance's and apart's, by state
 
     # ------------------------------------------------------------------------------ states
 
@@ -131,6 +137,11 @@ class CollisionChecker:
         lower bound, cheap), and only pairs whose bound is below the best exact distance are
         measured exactly. (inf, ("", "")) when no pair qualifies."""
         qa = self._q(q)
+        key = (qa.tobytes(), None if between is None else tuple(sorted(between)))
+        out: tuple[float, Pair] = self._answer(key, lambda: self._distance(qa, between))
+        return out
+
+    def _distance(self, qa: Vec, between: tuple[str, str] | None) -> tuple[float, Pair]:
         scene = self._scene
         gdata, mask = self._selection(between)
         if not mask.any():
@@ -145,14 +156,27 @@ class CollisionChecker:
         apart at q: a yes/no that stops at the first pair within it, ~4x cheaper than
         :meth:`distance` on the cable-routing cell (coal's security margin: no distance
         measured for a pair it proves farther)."""
-        key = (tuple(sorted(between)), keep)
-        checked = self._apart.get(key)
+        qa = self._q(q)
+        a, b = sorted(between)
+        free: bool = self._answer((qa.tobytes(), a, b, keep), lambda: self._apart(qa, (a, b), keep))
+        return free
+
+    def _apart(self, qa: Vec, arms: tuple[str, str], keep: float) -> bool:
+        checked = self._kept_apart.get((arms, keep))
         if checked is None:
-            mask = self._between(between)
+            mask = self._between(arms)
             checked = _Checked(self._model, self._scene.geometry, active=mask)
             checked.set_margins(np.where(mask, keep, 0.0))
-            self._apart[key] = checked
-        return checked.first_hit(self._model, self._data, self._q(q)) is None
+            self._kept_apart[(arms, keep)] = checked
+        return checked.first_hit(self._model, self._data, qa) is None
+
+    def _answer(self, key: tuple[object, ...], compute: Callable[[], Any]) -> Any:
+        """``compute()``, or its answer kept from the last time ``key`` was asked."""
+        if key not in self._answers:
+            if len(self._answers) >= ANSWERS:
+                self._answers.clear()
+            self._answers[key] = compute()
+        return self._answers[key]
 
     def closer_than(self, q: ArrayLike, limits: Vec) -> dict[int, float]:
         """The checked pairs closer than their limit (m, one per pair) at q, each with its
