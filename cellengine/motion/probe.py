@@ -31,6 +31,7 @@ class _Solid:
     shape: Any
     centre: Vec  # of its bounding sphere, in its own frame
     radius: float
+    placed: Any  # T as coal's transform (built once: a probe measures a static many times)
 
 
 @dataclass(frozen=True)
@@ -107,9 +108,7 @@ class ToolProbe:
             s, t = statics[k], tool[m]
             result.clear()
             T = P[i] @ t.T
-            d = float(
-                coal.distance(t.shape, _transform(T), s.shape, _transform(s.T), request, result)
-            )
+            d = float(coal.distance(t.shape, _transform(T), s.shape, s.placed, request, result))
             # ties: the first in pose, static, solid order, as looping over them would give
             if d < limit or (d == limit and best is not None and (i, k, m) < first):
                 limit, first = d, (i, k, m)
@@ -188,7 +187,8 @@ def _solid(name: str, T: Mat, shape: Any) -> _Solid:
     shape.computeLocalAABB()
     box = shape.aabb_local
     lo, hi = np.asarray(box.min_), np.asarray(box.max_)
-    return _Solid(name, T, shape, (lo + hi) / 2.0, float(np.linalg.norm(hi - lo)) / 2.0)
+    radius = float(np.linalg.norm(hi - lo)) / 2.0
+    return _Solid(name, T, shape, (lo + hi) / 2.0, radius, _transform(T))
 
 
 def _transform(T: Mat) -> Any:
