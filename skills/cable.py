@@ -248,7 +248,7 @@ def _place_carries(
         geo = _place_geometry(ctx.world, state, step, c_arm, f_arm, where, order, hold=hold)
         poses = [pair for _, paths in geo.carry for pair in _samples(paths)]
         poses += _samples(geo.insert)
-        if ctx.probe.nearest(f_arm, [T_f for _, T_f in poses], GRASP, (), ctx.clearance):
+        if ctx.probe.comes_within(f_arm, [T_f for _, T_f in poses], GRASP, (), ctx.clearance):
             continue
         clear = True
         room = max(_pair_rooms(ctx, c_arm, f_arm, poses, ctx.clearance).values())
@@ -405,7 +405,7 @@ class RouteCable(Skill):
             way = GuideWay(theta, side, gap=b.gap, turn_first=first)
             slide = _slide(b, way, _approach_pose(ctx.world, state, b, r_arm, way))
             poses = [*slide[::2], slide[-1]]
-            return ctx.probe.nearest(r_arm, poses, SLIDE, (), cg.CLEARANCE, own) is None
+            return not ctx.probe.comes_within(r_arm, poses, SLIDE, (), cg.CLEARANCE, own)
 
         def least(b: _Basics, side: float, first: bool) -> float | None:
             lo, hi = b.theta_min + cg.THETA_MARGIN, cg.THETA_MAX
