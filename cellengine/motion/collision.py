@@ -42,6 +42,7 @@ STEP_GROWTH = 2.0  # after a passed step
 # with so few objects, testing every pair of boxes beats maintaining a tree.
 BROAD_PHASE = pin.BroadPhaseManager_NaiveCollisionManager
 DEFAULT_CLEARANCE = 1e-3  # m: check_segment refuses a segment passing closer than this
+PATH_SLACK = 1e-5  # m: check_path's margins over the motion bound, room for GJK's tolerance
 # distance's and apart's answers kept per checker (states): the cable skills measure the same
 # pairs of IK solutions again for each way sharing a path (about a third of their calls);
 # emptied when full
@@ -128,6 +129,33 @@ class CollisionChecker:
             dtype=bool,
             count=len(Qa),
         )
+
+    def check_path(self, Q: ArrayLike) -> NDArray[np.bool_]:
+        """check_batch's answers for states along a path (rows a small motion apart: a
+        trajectory's samples), proved a run of rows at a time: a check of the run's first row
+        with each pair's margin its motion bound to the farthest row of the run (the module's
+        notes) clears them all. The run doubles after a pass; after a failure the first row
+        is checked exactly and the runs start again from the next. ~2x faster than
+        check_batch on the cable-routing plans' trajectories, where most runs pass."""
+        Qa = np.asarray(Q, dtype=float)
+        if Qa.ndim != 2 or Qa.shape[1] != self._nq:
+            raise ValueError(f"Q has shape {Qa.shape}, expected (n, {self._nq})")
+        out = np.zeros(len(Qa), dtype=bool)
+        inflated, motion = self._for_segments()[0], self._scene.motion
+        i, h = 0, 1
+        while i < len(Qa):
+            h = min(h, len(Qa) - i)
+            if h == 1:
+                out[i] = self._exact.first_hit(self._model, self._data, Qa[i]) is not None
+                i, h = i + 1, 2
+                continue
+            moved = np.abs(Qa[i : i + h] - Qa[i]).max(axis=0)
+            inflated.set_margins(motion @ moved + PATH_SLACK)
+            if inflated.first_hit(self._model, self._data, Qa[i]) is None:
+                i, h = i + h, 2 * h
+            else:
+                h = 1
+        return out
 
     def distance(self, q: ArrayLike, between: tuple[str, str] | None = None) -> tuple[float, Pair]:
         """The minimum distance over the checked pairs at q and the pair at it; ``between``

@@ -201,6 +201,25 @@ def test_answers_asked_again_are_kept_until_the_held_objects_change(
     assert held[0] < alone[0] - 0.01 and "box1" in held[1]  # 90 mm below the TCP, 100 above
 
 
+def test_check_path_answers_as_check_batch(cell: CellModel, checker: CollisionChecker) -> None:
+    """Along a path into a contact and out again (1000 states), and at unrelated states:
+    the same answers as checking each state."""
+    T_cell_tcp = g.transform(g.rot_x(math.pi / 2), [-0.1, -0.33, 0.6])
+    inside = both(cell, left=ik(cell, "left", T_cell_tcp, HOME))
+    f = np.concatenate([np.linspace(0.0, 1.0, 500), np.linspace(1.0, 0.0, 500)])[:, None]
+    path = both(cell) + f * (inside - both(cell))
+    hits = checker.check_batch(path)
+    assert 0 < hits.sum() < len(path)
+    np.testing.assert_array_equal(checker.check_path(path), hits)
+    still = np.repeat(inside[None, :], 5, axis=0)  # standing in the contact: every state
+    np.testing.assert_array_equal(checker.check_path(still), np.ones(5, dtype=bool))
+    rng = np.random.default_rng(3)
+    scattered = both(cell) + rng.uniform(-1.5, 1.5, (200, len(HOME) * 2))
+    hits = checker.check_batch(scattered)
+    assert 0 < hits.sum() < len(scattered)
+    np.testing.assert_array_equal(checker.check_path(scattered), hits)
+
+
 def test_left_arm_into_the_right_forearm(cell: CellModel, checker: CollisionChecker) -> None:
     # the left TCP pointing along -y, 20 mm inside the right forearm's tube at home
     T_cell_tcp = g.transform(g.rot_x(math.pi / 2), [-0.1, -0.33, 0.6])
