@@ -135,13 +135,17 @@ class ToolProbe:
         best: Nearest | None = None
         limit, earliest = within, (len(P), 0, 0)
         request, result = coal.DistanceRequest(), coal.DistanceResult()
-        for i, k, m in near[np.argsort(bound[tuple(near.T)], kind="stable")].tolist():
-            if bound[i, k, m] > limit:
+        bounds = bound[tuple(near.T)]
+        order = np.argsort(bounds, kind="stable")
+        placed: dict[tuple[int, int], Any] = {}  # a tool solid at a pose, for every static
+        for (i, k, m), b in zip(near[order].tolist(), bounds[order].tolist(), strict=True):
+            if b > limit:
                 break
             s, t = statics[k], tool[m]
+            if (i, m) not in placed:
+                placed[i, m] = _transform(P[i] @ t.T)
             result.clear()
-            T = P[i] @ t.T
-            d = float(coal.distance(t.shape, _transform(T), s.shape, s.placed, request, result))
+            d = float(coal.distance(t.shape, placed[i, m], s.shape, s.placed, request, result))
             # ties: the first in pose, static, solid order, as looping over them would give
             if d < limit or (d == limit and best is not None and (i, k, m) < earliest):
                 limit, earliest = d, (i, k, m)
