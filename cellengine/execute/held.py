@@ -195,11 +195,9 @@ class Holding:
         if not state.grips and not state.contacts and self._standing_as_built(state):
             if not state.by_arm and not state.jaw:
                 return base
-            held = [held_object(self.world, base, a, o) for a, o in sorted(state.by_arm.items())]
-            held_by_name = {h.name: h for h in held}
-            return assemble(
-                base.cell, base.statics, held_by_name, base.fixed_reasons, base.notes, jaw
-            )
+            riding = [held_object(self.world, base, a, o) for a, o in sorted(state.by_arm.items())]
+            by_name = {h.name: h for h in riding}
+            return assemble(base.cell, base.statics, by_name, base.fixed_reasons, base.notes, jaw)
         containers = self.world.objects.containers
         statics = [s for s in self.base.statics if s.name not in containers]
         statics += [
