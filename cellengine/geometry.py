@@ -43,16 +43,24 @@ def unit(v: ArrayLike) -> Vec:
     return out
 
 
+def cross(a: ArrayLike, b: ArrayLike) -> Vec:
+    """``np.cross`` of two 3-vectors, to the bit, in a twentieth of its time (numpy's, made
+    for arrays of vectors, costs ~17 us a call: 0.1 s of a cable plan's compile)."""
+    a0, a1, a2 = np.asarray(a, dtype=float).reshape(3).tolist()
+    b0, b1, b2 = np.asarray(b, dtype=float).reshape(3).tolist()
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+
+
 def angle_between(a: ArrayLike, b: ArrayLike) -> float:
     """The angle (rad, in [0, pi]) between two vectors."""
     ua, ub = unit(a), unit(b)
-    return math.atan2(float(np.linalg.norm(np.cross(ua, ub))), float(ua @ ub))
+    return math.atan2(float(np.linalg.norm(cross(ua, ub))), float(ua @ ub))
 
 
 def signed_angle(a: ArrayLike, b: ArrayLike, axis: Vec) -> float:
     """Angle (rad, right-handed about ``axis``) from ``a`` to ``b``, both normal to it."""
     ua, ub = unit(a), unit(b)
-    return math.atan2(float(np.cross(ua, ub) @ axis), float(ua @ ub))
+    return math.atan2(float(cross(ua, ub) @ axis), float(ua @ ub))
 
 
 def any_perpendicular(k: Vec) -> Vec:
@@ -188,12 +196,12 @@ def rotation_angles(Ts: Poses) -> Vec:
 def z_along(z: Vec) -> Mat:
     """A rotation whose z axis is the unit vector ``z`` (x: :func:`any_perpendicular`)."""
     x = any_perpendicular(z)
-    return np.column_stack([x, np.cross(z, x), z])
+    return np.column_stack([x, cross(z, x), z])
 
 
 def frame_yz(y: Vec, z: Vec) -> Mat:
     """The rotation with the orthonormal axes ``y`` and ``z``: columns y x z, y, z."""
-    return np.column_stack([np.cross(y, z), y, z])
+    return np.column_stack([cross(y, z), y, z])
 
 
 # ----------------------------------------------------------------------------- transforms

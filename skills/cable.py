@@ -250,7 +250,7 @@ def _place_carries(
         geo = _place_geometry(ctx.world, state, step, c_arm, f_arm, where, order, hold=hold)
         poses = [pair for _, paths in geo.carry for pair in _samples(paths)]
         poses += _samples(geo.insert)
-        if ctx.probe.nearest(f_arm, [T_f for _, T_f in poses], GRASP, (), ctx.clearance):
+        if ctx.probe.comes_within(f_arm, [T_f for _, T_f in poses], GRASP, (), ctx.clearance):
             continue
         clear = True
         room = max(_pair_rooms(ctx, c_arm, f_arm, poses, ctx.clearance).values())
@@ -407,7 +407,7 @@ class RouteCable(Skill):
             way = GuideWay(theta, side, gap=b.gap, turn_first=first)
             slide = _slide(b, way, _approach_pose(ctx.world, state, b, r_arm, way))
             poses = [*slide[::2], slide[-1]]
-            return ctx.probe.nearest(r_arm, poses, SLIDE, (), cg.CLEARANCE, own) is None
+            return not ctx.probe.comes_within(r_arm, poses, SLIDE, (), cg.CLEARANCE, own)
 
         def least(b: _Basics, side: float, first: bool) -> float | None:
             lo, hi = b.theta_min + cg.THETA_MARGIN, cg.THETA_MAX
@@ -827,7 +827,7 @@ def _pick_geometry(
     # the connector hand, its x staying along the chord), so the cable slides back against
     # gravity when the hand then moves up the chord (paper, section III-B).
     centre = T_c_last[:3, 3]
-    axis = np.cross(chord, up)
+    axis = g.cross(chord, up)
     down = cg.slide_down_angle(float(np.linalg.norm(T_f_last[:3, 3] - centre)))
     lower = cg.arc(T_f_last, centre, axis, -down, turn=True)
     spacing = _connector_spacing(world, state.place_guide, conn_len, hand_f)
@@ -1197,7 +1197,7 @@ def _hand_over(
     T_above = cg.lifted(T_take, up, cg.APPROACH_HEIGHT)
     _check_reach(ctx, c_arm, [("taking the cable over", T_take), ("above it", T_above)], where)
     T_up = cg.lifted(T_f, up, cg.RETRACT_HEIGHT)
-    side = np.cross(up, geo.axis)
+    side = g.cross(up, geo.axis)
     if float(side @ _towards_base(ctx.world, f_arm, T_f[:3, 3], up)) < 0.0:
         side = -side
     why: str | None = None
@@ -1576,7 +1576,7 @@ def _centred_gap(world: World, guide: str, b: _Basics, after: bool) -> tuple[flo
     # what stands up to the fingers going down to the slot, not the plates
     height = float(b.slot @ b.up) - b.dims.height / 2.0
     elements = [f for f in cg.footprints(world, guide, b.up) if f.top > height]
-    across = b.hand.width / 2.0 * np.cross(b.up, b.axis)
+    across = b.hand.width / 2.0 * g.cross(b.up, b.axis)
     reach = 2.0 * (max(cg.APPROACH_GAPS) + b.hand.half_length)
     # only what stands within the hand's half width of its line (most elements do not)
     end = face + reach * direction
@@ -1628,12 +1628,12 @@ def _guide_plan(
     elevation = math.atan2(b.rise + cg.Z_OFFSET, dims.length + x_off)
     prints = cg.footprints(world, guide, up) if prints is None else prints
     elevation = max(elevation, _swept_elevation(prints, b, theta, side))
-    lift = cg.arc(pull_path[-1], ap, np.cross(d, up), elevation, turn=False)
+    lift = cg.arc(pull_path[-1], ap, g.cross(d, up), elevation, turn=False)
     # Swing about the vertical through the pivot until the cable is over the slot, turning
     # the hand with it (a turn about the vertical keeps its z down).
     swing = cg.arc(lift[-1], ap, up, -side * theta, turn=way.slide_turn)
     # Insert: down on the circle until the cable lies along the axis through the slot.
-    insert = cg.arc(swing[-1], ap, np.cross(axis, up), -elevation, turn=False)
+    insert = cg.arc(swing[-1], ap, g.cross(axis, up), -elevation, turn=False)
     laid = state.route_length() + float(np.linalg.norm(ap - last))
     return GuidePlan(
         guide=guide,
@@ -1680,7 +1680,7 @@ def _approach_pose(world: World, state: CableState, b: _Basics, r_arm: str, way:
 
 
 def _slide_direction(b: _Basics, way: GuideWay) -> Vec:
-    left = np.cross(b.up, b.axis)
+    left = g.cross(b.up, b.axis)
     d: Vec = math.cos(way.theta) * b.axis + way.side * math.sin(way.theta) * left
     return d
 
@@ -1723,7 +1723,7 @@ def _swept_elevation(
     other element standing within the sector they sweep (out to the hand's reach and its
     half width either side); 0 when none stands there."""
     up, axis, ap = b.up, b.axis, b.ap
-    left = np.cross(up, axis)
+    left = g.cross(up, axis)
     level = float(b.slot @ up)
     out = 0.0
     for f in prints:
@@ -1803,7 +1803,7 @@ def _slide_sides(
     a round hand would stand in them. ``prints``: the footprints of the elements but the
     guide's (cg.footprints)."""
     up, axis, ap, hand = b.up, b.axis, b.ap, b.hand
-    left = np.cross(up, axis)
+    left = g.cross(up, axis)
     # the hand turns with the slide (its x along it): half its extent across the motion,
     # the collision checks' stand-in being square
     hand_radius = max(hand.width, 2.0 * hand.half_length) / 2.0

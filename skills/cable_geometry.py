@@ -175,7 +175,7 @@ def tcp_frame(
     z = -up
     if flange_towards is not None and lean != 0.0:
         z = -math.cos(lean) * up - math.sin(lean) * horizontal(flange_towards, up)
-    y = g.unit(np.cross(z, c))
+    y = g.unit(g.cross(z, c))
     return g.transform(g.frame_yz(y, z), position)
 
 
@@ -483,7 +483,7 @@ def element_of(ref: str) -> str:
 
 def _plane(up: Vec) -> tuple[Vec, Vec]:
     e1 = g.any_perpendicular(up)
-    return e1, np.cross(up, e1)
+    return e1, g.cross(up, e1)
 
 
 def _convex(points: Vec, up: Vec) -> Vec:

@@ -115,3 +115,13 @@ def test_inverse_and_transform_points_agree_with_pinocchio() -> None:
     P = np.array([[0.1, 0.2, 0.3], [-1.0, 0.5, 2.0]])
     expected = np.array([pin.SE3(T).act(p) for p in P])
     np.testing.assert_allclose(g.transform_points(T, P), expected, atol=1e-9)
+
+
+def test_cross_is_numpys_to_the_bit() -> None:
+    rng = np.random.default_rng(7)
+    axes = [*np.eye(3), *-np.eye(3), np.zeros(3)]  # signed zeros
+    for a, b in [*rng.normal(size=(2000, 2, 3)), *((u, v) for u in axes for v in axes)]:
+        assert g.cross(a, b).tobytes() == np.cross(a, b).tobytes()
+    assert g.cross([1, 0, 0], [0, 1, 0]).tolist() == [0.0, 0.0, 1.0]
+    with pytest.raises(ValueError):
+        g.cross(np.eye(3), np.eye(3))  # arrays of vectors are numpy's

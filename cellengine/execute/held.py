@@ -33,13 +33,11 @@ from cellengine.motion.scene import (
     CollisionScene,
     HeldObject,
     Pair,
-    attach,
+    assemble,
     held_box,
     held_from_world,
     pair_key,
-    rearranged,
     standing_container,
-    with_jaw,
 )
 from cellengine.world import RefError, World
 
@@ -190,12 +188,16 @@ class Holding:
         self.state, self.checker = state, checker
 
     def _scene(self, state: Held) -> CollisionScene:
-        base = with_jaw(self.base, state.jaw) if state.jaw else self.base
+        """The base scene with ``state``'s jaw, held objects and standing containers, built
+        in one go (each change one at a time built a scene for each: ~10 ms apiece)."""
+        base = self.base
+        jaw = {**base.jaw, **state.jaw}
         if not state.grips and not state.contacts and self._standing_as_built(state):
-            scene = base
-            for arm, obj in sorted(state.by_arm.items()):
-                scene = attach(scene, held_object(self.world, scene, arm, obj))
-            return scene
+            if not state.by_arm and not state.jaw:
+                return base
+            riding = [held_object(self.world, base, a, o) for a, o in sorted(state.by_arm.items())]
+            by_name = {h.name: h for h in riding}
+            return assemble(base.cell, base.statics, by_name, base.fixed_reasons, base.notes, jaw)
         containers = self.world.objects.containers
         statics = [s for s in self.base.statics if s.name not in containers]
         statics += [
@@ -218,7 +220,8 @@ class Holding:
                 for m in mine:
                     if m != name:
                         allowed[pair_key(m, name)] = "contact"
-        return rearranged(base, statics, held, allowed)
+        fixed = {**base.fixed_reasons, **allowed}
+        return assemble(base.cell, statics, held, fixed, base.notes, jaw)
 
     def _standing_as_built(self, state: Held) -> bool:
         containers = self.world.objects.containers

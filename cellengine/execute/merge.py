@@ -44,7 +44,14 @@ from typing import Literal
 import numpy as np
 
 from cellengine.arrays import Vec
-from cellengine.execute.retime import fastest, jerk_limits, moves, still, thinned, timed
+from cellengine.execute.retime import (
+    jerk_limits,
+    moves,
+    still,
+    thinned,
+    timed,
+    timed_and_fastest,
+)
 from cellengine.motion.jerk import TCP_MARGIN
 from cellengine.motion.robot import CellModel
 from cellengine.motion.speed import tcp_limit, tcp_speeds
@@ -83,13 +90,14 @@ def merge_rows(
     moving = {arm: r for arm, r in rows.items() if moves(r)}
     if not moving:
         return Merged(still(q, cell.joint_names), {}, {m: 0.0 for m in MERGES}, 0.0, 0.0)
-    alone = {
-        arm: timed(r, cell.timing_limits(arm), cell.arms[arm].joint_names, tcp_limit(cell, (arm,)))
+    timings = {
+        arm: timed_and_fastest(
+            r, cell.timing_limits(arm), cell.arms[arm].joint_names, tcp_limit(cell, (arm,))
+        )
         for arm, r in moving.items()
     }
-    bound = max(
-        fastest(r, cell.timing_limits(arm), tcp_limit(cell, (arm,))) for arm, r in moving.items()
-    )
+    alone = {arm: traj for arm, (traj, _) in timings.items()}
+    bound = max(fastest for _, fastest in timings.values())
     bound_jerk = max(t.duration for t in alone.values())
     built = {
         "published": published(cell, q, alone, moving),

@@ -25,6 +25,7 @@ from cellengine.motion.timing import (
     TcpSpeedLimit,
     speed_profile,
     time_parameterize,
+    time_parameterize_and_bound,
 )
 from cellengine.motion.trajectory import Trajectory
 
@@ -89,6 +90,22 @@ def timed(
         return still(R[0], names)
     return _in_range(
         lambda W: time_parameterize(
+            W, limits, jerk=jerk_limits(limits), joint_names=tuple(names), tcp=tcp
+        ),
+        R,
+        rows,
+    )
+
+
+def timed_and_fastest(
+    rows: Vec, limits: Limits, names: Sequence[str], tcp: TcpSpeedLimit | None = None
+) -> tuple[Trajectory, float]:
+    """:func:`timed` and :func:`fastest` of the same rows, their spline built once."""
+    R = thinned(rows)
+    if len(R) < 2:
+        return still(R[0], names), 0.0
+    return _in_range(
+        lambda W: time_parameterize_and_bound(
             W, limits, jerk=jerk_limits(limits), joint_names=tuple(names), tcp=tcp
         ),
         R,

@@ -109,7 +109,7 @@ def depth_of(a: Box, b: Box) -> float:
     separating axis theorem's 15 axes (0 when an axis separates them)."""
     Ra, Rb = a.T_cell_box[:3, :3], b.T_cell_box[:3, :3]
     axes = [*Ra.T, *Rb.T]
-    axes += [np.cross(u, v) for u in Ra.T for v in Rb.T]
+    axes += [g.cross(u, v) for u in Ra.T for v in Rb.T]
     d = b.T_cell_box[:3, 3] - a.T_cell_box[:3, 3]
     least = np.inf
     for axis in axes:

@@ -193,6 +193,7 @@ def _arm_distance(
 
 
 class CellChecker(Checker, Protocol):
+    def check_path(self, Q: Vec) -> NDArray[np.bool_]: ...  # check_batch of a path's states
     def distance(self, q: Vec, between: tuple[str, str] | None = None) -> Distance: ...
 
     @property
@@ -229,13 +230,26 @@ def check_cell_trajectory(
         def distance(q: Vec) -> Distance:
             return checker.distance(q, between)
 
-    return check_trajectory(traj, cell.joint_names, cell.limits, checker, distance)
+    return check_trajectory(traj, cell.joint_names, cell.limits, _OnPath(checker), distance)
+
+
+@dataclass(frozen=True)
+class _OnPath:
+    """A cell checker checking the gate's samples as the path they are (check_path)."""
+
+    checker: CellChecker
+
+    def check_batch(self, Q: Vec) -> NDArray[np.bool_]:
+        return self.checker.check_path(Q)
+
+    def check(self, q: Vec) -> object | None:
+        return self.checker.check(q)
 
 
 def _with_clearance(
     traj: Trajectory, cell: CellModel, checker: CellChecker, clearance: float, near: frozenset[Pair]
 ) -> GateReport:
-    t, q, violations = _sampled(traj, cell.joint_names, cell.limits, checker, SAMPLE_DT)
+    t, q, violations = _sampled(traj, cell.joint_names, cell.limits, _OnPath(checker), SAMPLE_DT)
     measured = measure(checker.scene, t, q, near)
     found = measured
     for _ in range(MAX_LEAVING):

@@ -36,6 +36,10 @@ TWO_PI = 2.0 * math.pi
 # where branches coincide).
 SAME_SOLUTION = 1e-9
 
+# by_branch's answers kept per arm (poses): skills ask again about the poses of paths they
+# share (~4 times each on the cable-routing plans); 8 x 6 floats each, emptied when full.
+BRANCH_CACHE = 4096
+
 
 class ArmIK:
     """IK of ``arm``'s TCP in the cell frame. ``max_restarts`` applies to the numerical
@@ -52,6 +56,7 @@ class ArmIK:
         self.closed_form: URKinematics | None = None
         self.numeric: NumericIK | None = None
         self._path_solver: NumericIK | None = None
+        self._branches: dict[bytes, Vec] = {}  # by_branch's, by the pose's bytes
         if arm.dh is not None:
             self.closed_form = URKinematics.from_dh(arm.dh, self.lower, self.upper)
         else:
@@ -117,10 +122,16 @@ class ArmIK:
         from singularities). None for an arm solved numerically (it has no branches)."""
         if self.closed_form is None:
             return None
-        q_all, valid = self.closed_form.ik_all(self.base_flange(T_cell_tcp), float(self.home[5]))
-        w = wrap_rows_near(q_all, self.home, self.lower, self.upper)
-        w[~valid] = np.nan
-        return w
+        T = np.asarray(T_cell_tcp, dtype=float)
+        key = T.tobytes()
+        rows = self._branches.get(key)
+        if rows is None:
+            if len(self._branches) >= BRANCH_CACHE:
+                self._branches.clear()
+            q_all, valid = self.closed_form.ik_all(self.base_flange(T), float(self.home[5]))
+            rows = self._branches[key] = wrap_rows_near(q_all, self.home, self.lower, self.upper)
+            rows[~valid] = np.nan
+        return rows.copy()  # the caller's to change
 
     # ------------------------------------------------------------------ many poses
 

@@ -31,6 +31,7 @@ class _Solid:
     shape: Any
     centre: Vec  # of its bounding sphere, in its own frame
     radius: float
+    placed: Any  # T as coal's transform (built once: a probe measures a static many times)
 
 
 @dataclass(frozen=True)
@@ -52,6 +53,7 @@ class ToolProbe:
         self._tools: dict[tuple[str, float | None], list[_Solid]] = {}
         # Skills ask again about the same paths (RouteCable's ways share their inserts).
         self._asked: dict[tuple[object, ...], Nearest | None] = {}
+        self._found: dict[tuple[object, ...], Nearest | None] = {}  # comes_within's
 
     def nearest(
         self,
@@ -66,14 +68,44 @@ class ToolProbe:
         fingers at jaw ``mode``'s opening (None: the widest); objects named in ``skip`` (or
         their parts ``name#k``) left out, and with ``only`` every object it does not name;
         only pairs closer than ``within`` (m) are measured, None when none is."""
+        return self._ask(arm, poses, mode, skip, within, only, False)
+
+    def comes_within(
+        self,
+        arm: str,
+        poses: Sequence[Mat],
+        mode: str | None,
+        skip: Collection[str],
+        within: float,
+        only: Collection[str] | None = None,
+    ) -> bool:
+        """Whether :meth:`nearest` finds an object: its pairs measured in the same order, up
+        to the first closer than ``within`` (a third of the measuring, when one is)."""
+        return self._ask(arm, poses, mode, skip, within, only, True) is not None
+
+    def _ask(
+        self,
+        arm: str,
+        poses: Sequence[Mat],
+        mode: str | None,
+        skip: Collection[str],
+        within: float,
+        only: Collection[str] | None,
+        first: bool,
+    ) -> Nearest | None:
         if only is not None:
             skip = {*skip, *(s.name for s in self.statics if s.name.split("#")[0] not in only)}
         # poses to 0.1 um and 1e-7 rad: the same path computed along another way's arcs
         digest = hashlib.sha1(np.round(np.asarray(poses, dtype=float), 7).tobytes()).digest()
         key = (arm, mode, frozenset(skip), within, digest)
-        if key not in self._asked:
-            self._asked[key] = self._nearest(arm, poses, mode, skip, within)
-        return self._asked[key]
+        if key in self._asked:  # the nearest itself answers both
+            return self._asked[key]
+        if not first:
+            self._asked[key] = self._nearest(arm, poses, mode, skip, within, False)
+            return self._asked[key]
+        if key not in self._found:
+            self._found[key] = self._nearest(arm, poses, mode, skip, within, True)
+        return self._found[key]
 
     def _nearest(
         self,
@@ -82,7 +114,9 @@ class ToolProbe:
         mode: str | None,
         skip: Collection[str],
         within: float,
+        first: bool,
     ) -> Nearest | None:
+        """The nearest pair closer than ``within``; ``first``: the first found instead."""
         tool = self._tool(arm, mode)
         statics = [
             s for s in self.statics if s.name not in skip and s.name.split("#")[0] not in skip
@@ -99,21 +133,25 @@ class ToolProbe:
         bound = np.linalg.norm(c_t[:, None, :, :] - c_s[None, :, None, :], axis=-1) - r
         near = np.argwhere(bound < within)  # (pose, static, solid), in the loops' order
         best: Nearest | None = None
-        limit, first = within, (len(P), 0, 0)
+        limit, earliest = within, (len(P), 0, 0)
         request, result = coal.DistanceRequest(), coal.DistanceResult()
-        for i, k, m in near[np.argsort(bound[tuple(near.T)], kind="stable")].tolist():
-            if bound[i, k, m] > limit:
+        bounds = bound[tuple(near.T)]
+        order = np.argsort(bounds, kind="stable")
+        placed: dict[tuple[int, int], Any] = {}  # a tool solid at a pose, for every static
+        for (i, k, m), b in zip(near[order].tolist(), bounds[order].tolist(), strict=True):
+            if b > limit:
                 break
             s, t = statics[k], tool[m]
+            if (i, m) not in placed:
+                placed[i, m] = _transform(P[i] @ t.T)
             result.clear()
-            T = P[i] @ t.T
-            d = float(
-                coal.distance(t.shape, _transform(T), s.shape, _transform(s.T), request, result)
-            )
+            d = float(coal.distance(t.shape, placed[i, m], s.shape, s.placed, request, result))
             # ties: the first in pose, static, solid order, as looping over them would give
-            if d < limit or (d == limit and best is not None and (i, k, m) < first):
-                limit, first = d, (i, k, m)
+            if d < limit or (d == limit and best is not None and (i, k, m) < earliest):
+                limit, earliest = d, (i, k, m)
                 best = Nearest(d, t.name, s.name)
+                if first:
+                    break
         return best
 
     def under(self, level: float, up: Vec) -> frozenset[str]:
@@ -188,7 +226,8 @@ def _solid(name: str, T: Mat, shape: Any) -> _Solid:
     shape.computeLocalAABB()
     box = shape.aabb_local
     lo, hi = np.asarray(box.min_), np.asarray(box.max_)
-    return _Solid(name, T, shape, (lo + hi) / 2.0, float(np.linalg.norm(hi - lo)) / 2.0)
+    radius = float(np.linalg.norm(hi - lo)) / 2.0
+    return _Solid(name, T, shape, (lo + hi) / 2.0, radius, _transform(T))
 
 
 def _transform(T: Mat) -> Any:

@@ -229,7 +229,10 @@ def speed_profile(
     """The raw TOPP-RA profile along the spline (the figure to compare with toppra):
     limits (and `tcp`) met at the grid points, accelerations bang-bang, not checked in
     between."""
-    problem = _problem(waypoints, limits, None, tcp, grid_points)
+    return _raw_profile(_problem(waypoints, limits, None, tcp, grid_points))
+
+
+def _raw_profile(problem: _Problem) -> SpeedProfile:
     if problem.tcp_speed is None or problem.tcp_ds is None:
         return problem.planner.solve()
     with np.errstate(divide="ignore"):  # a grid point where the TCPs stand: no cap
@@ -263,7 +266,26 @@ def time_parameterize(
     """A jerk-limited trajectory along the spline through `waypoints`: the time-optimal
     profile smoothed on the path so that joint jerks stay within `jerk` (per joint, or
     `limits.jerk`), velocities and accelerations within the limits."""
-    problem = _problem(waypoints, limits, joint_names, tcp, grid_points)
+    return _jerk_limited(_problem(waypoints, limits, joint_names, tcp, grid_points), jerk)
+
+
+def time_parameterize_and_bound(
+    waypoints: ArrayLike,
+    limits: KinematicLimits,
+    *,
+    jerk: ArrayLike | None = None,
+    joint_names: Sequence[str] | None = None,
+    tcp: TcpSpeedLimit | None = None,
+) -> tuple[Trajectory, float]:
+    """`time_parameterize`'s trajectory and the duration of `speed_profile` (the bound no
+    timing of the path beats), on one spline and speed planner: building them is most of
+    the bound's cost."""
+    problem = _problem(waypoints, limits, joint_names, tcp, None)
+    bound = _raw_profile(problem).duration
+    return _jerk_limited(problem, jerk), bound
+
+
+def _jerk_limited(problem: _Problem, jerk: ArrayLike | None) -> Trajectory:
     if jerk is None and problem.limits.jerk is None:
         raise ValueError("time_parameterize needs jerk limits: pass jerk= or limits.jerk")
     j = (

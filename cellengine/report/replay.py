@@ -144,7 +144,7 @@ def placements(
     M = np.empty((len(Q), n, 4, 4))
     tcp = {arm: np.empty((len(Q), 3)) for arm in cell.arms}
     for s, q in enumerate(Q):
-        if jaw is not None:
+        if jaw is not None and (s == 0 or jaw[s] != jaw[s - 1]):  # else placed already
             place_fingers(cell, geometry, jaw[s])
         pin.framesForwardKinematics(model, data, q)
         pin.updateGeometryPlacements(model, data, geometry, gdata)

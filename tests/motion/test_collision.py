@@ -183,6 +183,43 @@ def test_apart_agrees_with_the_distance_and_sees_only_the_two_arms(
     assert checker.apart(q, 0.01, ("left", "right"))
 
 
+def test_answers_asked_again_are_kept_until_the_held_objects_change(
+    cell: CellModel, scene: CollisionScene, world: World
+) -> None:
+    """distance and apart keep their answers per state: asked again (the arms the other way
+    round), the first answer; after an attach, measured anew with what is held."""
+    checker = CollisionChecker(scene)
+    T_cell_slot = world.pose("routing.guide3.slot")
+    q = both(cell, left=ik(cell, "left", g.transform(DOWN, T_cell_slot[:3, 3] + [0, 0, 0.1])))
+    first = checker.distance(q, between=("left", "right"))
+    assert checker.distance(q.copy(), between=("right", "left")) == first
+    assert checker.apart(q, first[0] - 1e-4, ("left", "right"))
+    assert checker.apart(q, first[0] - 1e-4, ("right", "left"))
+    alone = checker.distance(q)
+    checker.attach(held_box("box1", "left", (0.02, 0.02, 0.18), np.eye(4)))
+    held = checker.distance(q)
+    assert held[0] < alone[0] - 0.01 and "box1" in held[1]  # 90 mm below the TCP, 100 above
+
+
+def test_check_path_answers_as_check_batch(cell: CellModel, checker: CollisionChecker) -> None:
+    """Along a path into a contact and out again (1000 states), and at unrelated states:
+    the same answers as checking each state."""
+    T_cell_tcp = g.transform(g.rot_x(math.pi / 2), [-0.1, -0.33, 0.6])
+    inside = both(cell, left=ik(cell, "left", T_cell_tcp, HOME))
+    f = np.concatenate([np.linspace(0.0, 1.0, 500), np.linspace(1.0, 0.0, 500)])[:, None]
+    path = both(cell) + f * (inside - both(cell))
+    hits = checker.check_batch(path)
+    assert 0 < hits.sum() < len(path)
+    np.testing.assert_array_equal(checker.check_path(path), hits)
+    still = np.repeat(inside[None, :], 5, axis=0)  # standing in the contact: every state
+    np.testing.assert_array_equal(checker.check_path(still), np.ones(5, dtype=bool))
+    rng = np.random.default_rng(3)
+    scattered = both(cell) + rng.uniform(-1.5, 1.5, (200, len(HOME) * 2))
+    hits = checker.check_batch(scattered)
+    assert 0 < hits.sum() < len(scattered)
+    np.testing.assert_array_equal(checker.check_path(scattered), hits)
+
+
 def test_left_arm_into_the_right_forearm(cell: CellModel, checker: CollisionChecker) -> None:
     # the left TCP pointing along -y, 20 mm inside the right forearm's tube at home
     T_cell_tcp = g.transform(g.rot_x(math.pi / 2), [-0.1, -0.33, 0.6])

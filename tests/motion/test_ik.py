@@ -141,6 +141,22 @@ def test_by_branch_puts_each_branch_in_its_row(cable_cell: CellModel) -> None:
     assert np.isnan(ik.by_branch(g.pose([2.0, 0.35, 0.3]))).all()
 
 
+def test_by_branch_answers_a_pose_asked_again_as_the_first_time(cable_cell: CellModel) -> None:
+    """by_branch keeps its answers per pose: asked again, the same rows, and the caller's
+    copy, which it may change."""
+    ik = ArmIK(cable_cell.arms["left"])
+    T = g.transform(g.rot_x(math.pi) @ g.rot_z(0.3), [0.4, 0.3, 0.25])
+    first = ik.by_branch(T)
+    assert first is not None
+    kept = first.copy()
+    first[:] = 0.0
+    again = ik.by_branch(T.copy())
+    assert again is not None
+    np.testing.assert_array_equal(again, kept)
+    fresh = ArmIK(cable_cell.arms["left"]).by_branch(T)
+    np.testing.assert_array_equal(again, fresh)
+
+
 def test_arm_ik_is_built_once_per_arm(cable_cell: CellModel) -> None:
     left, right = cable_cell.arms["left"], cable_cell.arms["right"]
     assert arm_ik(left) is arm_ik(left)

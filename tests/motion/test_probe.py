@@ -8,6 +8,7 @@ import pytest
 
 from cellengine.context import build_context
 from cellengine.info.load import load_plan
+from cellengine.motion.probe import ToolProbe
 from tests.conftest import CELLS
 
 DOWN = np.diag([1.0, -1.0, -1.0])  # the tool axis (TCP z) pointing down
@@ -40,6 +41,23 @@ def test_nothing_within_reports_none_and_skip_leaves_an_object_out(ctx) -> None:
     assert hit is not None and hit.other == "routing.guide1" and hit.distance < 0.01
     skipped = ctx.probe.nearest("left", at_slot, "grasp", skip={"routing.guide1"}, within=0.01)
     assert skipped is None or skipped.other != "routing.guide1"
+
+
+def test_comes_within_is_whether_nearest_finds_an_object(ctx) -> None:  # type: ignore[no-untyped-def]
+    """comes_within stops at the first pair under the distance: the same yes or no as
+    nearest, also asked in the other order (nearest's answer then serves it)."""
+    slot = ctx.world.pose("routing.guide1")[:3, 3]
+    paths = [[tcp(0.9, 0.5, 0.03)], [tcp(*slot)], [tcp(0.9, 0.5, 0.03), tcp(*slot)]]
+    for within in (0.01, 0.02, 0.05):
+        for only in (None, {"routing.guide2"}):
+            for poses in paths:
+                alone = ToolProbe(ctx.cell, ctx.scene)
+                found = alone.comes_within("left", poses, "grasp", (), within, only)
+                near = alone.nearest("left", poses, "grasp", within=within, only=only)
+                assert found == (near is not None)
+                assert ctx.probe.comes_within("left", poses, "grasp", (), within, only) == found
+    assert ctx.probe.comes_within("left", [tcp(*slot)], "grasp", (), 0.01)
+    assert not ctx.probe.comes_within("left", [tcp(0.9, 0.5, 0.03)], "grasp", (), 0.02)
 
 
 def test_two_tools_side_by_side_are_their_fingers_gap_apart(ctx) -> None:  # type: ignore[no-untyped-def]

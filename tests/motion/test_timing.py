@@ -17,6 +17,7 @@ from cellengine.motion.timing import (
     speed_profile,
     time_optimal,
     time_parameterize,
+    time_parameterize_and_bound,
 )
 from cellengine.motion.topp import SplinePath
 from cellengine.motion.trajectory import Trajectory
@@ -185,6 +186,19 @@ def test_tcp_speed_limit_is_respected() -> None:
             assert speed.max() <= 0.3
             assert speed.max() > 0.29  # and is used
     assert capped.duration > free.duration
+
+
+@pytest.mark.parametrize("tcp", [None, TcpSpeedLimit(0.3, lambda q: np.c_[q[:, :3]])])
+def test_timing_and_bound_on_one_spline_are_each_as_alone(tcp: TcpSpeedLimit | None) -> None:
+    """One spline and speed planner for both: the same trajectory as time_parameterize's and
+    the same bound as speed_profile's, to the bit (the planner's second solve starts from
+    its first)."""
+    wp, limits = random_walk(3), ur_limits()
+    traj, bound = time_parameterize_and_bound(wp, limits, tcp=tcp)
+    alone = time_parameterize(wp, limits, tcp=tcp)
+    for a, b in ((traj.t, alone.t), (traj.q, alone.q), (traj.qd, alone.qd)):
+        np.testing.assert_array_equal(a, b)
+    assert bound == speed_profile(wp, limits, tcp=tcp).duration < traj.duration
 
 
 def test_both_arms_on_one_time_axis() -> None:
