@@ -85,9 +85,8 @@ DEFAULT_SETUP: dict[str, Any] = {
         }
     },
     "driver": {"kind": "sim"},
-    # until RouteCable keeps 10 mm between guides 40 mm apart (issue #13): the imported
-    # sample's insertion into J3 passes 5.5 mm from J4
-    "clearance": 1,
+    # the engine's default, written out: what a user tightens or loosens
+    "clearance": 10,
 }
 
 DESCRIPTION = """\
