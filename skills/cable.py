@@ -102,9 +102,9 @@ class PickCable(Skill):
         the hands (cg.LEANS, the default first), the far hand grasping as published, then
         turned half a turn; all of those first as published, then with the hands meeting
         between the combs before the slide (cg.PICK_MEETS); the first way's error when none
-        reaches. ``then``: where the
-        connector arm, and the routing arm, work after the pick (the connector guide, the
-        route's last guide): with either arm, the arms not crossing there either first."""
+        reaches. ``then``: where the connector arm, and the routing arm, work after the pick
+        (the connector guide, the route's last guide): with either arm, the arms not crossing
+        there either first."""
         world = ctx.world
         where = f"steps[{state.step}] PickCable {self.cable}"
         arms = _two_arms(world, where)
@@ -819,8 +819,7 @@ def _pick_geometry(
     chord = cg.horizontal(T_f_up[:3, 3] - T_c_up[:3, 3], up)
     faced_c = cg.turn_in_place(T_c_up, cg.tcp_frame(T_c_up[:3, 3], chord, up, -chord, lean))
     faced_f = cg.turn_in_place(T_f_up, cg.tcp_frame(T_f_up[:3, 3], chord, up, chord, lean))
-    moves, chord = _meet(faced_c[-1], faced_f[-1], chord, up, lean, meet)
-    met = {{"c": c_arm, "f": f_arm}[k]: v for k, v in moves.items()}
+    met, chord = _meet({c_arm: faced_c[-1], f_arm: faced_f[-1]}, c_arm, chord, up, lean, meet)
     T_c_last = met[c_arm][-1] if c_arm in met else faced_c[-1]
     T_f_last = met[f_arm][-1] if f_arm in met else faced_f[-1]
     # Down on a circle about the connector hand, turning with it (the hand leans away from
@@ -840,7 +839,7 @@ def _pick_geometry(
         grasp={c_arm: T_c, f_arm: T_f},
         retracted={c_arm: T_c_up, f_arm: T_f_up},
         faced={c_arm: faced_c, f_arm: faced_f},
-        meet={a: met[a] for a in (c_arm, f_arm) if a in met},
+        meet=met,
         lower=lower,
         slide=slide,
         raise_=raise_,
@@ -857,23 +856,31 @@ def _pick_geometry(
 
 
 def _meet(
-    T_c: Mat, T_f: Mat, chord: Vec, up: Vec, lean: float, meet: tuple[float, float]
+    hands: Mapping[str, Mat],
+    c_arm: str,
+    chord: Vec,
+    up: Vec,
+    lean: float,
+    meet: tuple[float, float],
 ) -> tuple[dict[str, Poses], Vec]:
-    """The hands' paths to where they meet ("c", "f": those that move) and the chord after:
-    the connector hand carries its end ``meet[0]`` of the level span towards the far hand,
-    and the far hand comes round to the rest of the span from it, the chord turned by
-    ``meet[1]`` (rad) about ``up``. The hands never move apart: the cable only slackens."""
+    """The paths of the hands that move to where they meet, by arm, and the chord after:
+    the connector hand (``c_arm``'s) carries its end ``meet[0]`` of the level span towards
+    the far hand, and the far hand comes round to the rest of the span from it, the chord
+    turned by ``meet[1]`` (rad) about ``up``. The hands never move apart: the cable only
+    slackens."""
     fraction, swing = meet
     if fraction == 0.0 and swing == 0.0:
         return {}, chord
+    (f_arm,) = set(hands) - {c_arm}
+    T_c, T_f = hands[c_arm], hands[f_arm]
     span = float((T_f[:3, 3] - T_c[:3, 3]) @ chord)
     centre = T_c[:3, 3] + fraction * span * chord
     turned = g.axis_angle_to_matrix(up, swing) @ chord
     T_c1 = cg.tcp_frame(centre, turned, up, -turned, lean)
     T_f1 = cg.tcp_frame(centre + (1.0 - fraction) * span * turned, turned, up, turned, lean)
-    paths = {"c": cg.line(T_c, T_c1)}  # turning its connector with it
+    paths = {c_arm: cg.line(T_c, T_c1)}  # turning its connector with it
     if swing != 0.0:  # the far hand holds only the cable: either way along it
-        paths["f"] = cg.line(T_f, cg.nearer_turn(T_f, T_f1))
+        paths[f_arm] = cg.line(T_f, cg.nearer_turn(T_f, T_f1))
     return paths, turned
 
 
