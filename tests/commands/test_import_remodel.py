@@ -142,6 +142,9 @@ def test_default_robots_in_mm_and_deg(src: Path, tmp_path: Path) -> None:
     assert cell.tools["cable_gripper"].jaw["slide"] == pytest.approx(0.007)
     assert cell.driver.kind == "sim"
     assert read(dest / "cell.yaml")["units"] == {"length": "mm", "angle": "deg"}
+    # the engine's default clearance, written out where a user sees it
+    assert read(dest / "cell.yaml")["clearance"] == 10
+    assert cell.clearance == pytest.approx(0.010)
 
 
 def test_every_file_starts_with_its_schema_line(src: Path, tmp_path: Path) -> None:
