@@ -184,9 +184,11 @@ def test_placing_the_connector_sends_the_search_back_to_another_pick(
     out = tmp_path / "out"
     assert plan(path, out) == 0, capsys.readouterr().err
     # choices: PickCable, PlaceConnector, guide1, release. Every pick is drawn when the first
-    # refusal blames the arms (all six give the right arm the connector end); then the
-    # second, then the third is tried.
-    assert [watch.at(d) for d in range(4)] == [[0, 1, 2, 3, 4, 5], [0], [0], [0]]
+    # refusal blames the arms (all give the right arm the connector end: three tips, the far
+    # hand as published or turned, each as published then meeting the other hand, PICK_MEETS);
+    # then the second, then the third is tried.
+    n = 6 * len(cg.PICK_MEETS)
+    assert [watch.at(d) for d in range(4)] == [list(range(n)), [0], [0], [0]]
     picks = [c for p, _, c in watch.taken if p == ()]
     assert {c.decides["arms"] for c in picks} == {"right holds the connector"}
     assert [where for where, _ in watch.refused] == [(0,), (1,)]  # PlaceConnector after each
@@ -196,7 +198,7 @@ def test_placing_the_connector_sends_the_search_back_to_another_pick(
             "cable, the arms cannot keep the cell's clearance from each other carrying the "
             "connector to the guide (the cell's clearance is 10.0 mm)"
         )
-    tips = [15.0, 15.0, 25.0, 25.0, 5.0, 5.0]
+    tips = [15.0, 15.0, 25.0, 25.0, 5.0, 5.0] * len(cg.PICK_MEETS)
     assert [round(math.degrees(tip(c, "left")), 9) for c in picks] == tips
     assert [round(math.degrees(tip(c, "right")), 9) for c in picks] == tips
     # what was compiled is the third pick and what followed it
