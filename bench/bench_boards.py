@@ -112,8 +112,8 @@ def _part_kind(name: str) -> str:
 # ------------------------------------------------------------------------------- tasks
 
 
-class _OutOfTime(Exception):
-    pass
+class _OutOfTime(BaseException):
+    """Not an Exception: no ``except Exception`` in the engine swallows it."""
 
 
 def _out_of_time(signum: int, frame: object) -> None:
