@@ -333,12 +333,19 @@ class RouteCable(Skill):
         # Where the other hand stands back to matters only to the arms' clearance while the
         # routing hand comes (_coming): ways that differ only in it are otherwise checked once.
         checked: dict[GuideWay, GuidePlan | InputError] = {}
-        screen = _Screen(tuple(cg.footprints(world, guide, cg.platform_up(world, guide))))
+        up = cg.platform_up(world, guide)
+        screen = _Screen(tuple(cg.footprints(world, guide, up)), up)
         heads, theta0 = _way_heads(world, state, guide, r_arm, self._clear_from(ctx, state, k))
         ways = _ranked(heads, theta0)
         first = next(ways)  # a head has ways
         self._check_any_length(ctx, state, k, heads, first, r_arm, o_arm)
+        released = _letting_go(ctx, state, (r_arm, o_arm), screen.up, guide)
+        whys = [e for e in released.values() if e is not None]
+        if released and len(whys) == len(released):
+            raise whys[0]  # no way's other hand lets go of the last guide
         for way in itertools.chain((first,), ways):
+            if released.get(way.stand_back) is not None:
+                continue  # the stand-backs that work are among the ways too
             key = replace(way, stand_back=cg.STAND_BACK)
             if key not in checked:
                 checked[key] = self._checked(ctx, state, guide, way, r_arm, o_arm, screen)
@@ -481,7 +488,8 @@ class RouteCable(Skill):
 
                 routed[r_key] = _routing_hand_blocked(ctx, world, self.cable, gp, r_arm, came)
             if p_key not in pivots:
-                pivots[p_key] = _pivot_blocked(ctx, state, guide, r_arm, o_arm, way)
+                nxt = cg.platform_up(world, self.guides[k + 1]) if after else None
+                pivots[p_key] = _pivot_blocked(ctx, state, guide, arms, way, nxt)
             found, pivoting = routed[r_key], pivots[p_key]
             if isinstance(found, InputError):
                 return found
@@ -508,6 +516,7 @@ class _Screen:
     """What RouteCable.guide_plans found of one guide's ways so far, by what it depends on."""
 
     prints: tuple[cg.Footprint, ...]  # the other elements' (cg.footprints of the guide)
+    up: Vec  # the guide's platform's
     approaches: dict[tuple[float, float, float], InputError | None] = field(default_factory=dict)
     # why not, or the routing arm's branches that can
     routed: dict[GuideWay, InputError | frozenset[int]] = field(default_factory=dict)
@@ -518,6 +527,51 @@ class _Screen:
     # the room between the arms per routing branch while the routing hand comes and slides
     # (and why not, when no branch has it)
     coming: dict[GuideWay, tuple[dict[int, float], _Blocked | None]] = field(default_factory=dict)
+
+
+def _letting_go(
+    ctx: PlanningContext, state: CableState, arms: tuple[str, str], up: Vec, guide: str
+) -> dict[float, InputError | None]:
+    """Per stand-back (when the other hand holds the cable at the last guide), why the other
+    arm cannot let go and stand back, the routing hand holding still, on the IK branches the
+    arms may be on without hitting itself or coming within the cell's clearance of the
+    routing arm; or None. It depends on the state alone: every way of the guide with that
+    stand-back would be refused for it (_coming, or the compiler)."""
+    from cellengine.execute.following import STRIDE, surviving  # the motion stack
+
+    r_arm, o_arm = arms
+    if o_arm not in state.held:
+        return {}
+    out: dict[float, InputError | None] = {}
+    where = f"steps[{state.step}] RouteCable {guide}"
+    what = f"the other arm ({o_arm}) lets go of {state.guides[-1]} and stands back"
+    for back in _stand_backs(state, o_arm):
+        poses = _stand_back(state, o_arm, up, back)
+        may = state.branches_of(o_arm)
+        alive, nearest = surviving(ctx.cell, ctx.checker, o_arm, poses, ctx.home, may)
+        if not alive:
+            out[back] = _error(
+                f"{where}: {what} {_mm(back)} mm on no IK branch it may be on without "
+                f"hitting itself ({', '.join(nearest[1]) or 'out of reach'})"
+            )
+            continue
+        T_r = state.tcp[r_arm]
+        pairs = [(T_r, T) for T in (*poses[::STRIDE], poses[-1])]
+        may_r, keep = state.branches_of(r_arm), ctx.clearance
+        rooms = _pair_rooms(ctx, r_arm, o_arm, pairs, keep, may_r, frozenset(alive), False)
+        room = max(rooms.values())
+        out[back] = (
+            None
+            if room >= keep
+            else _Blocked.of(
+                room - keep,
+                f"{where}: however the two arms are posed, they "
+                + ("collide" if room == -math.inf else f"come within {_mm(room)} mm of each other")
+                + f" while {what} {_mm(back)} mm, the routing arm ({r_arm}) still; the cell's "
+                f"clearance is {_mm(keep)} mm",
+            )
+        )
+    return out
 
 
 def _approach_blocked(ctx: PlanningContext, gp: GuidePlan, r_arm: str) -> InputError | None:
@@ -728,10 +782,14 @@ def _up(T: Mat, arm: str, up: Vec, height: float) -> ArmPath:
 def _stand_back(state: CableState, arm: str, up: Vec, distance: float) -> Poses:
     """Up by RETRACT_HEIGHT, then ``distance`` back along the route (its last two points: the
     pivot and the slot of the last guide)."""
-    T = state.tcp[arm]
-    T_up = cg.lifted(T, up, cg.RETRACT_HEIGHT)
     last = np.asarray(state.route[-2:], dtype=float)
-    back = -cg.horizontal(last[-1] - last[0], up)
+    return _stand_back_from(state.tcp[arm], last[-1] - last[0], up, distance)
+
+
+def _stand_back_from(T: Mat, along: Vec, up: Vec, distance: float) -> Poses:
+    """_stand_back from ``T``, the route going ``along`` at its end."""
+    T_up = cg.lifted(T, up, cg.RETRACT_HEIGHT)
+    back = -cg.horizontal(along, up)
     return ip.concatenate(
         [cg.line(T, T_up), cg.line(T_up, cg.at(T_up, T_up[:3, 3] + distance * back))]
     )
@@ -1773,11 +1831,18 @@ def _approach_path(T_r0: Mat, T_ap: Mat, b: _Basics, how: str) -> Poses:
 
 
 def _pivot_blocked(
-    ctx: PlanningContext, state: CableState, guide: str, r_arm: str, o_arm: str, way: GuideWay
+    ctx: PlanningContext,
+    state: CableState,
+    guide: str,
+    arms: tuple[str, str],
+    way: GuideWay,
+    next_up: Vec | None,
 ) -> InputError | None:
     """Why the other hand cannot come down to the pivot of ``way`` keeping its clearances
     (what depends only on A, the pivot's tip and its direction: checked before the rest of
-    the way is built), or None."""
+    the way is built), or, when a next guide's platform has ``next_up``, then let go and
+    stand back from it (_leave_blocked); or None."""
+    r_arm, o_arm = arms
     b = _basics(ctx.world, state, guide, r_arm, way.gap, way.gap_after)
     base = way.towards_base
     tip_o = g.unit(-b.axis + base * _towards_base(ctx.world, o_arm, b.slot, b.up))
@@ -1789,13 +1854,37 @@ def _pivot_blocked(
         ctx, o_arm, T_pivot[None], GRASP, beside
     )
     if found is None:
-        return None
+        return None if next_up is None else _leave_blocked(ctx, b, o_arm, poses, next_up)
     near, limit, own = found
     return _Blocked.of(
         near.distance - limit,
         f"{b.where}: {near.tool} {_passes(near, limit)} "
         f"grasping at the pivot (stopping {_mm(b.gap)} mm before the guide); "
         + _env_fix(ctx, near, own),
+    )
+
+
+def _leave_blocked(
+    ctx: PlanningContext, b: _Basics, o_arm: str, grasp: Poses, next_up: Vec
+) -> InputError | None:
+    """Why the other arm, come down to the pivot along ``grasp`` (any branch: it comes on a
+    transit), could not then let go and stand back from it at the next guide (_stand_back,
+    some stand-back) without hitting itself on the branch it grasped on, or None. (Found
+    only at the next guide, it sends the search back through every way of this one.)"""
+    from cellengine.execute.following import surviving  # the motion stack: planning only
+
+    nearest: tuple[float, tuple[str, str]] = (math.inf, ("", ""))
+    for back in cg.STAND_BACKS:
+        poses = np.concatenate([grasp, _stand_back_from(grasp[-1], b.axis, next_up, back)])
+        alive, near = surviving(ctx.cell, ctx.checker, o_arm, poses, ctx.home)
+        if alive:
+            return None
+        nearest = min(nearest, near)
+    return _error(
+        f"{b.where}: the other arm ({o_arm}) would grasp at the pivot (stopping "
+        f"{_mm(b.gap)} mm before the guide) on no IK branch on which it can let go and stand "
+        f"back from it at the next guide without hitting itself "
+        f"({', '.join(nearest[1]) or 'out of reach'})"
     )
 
 

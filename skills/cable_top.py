@@ -90,6 +90,10 @@ def top_ways(
     """The ways to route guide ``k`` over its top, best first, each with the state after it;
     the closest way's error when none passes the checks."""
     r_arm, o_arm = step.arms(ctx, state)
+    up = cg.platform_up(ctx.world, step.guides[k])
+    released = c._letting_go(ctx, state, (r_arm, o_arm), up, step.guides[k]).get(cg.STAND_BACK)
+    if released is not None:
+        raise released  # every way lets go of the last guide so
     closest: tuple[float, InputError] | None = None
     found = False
     memo: Memo = {}

@@ -569,7 +569,7 @@ def test_the_pivot_hand_closed_on_the_cable_keeps_clear_of_the_guide_before() ->
 
     def blocked(lean_deg: float) -> InputError | None:
         way = C.GuideWay(1.0, 1.0, gap=15.0 * MM, pivot_lean=math.radians(lean_deg))
-        return C._pivot_blocked(ctx, state, "routing.guide2", r_arm, o_arm, way)
+        return C._pivot_blocked(ctx, state, "routing.guide2", (r_arm, o_arm), way, None)
 
     error = blocked(30.0)
     assert error is not None and error.problems[0].message == (
@@ -1020,7 +1020,9 @@ def test_the_arms_are_screened_while_the_routing_hand_comes_and_slides() -> None
     assert any(rooms[k] < ctx.clearance for k in C.ANY_BRANCH - gp.branches)
     way = C.GuideWay(gp.theta, gp.side, gap=gp.a)
     far = replace(ctx, clearance=0.5)
-    blocked = C._coming(far, state, gp, way, ("left", "right"), C._Screen(()), (cg.STAND_BACK,))
+    blocked = C._coming(
+        far, state, gp, way, ("left", "right"), C._Screen((), gp.up), (cg.STAND_BACK,)
+    )
     assert isinstance(blocked, C._Blocked)
     near = blocked.distance + 0.5
     assert 0.0 < near < 0.5
