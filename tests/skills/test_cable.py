@@ -1092,3 +1092,25 @@ def test_the_arms_pair_is_screened_from_the_pivot_grasp_to_the_insert() -> None:
     poses = [(gp.slide[-1], T) for T in down] + [(T, gp.pivot) for T in held]
     best = max(C._pair_rooms(ctx, "left", "right", poses, 0.0, gp.branches).values())
     assert 0.01 < best <= near < 0.5
+
+
+def test_the_other_hand_letting_go_is_screened_once_per_state() -> None:
+    """After guide1 the other hand lets go and stands back, the routing hand holding still
+    where it inserted: that depends on the state alone. Moved to 150 mm over the pivot hand,
+    the routing hand is in the way of its standing back on every pair of branches, whatever
+    the stand-back: guide2 is refused with that before any of its ways is built."""
+    world, _ = _world()
+    ctx, state, route, r_arm, o_arm = _after_guide1(world)
+    up = cg.platform_up(world, "routing.guide2")
+    free = C._letting_go(ctx, state, (r_arm, o_arm), up, "routing.guide2")
+    assert set(free) == set(cg.STAND_BACKS) and all(e is None for e in free.values())
+    over = replace(state, tcp={**state.tcp, r_arm: cg.lifted(state.tcp[o_arm], up, 0.150)})
+    whys = C._letting_go(ctx, over, (r_arm, o_arm), up, "routing.guide2")
+    assert all(isinstance(e, C._Blocked) for e in whys.values())
+    with pytest.raises(InputError) as err:
+        next(route.guide_plans(ctx, over, 1))
+    assert err.value.problems[0].message == (
+        "steps[2] RouteCable routing.guide2: however the two arms are posed, they collide "
+        "while the other arm (right) lets go of routing.guide1 and stands back 100.0 mm, the "
+        "routing arm (left) still; the cell's clearance is 10.0 mm"
+    )
