@@ -47,12 +47,16 @@ class Candidate:
     the actual times of its parts), from the compiled program. ``decides``: what this
     candidate fixes for the rest of the plan, by name (e.g. ``{"arms": "left holds the
     connector"}``): an error that blames one of these names sends the search straight back
-    to the latest choice that decided it, to a candidate that decides it otherwise."""
+    to the latest choice that decided it, to a candidate that decides it otherwise.
+    ``failed_at(j)``: called when the compiler could not compile the candidate's segment
+    ``j``, so the family can leave out, before building them, the candidates it has not
+    offered yet that would fail there too (the compiler passes over those it is given)."""
 
     segments: tuple[Segment, ...]
     then: Callable[[], Iterator[Candidate]] | None = None
     report: Callable[[Program], Mapping[str, Any]] | None = None
     decides: Mapping[str, str] = field(default_factory=dict)
+    failed_at: Callable[[int], None] | None = None
 
 
 @runtime_checkable

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable, Collection, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterable, Iterator, Mapping, Sequence, Set
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Annotated, Any, Literal
@@ -313,17 +313,22 @@ class RouteCable(Skill):
         return r_arm, o_arm
 
     def ways(
-        self, ctx: PlanningContext, state: CableState, k: int
+        self, ctx: PlanningContext, state: CableState, k: int, dead: Set[bytes] = frozenset()
     ) -> Iterator[tuple[list[Segment], CableState]]:
-        """The ways to route guide ``k`` from ``state``, best first, with the state after."""
+        """The ways to route guide ``k`` from ``state``, best first, with the state after
+        (``dead``: see guide_plans)."""
         r_arm, o_arm = self.arms(ctx, state)
-        for gp in self.guide_plans(ctx, state, k):
+        for gp in self.guide_plans(ctx, state, k, dead):
             yield _emit_guide(state, gp, r_arm, o_arm, self.cable)
 
-    def guide_plans(self, ctx: PlanningContext, state: CableState, k: int) -> Iterator[GuidePlan]:
+    def guide_plans(
+        self, ctx: PlanningContext, state: CableState, k: int, dead: Set[bytes] = frozenset()
+    ) -> Iterator[GuidePlan]:
         """Guide ``k``'s plans that pass the checks (reach, cable length, a slide clear of
         the other elements), best first (:func:`guide_ways`); the first way's error when
-        none does."""
+        none does. ``dead``: the other hand's releases (their poses' bytes) the compiler
+        could not run from ``state``; the ways that begin with one are left out, looked at
+        as they come (the set may grow while the ways are drawn)."""
         world, guide = ctx.world, self.guides[k]
         r_arm, o_arm = self.arms(ctx, state)
         # the error to give when no way passes: the way that came closest to keeping the
@@ -343,9 +348,14 @@ class RouteCable(Skill):
         whys = [e for e in released.values() if e is not None]
         if released and len(whys) == len(released):
             raise whys[0]  # no way's other hand lets go of the last guide
+        releases = {b: _stand_back(state, o_arm, up, b).tobytes() for b in released}
         for way in itertools.chain((first,), ways):
             if released.get(way.stand_back) is not None:
                 continue  # the stand-backs that work are among the ways too
+            if releases and releases[way.stand_back] in dead:
+                if all(r in dead for r in releases.values()):
+                    return  # the compiler ran none of them
+                continue
             key = replace(way, stand_back=cg.STAND_BACK)
             if key not in checked:
                 checked[key] = self._checked(ctx, state, guide, way, r_arm, o_arm, screen)
@@ -1974,6 +1984,9 @@ def _check_length(world: World, name: str, hand: cg.Hand, gp: GuidePlan) -> None
         )
 
 
+RELEASE = "release the previous guide"  # the label's end of a guide's first segment
+
+
 def _emit_guide(
     state: CableState, gp: GuidePlan, r_arm: str, o_arm: str, cable: str
 ) -> tuple[list[Segment], CableState]:
@@ -1985,7 +1998,7 @@ def _emit_guide(
         # along the route: straight up, its wrist stays where the routing arm's forearm
         # passes on its way to the next guide (a collision on plan_one_turn).
         b.add(
-            f"{label}: release the previous guide",
+            f"{label}: {RELEASE}",
             [_cartesian(o_arm, _stand_back(b.state, o_arm, gp.up, gp.stand_back))],
             before=[GripperEvent(o_arm, OPEN)],
             # its pivot's guides; the routing hand stands where it inserted

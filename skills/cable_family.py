@@ -5,9 +5,11 @@ each step's ways offered to the compiler best first, and the cable released at t
 from __future__ import annotations
 
 import functools
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Sequence, Set
 from dataclasses import replace
 from typing import TYPE_CHECKING
+
+import numpy as np
 
 from cellengine.errors import InputError, Problem, StepError, at_step
 from cellengine.family import Candidate
@@ -15,6 +17,7 @@ from cellengine.program import Segment
 from cellengine.skill import Skill
 from cellengine.skills import cable_meaning, cable_top
 from cellengine.skills.cable import (
+    RELEASE,
     PickCable,
     PlaceConnector,
     RouteCable,
@@ -117,7 +120,10 @@ def _guide(
             if (error := failed[key]) is not None:
                 raise error
             return
-        ways = _ways(ctx, step, state, k)
+        # the other hand's releases the compiler could not run from this state (their poses'
+        # bytes): every way that begins with one is left out before it is built
+        dead: set[bytes] = set()
+        ways = _ways(ctx, step, state, k, dead)
         offered, stranded = False, set[str]()
         while True:
             try:
@@ -144,11 +150,20 @@ def _guide(
                 if last
                 else functools.partial(_guide, ctx, steps, i, after, k + 1, failed)
             )
-            yield Candidate(tuple(segments), then=then)
+            failed_at = functools.partial(_release_failed, segments, dead)
+            yield Candidate(tuple(segments), then=then, failed_at=failed_at)
+
+
+def _release_failed(segments: Sequence[Segment], dead: set[bytes], j: int) -> None:
+    """Candidate.failed_at of a guide's way: its first segment, the other hand letting go of
+    the last guide, could not be compiled."""
+    first = segments[0]
+    if j == 0 and first.label.endswith(RELEASE) and len(first.paths) == 1:
+        dead.add(np.asarray(first.paths[0].poses).tobytes())
 
 
 def _ways(
-    ctx: PlanningContext, step: RouteCable, state: CableState, k: int
+    ctx: PlanningContext, step: RouteCable, state: CableState, k: int, dead: Set[bytes]
 ) -> Iterator[tuple[list[Segment], CableState]]:
     """Guide ``k``'s ways: the published slide and pivot's (RouteCable.ways), then, after all
     of them, laying the cable over the guide's top and pushing it in (cable_top, for a guide
@@ -157,11 +172,11 @@ def _ways(
     way)."""
     first: InputError | None = None
     try:
-        yield from step.ways(ctx, state, k)
+        yield from step.ways(ctx, state, k, dead)
     except InputError as e:
         first = e
     try:
-        yield from cable_top.top_ways(ctx, step, state, k)
+        yield from cable_top.top_ways(ctx, step, state, k, dead)
     except InputError:
         if first is not None:
             raise first from None

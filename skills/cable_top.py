@@ -27,7 +27,7 @@ from __future__ import annotations
 import functools
 import itertools
 import math
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Set
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -85,15 +85,22 @@ class TopPlan:
 
 
 def top_ways(
-    ctx: PlanningContext, step: c.RouteCable, state: CableState, k: int
+    ctx: PlanningContext,
+    step: c.RouteCable,
+    state: CableState,
+    k: int,
+    dead: Set[bytes] = frozenset(),
 ) -> Iterator[tuple[list[Segment], CableState]]:
     """The ways to route guide ``k`` over its top, best first, each with the state after it;
-    the closest way's error when none passes the checks."""
+    the closest way's error when none passes the checks. None when the other hand's release
+    of the last guide is ``dead`` (RouteCable.guide_plans)."""
     r_arm, o_arm = step.arms(ctx, state)
     up = cg.platform_up(ctx.world, step.guides[k])
     released = c._letting_go(ctx, state, (r_arm, o_arm), up, step.guides[k]).get(cg.STAND_BACK)
     if released is not None:
         raise released  # every way lets go of the last guide so
+    if o_arm in state.held and c._stand_back(state, o_arm, up, cg.STAND_BACK).tobytes() in dead:
+        return  # the compiler could not run it
     closest: tuple[float, InputError] | None = None
     found = False
     memo: Memo = {}
@@ -355,7 +362,7 @@ def _emit(
     pair = (r_arm, o_arm)
     if o_arm in b.state.held:  # as after any guide: it lets go and backs off along the route
         b.add(
-            f"{label}: release the previous guide",
+            f"{label}: {c.RELEASE}",
             [c._cartesian(o_arm, c._stand_back(b.state, o_arm, tp.up, cg.STAND_BACK))],
             before=[GripperEvent(o_arm, c.OPEN)],
             near=[

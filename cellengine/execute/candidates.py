@@ -104,6 +104,9 @@ def compile_candidates(
             ran = _prefix(chosen[failed].taken.segments, current[2])
             if ran is not None:
                 chosen[failed].failed.add(ran)
+            failed_at = chosen[failed].taken.failed_at
+            if failed_at is not None and current[2] >= 0:
+                failed_at(current[2])  # so the family leaves out what would fail there too
         k = _jump(chosen, failed, blames) if blames is not None else None
         k = k if k is not None else _next_candidate(chosen, failed)
         if k is None:

@@ -304,3 +304,25 @@ def test_an_arm_that_cannot_turn_on_from_an_earlier_transit_compiles_again_from_
     assert labels(c) == [f"to {NEAR}", "turn -400 deg"]
     assert seen[:2] == [f"to {NEAR}", "turn +400 deg"]
     assert seen[-3:] == ["turn -400 deg", f"to {NEAR}", "turn -400 deg"]
+
+
+def test_a_candidate_is_told_which_of_its_segments_failed() -> None:
+    """Choice 1's first way fails in its second segment (a line out of reach), and is told
+    so (Candidate.failed_at), before the next way is drawn: a family can then leave out the
+    ways it has not built yet that would fail there too. A way that compiles is told nothing."""
+    out = (0.40, 0.15, 1.40)  # 1.2 m straight up from NEAR: out of reach
+    told: list[tuple[str, int]] = []
+    drawn: list[tuple[str, int]] = []  # each way, and how many were told when it was drawn
+
+    def ways() -> Iterator[Candidate]:
+        for name, segments in (
+            ("fails", (slide(1, NEAR, ALSO), slide(1, ALSO, out))),
+            ("runs", (slide(1, NEAR, ALSO),)),
+        ):
+            drawn.append((name, len(told)))
+            yield Candidate(segments, failed_at=lambda j, name=name: told.append((name, j)))
+
+    start = Candidate((hop(0, NEAR),), then=ways)
+    compile_candidates(compiler(), choice(start))
+    assert told == [("fails", 1)]
+    assert drawn == [("fails", 0), ("runs", 1)]
