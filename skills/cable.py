@@ -345,12 +345,13 @@ class RouteCable(Skill):
         first = next(ways)  # a head has ways
         self._check_any_length(ctx, state, k, heads, first, r_arm, o_arm)
         released = _letting_go(ctx, state, (r_arm, o_arm), screen.up, guide)
-        whys = [e for e in released.values() if e is not None]
+        whys = [e for e in released.values() if isinstance(e, InputError)]
         if released and len(whys) == len(released):
             raise whys[0]  # no way's other hand lets go of the last guide
         releases = {b: _stand_back(state, o_arm, up, b).tobytes() for b in released}
         for way in itertools.chain((first,), ways):
-            if released.get(way.stand_back) is not None:
+            release = released.get(way.stand_back, ())
+            if isinstance(release, InputError):
                 continue  # the stand-backs that work are among the ways too
             if releases and releases[way.stand_back] in dead:
                 if all(r in dead for r in releases.values()):
@@ -361,7 +362,7 @@ class RouteCable(Skill):
                 checked[key] = self._checked(ctx, state, guide, way, r_arm, o_arm, screen)
             gp = checked[key]
             if not isinstance(gp, InputError):
-                gp = replace(gp, stand_back=way.stand_back)
+                gp = replace(gp, stand_back=way.stand_back, release=release)
                 gp = _coming(ctx, state, gp, way, (r_arm, o_arm), screen, (way.stand_back,))
             if isinstance(gp, InputError):
                 score = gp.distance if isinstance(gp, _Blocked) else -math.inf
@@ -539,20 +540,25 @@ class _Screen:
     coming: dict[GuideWay, tuple[dict[int, float], _Blocked | None]] = field(default_factory=dict)
 
 
+Release = tuple[tuple[str, frozenset[int]], ...]  # Segment.branches of a release
+
+
 def _letting_go(
     ctx: PlanningContext, state: CableState, arms: tuple[str, str], up: Vec, guide: str
-) -> dict[float, InputError | None]:
+) -> dict[float, InputError | Release]:
     """Per stand-back (when the other hand holds the cable at the last guide), why the other
     arm cannot let go and stand back, the routing hand holding still, on the IK branches the
     arms may be on without hitting itself or coming within the cell's clearance of the
-    routing arm; or None. It depends on the state alone: every way of the guide with that
-    stand-back would be refused for it (_coming, or the compiler)."""
+    routing arm; else each arm's branches in a pair of them that can. It depends on the state
+    alone: every way of the guide with that stand-back would be refused for it (_coming, or
+    the compiler), and its release requires those branches (so a transit before it that
+    chose others is compiled again looking ahead at them)."""
     from cellengine.execute.following import STRIDE, surviving  # the motion stack
 
     r_arm, o_arm = arms
     if o_arm not in state.held:
         return {}
-    out: dict[float, InputError | None] = {}
+    out: dict[float, InputError | Release] = {}
     where = f"steps[{state.step}] RouteCable {guide}"
     what = f"the other arm ({o_arm}) lets go of {state.guides[-1]} and stands back"
     for back in _stand_backs(state, o_arm):
@@ -567,19 +573,24 @@ def _letting_go(
             continue
         T_r = state.tcp[r_arm]
         pairs = [(T_r, T) for T in (*poses[::STRIDE], poses[-1])]
-        may_r, keep = state.branches_of(r_arm), ctx.clearance
-        rooms = _pair_rooms(ctx, r_arm, o_arm, pairs, keep, may_r, frozenset(alive), False)
+        may_r, may_o, keep = state.branches_of(r_arm), frozenset(alive), ctx.clearance
+        rooms = _pair_rooms(ctx, r_arm, o_arm, pairs, keep, may_r, may_o, False)
         room = max(rooms.values())
-        out[back] = (
-            None
-            if room >= keep
-            else _Blocked.of(
+        if room < keep:
+            out[back] = _Blocked.of(
                 room - keep,
                 f"{where}: however the two arms are posed, they "
                 + ("collide" if room == -math.inf else f"come within {_mm(room)} mm of each other")
                 + f" while {what} {_mm(back)} mm, the routing arm ({r_arm}) still; the cell's "
                 f"clearance is {_mm(keep)} mm",
             )
+            continue
+        swapped = [(T_o, T_r) for T_r, T_o in pairs]
+        o_rooms = _pair_rooms(ctx, o_arm, r_arm, swapped, keep, may_o, may_r, False)
+        out[back] = tuple(
+            (arm, frozenset(k for k, v in found.items() if v >= keep))
+            for arm, found in sorted(((r_arm, rooms), (o_arm, o_rooms)))
+            if -1 not in found  # an arm solved numerically has no branches
         )
     return out
 
@@ -749,6 +760,7 @@ class _Builder:
         near: Iterable[tuple[str, str]] = (),
         facts: Mapping[str, Any] | None = None,
         annotations: Iterable[Annotation] = (),
+        branches: tuple[tuple[str, frozenset[int]], ...] = (),
     ) -> None:
         seg = Segment(
             step=self.state.step,
@@ -761,6 +773,7 @@ class _Builder:
             near=tuple(near),
             facts=MappingProxyType(dict(facts or {})),
             annotations=tuple(annotations),
+            branches=branches,
         )
         state = self.state
         for event in seg.before:
@@ -1352,6 +1365,9 @@ class GuidePlan:
     beside: tuple[str, ...]
     # the routing arm's IK branches that can do it (of those it may be on), once screened
     branches: frozenset[int] = ANY_BRANCH
+    # each arm's IK branches on which the other hand's release (the first segment) keeps the
+    # arms the cell's clearance apart, the routing arm standing (_letting_go), once screened
+    release: tuple[tuple[str, frozenset[int]], ...] = ()
 
     @property
     def radius(self) -> float:
@@ -2006,6 +2022,7 @@ def _emit_guide(
                 *((o_arm, e) for e in sorted({*map(cg.element_of, state.guides[-2:]), *gp.beside})),
                 *((r_arm, e) for e in gp.beside),
             ],
+            branches=gp.release,
         )
     near = [(r_arm, e) for e in gp.beside]  # the hands work between these (GuidePlan)
     if gp.reorient is not None:  # turning in place where it inserted, by that guide

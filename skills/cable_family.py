@@ -213,6 +213,12 @@ def _narrowed(
                 required[k][arm] = branches[arm]
 
     for k, segment in enumerate(segments):
+        moved = {p.arm for p in segment.paths if p.kind == "transit"}
+        for arm, given in segment.branches:  # the skill's own (a release's: _letting_go)
+            if arm not in moved:
+                branches[arm] = branches.get(arm, ANY_BRANCH) & given
+                if not branches[arm]:
+                    return arm
         for path in segment.paths:
             if path.kind == "transit":
                 close(path.arm)
@@ -231,10 +237,20 @@ def _narrowed(
         branches[arm] = kept
         close(arm)
     out = [
-        replace(s, branches=tuple(sorted(r.items()))) if r else s
+        replace(s, branches=_joined(s.branches, r)) if r else s
         for s, r in zip(segments, required, strict=True)
     ]
     return out, replace(after, branches=branches)
+
+
+def _joined(
+    given: tuple[tuple[str, frozenset[int]], ...], found: dict[str, frozenset[int]]
+) -> tuple[tuple[str, frozenset[int]], ...]:
+    """Segment.branches: the skill's and those _narrowed found, each arm on both."""
+    out = dict(given)
+    for arm, b in found.items():
+        out[arm] = out[arm] & b if arm in out else b
+    return tuple(sorted(out.items()))
 
 
 FAMILY = CableFamily()

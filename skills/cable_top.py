@@ -97,7 +97,7 @@ def top_ways(
     r_arm, o_arm = step.arms(ctx, state)
     up = cg.platform_up(ctx.world, step.guides[k])
     released = c._letting_go(ctx, state, (r_arm, o_arm), up, step.guides[k]).get(cg.STAND_BACK)
-    if released is not None:
+    if isinstance(released, InputError):
         raise released  # every way lets go of the last guide so
     if o_arm in state.held and c._stand_back(state, o_arm, up, cg.STAND_BACK).tobytes() in dead:
         return  # the compiler could not run it

@@ -236,7 +236,9 @@ class Compiler:
         figures: list[tuple[Part, Merged, GateReport, dict[str, float]]] = []
         t, q = t0, self.q
         for part in parts:
-            merged = merge_rows(self.cell, q, part.rows, part.coupled, merge)
+            # an async transit planned as one (strategies._async_transit): one time law
+            joint = self.strategy == "async" and part.solved == "together"
+            merged = merge_rows(self.cell, q, part.rows, part.coupled, "joint" if joint else merge)
             traj, report, starts = self._timed(part, merged, t, q, near)
             pieces.append(traj)
             figures.append((part, merged, report, starts))
@@ -270,18 +272,18 @@ class Compiler:
         return frozenset(out)
 
     def _check_branches(self, segment: Segment) -> None:
-        """Refuse a Cartesian path of an arm on an IK branch the segment does not require of
-        it (Segment.branches): the skill's checks of its poses did not look at that branch,
-        and the transit that chose it did not look ahead at them."""
-        for path in segment.paths:
-            on = segment.branches_of(path.arm)
-            ik = arm_ik(self.cell.arms[path.arm])
-            if path.kind == "transit" or on is None or ik.closed_form is None:
+        """Refuse an arm (following a Cartesian path or standing) on an IK branch the segment
+        does not require of it (Segment.branches): the skill's checks of its poses did not
+        look at that branch, and the transit that chose it did not look ahead at them."""
+        moved = {p.arm for p in segment.paths if p.kind == "transit"}
+        for arm, on in segment.branches:  # an arm that stands too: the skill looked at it
+            ik = arm_ik(self.cell.arms[arm])
+            if arm in moved or ik.closed_form is None:
                 continue
-            branch = ik.branch(self.q[self.cell.slices[path.arm]])
+            branch = ik.branch(self.q[self.cell.slices[arm]])
             if branch not in on:
                 raise Refused(
-                    f"the {path.arm} arm is on IK branch {branch}; the skill checked this "
+                    f"the {arm} arm is on IK branch {branch}; the skill checked this "
                     f"segment's poses on branches {sorted(on)} only",
                     configuration=True,
                 )
@@ -370,6 +372,8 @@ def _merge_name(parts: list[Part], merge: Merge, strategy: Strategy) -> str:
         return "none"  # one arm or none: nothing to merge
     if strategy == "async" and any(p.solved == "apart" for p in parts):
         return "async"
+    if strategy == "async" and all(p.solved == "together" for p in parts):
+        return "joint"  # solved on one grid (a closed chain, a transit planned as one)
     return merge
 
 

@@ -29,10 +29,11 @@ import numpy as np
 
 from cellengine.arrays import Vec
 from cellengine.execute import solve
-from cellengine.execute.refused import Refused
+from cellengine.execute.refused import NoMoreChoices, Refused
 from cellengine.execute.solve import Accept, Ahead
 from cellengine.execute.split import SPLIT_THRESHOLD, split_point
 from cellengine.motion.collision import CollisionChecker
+from cellengine.motion.ik import arm_ik
 from cellengine.motion.robot import CellModel
 from cellengine.program import ArmPath, Segment
 
@@ -105,8 +106,10 @@ def solve_segment(
             )
         ]
     coupled = segment.keep_distance is not None
-    if kinds == {"transit"} and strategy != "async":
+    if kinds == {"transit"}:
         goals = {a: p.poses[-1] for a, p in paths.items()}
+        if strategy == "async":
+            return [_async_transit(cell, checker, paths, q, accept, choice, clearance, ahead)]
         rows = solve.transit(cell, checker, goals, q, accept, choice, clearance, ahead)
         return [_coupled_part(cell, q, rows, {}, tuple(paths))]
     if kinds == {"cartesian"} and (strategy == "sync" or coupled):
@@ -129,6 +132,55 @@ def solve_segment(
             ahead=ahead,
         )
     ]
+
+
+def _async_transit(
+    cell: CellModel,
+    checker: CollisionChecker,
+    paths: Mapping[str, ArmPath],
+    q: Vec,
+    accept: Accept | None,
+    choice: int,
+    clearance: float | None,
+    ahead: Ahead | None,
+) -> Part:
+    """A transit of two arms under async: each on its own (prioritised), unless that leaves
+    an arm on an IK branch its segments ahead do not require, or finds no goal at all (the
+    arm before it standing at its goal can take the only free ones): then both as one, as
+    the other strategies plan it (merged on one time law: Compiler._assembled)."""
+    try:
+        part = _apart(
+            cell, checker, paths, q, "apart", prioritised=True, accept=accept, choice=choice,
+            clearance=clearance, ahead=ahead,
+        )  # fmt: skip
+    except NoMoreChoices:
+        raise  # the choices are the apart plan's
+    except Refused as e:
+        apart: Part | Refused = e
+    else:
+        if not _off_ahead(cell, part, ahead):
+            return part
+        apart = part
+    goals = {a: p.poses[-1] for a, p in paths.items()}
+    try:
+        rows = solve.transit(cell, checker, goals, q, accept, choice, clearance, ahead)
+    except Refused:
+        if isinstance(apart, Refused):
+            raise apart from None
+        return apart
+    return _coupled_part(cell, q, rows, {}, tuple(paths))
+
+
+def _off_ahead(cell: CellModel, part: Part, ahead: Ahead | None) -> bool:
+    """Whether an arm of ``part`` ends on an IK branch its segments ahead do not require."""
+    for arm, rows in part.rows.items():
+        on = (ahead or {}).get(arm)
+        ik = arm_ik(cell.arms[arm])
+        if on is None or on.on is None or ik.closed_form is None:
+            continue
+        if ik.branch(rows[-1]) not in on.on:
+            return True
+    return False
 
 
 def _by_arm(cell: CellModel, segment: Segment) -> dict[str, ArmPath]:

@@ -1098,12 +1098,17 @@ def test_the_other_hand_letting_go_is_screened_once_per_state() -> None:
     """After guide1 the other hand lets go and stands back, the routing hand holding still
     where it inserted: that depends on the state alone. Moved to 150 mm over the pivot hand,
     the routing hand is in the way of its standing back on every pair of branches, whatever
-    the stand-back: guide2 is refused with that before any of its ways is built."""
+    the stand-back: guide2 is refused with that before any of its ways is built. Where it can,
+    the release requires of each arm the branches that keep the arms apart."""
     world, _ = _world()
     ctx, state, route, r_arm, o_arm = _after_guide1(world)
     up = cg.platform_up(world, "routing.guide2")
     free = C._letting_go(ctx, state, (r_arm, o_arm), up, "routing.guide2")
-    assert set(free) == set(cg.STAND_BACKS) and all(e is None for e in free.values())
+    assert set(free) == set(cg.STAND_BACKS)
+    for release in free.values():  # each arm's branches on which the release keeps clear
+        assert not isinstance(release, InputError)
+        assert [arm for arm, _ in release] == sorted((r_arm, o_arm))
+        assert all(b and b <= state.branches_of(arm) for arm, b in release)
     over = replace(state, tcp={**state.tcp, r_arm: cg.lifted(state.tcp[o_arm], up, 0.150)})
     whys = C._letting_go(ctx, over, (r_arm, o_arm), up, "routing.guide2")
     assert all(isinstance(e, C._Blocked) for e in whys.values())

@@ -32,6 +32,7 @@ from cellengine.family import Candidate, SkillFamily
 from cellengine.pipeline import compile_plan
 from cellengine.skill import Skill
 from cellengine.skills import cable_geometry as cg
+from cellengine.skills.cable import RELEASE
 from tests.conftest import CELLS
 
 # The routing platform's X3D: a Transform per element, its translation in the plate's own
@@ -252,6 +253,29 @@ def test_a_hand_coming_in_at_an_angle_approaches_along_the_guide(tmp_path: Path)
     label, how = approaches[0]
     assert label == "RouteCable routing.guide1: approach sliding"
     assert how in ("along the axis", "from above")
+    result = check_compiled(compiled)
+    assert result.ok, result.failures
+
+
+def test_async_plans_a_transit_of_both_arms_as_one_where_apart_strands_an_arm(
+    tmp_path: Path,
+) -> None:
+    """Board 11 of bench/boards.py with async: planned each on its own (the right arm
+    standing), the pick's transit put the left arm on an IK branch from which, routing, it
+    stands in the way of the right hand letting go of guide4 (the skill requires the
+    branches on which the release keeps the arms apart). That transit is planned as one, as
+    split and sync plan it, merged on one time law: it compiles and passes the benchmark's
+    check."""
+    make_board(11, tmp_path / "board")
+    compiled = compile_plan(tmp_path / "board" / "plan.yaml", "async")
+    both = [
+        s.report
+        for s in compiled.program.segments
+        if len(s.segment.paths) == 2 and {p.kind for p in s.segment.paths} == {"transit"}
+    ]
+    assert any(s["solved"] == ["together"] and s["merge"] == "joint" for s in both)
+    release = [s.segment for s in compiled.program.segments if s.segment.label.endswith(RELEASE)]
+    assert release and all({a for a, _ in s.branches} == {"left", "right"} for s in release)
     result = check_compiled(compiled)
     assert result.ok, result.failures
 
