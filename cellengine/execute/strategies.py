@@ -29,7 +29,7 @@ import numpy as np
 
 from cellengine.arrays import Vec
 from cellengine.execute import solve
-from cellengine.execute.refused import NoMoreChoices, Refused
+from cellengine.execute.refused import Refused
 from cellengine.execute.solve import Accept, Ahead
 from cellengine.execute.split import SPLIT_THRESHOLD, split_point
 from cellengine.motion.collision import CollisionChecker
@@ -147,18 +147,20 @@ def _async_transit(
     """A transit of two arms under async: each on its own (prioritised), unless that leaves
     an arm on an IK branch its segments ahead do not require, or finds no goal at all (the
     arm before it standing at its goal can take the only free ones): then both as one, as
-    the other strategies plan it (merged on one time law: Compiler._assembled)."""
+    the other strategies plan it (merged on one time law: Compiler._assembled). Only for the
+    first choice: the compiler's next choices (``choice`` > 0) are the apart plan's
+    alternatives, each as it is, whatever branch it takes."""
     try:
         part = _apart(
             cell, checker, paths, q, "apart", prioritised=True, accept=accept, choice=choice,
             clearance=clearance, ahead=ahead,
         )  # fmt: skip
-    except NoMoreChoices:
-        raise  # the choices are the apart plan's
     except Refused as e:
+        if choice > 0:
+            raise
         apart: Part | Refused = e
     else:
-        if not _off_ahead(cell, part, ahead):
+        if choice > 0 or not _off_ahead(cell, part, ahead):
             return part
         apart = part
     goals = {a: p.poses[-1] for a, p in paths.items()}
