@@ -1907,9 +1907,9 @@ def _leave_blocked(
             return None
         nearest = min(nearest, near)
     return _error(
-        f"{b.where}: the other arm ({o_arm}) would grasp at the pivot (stopping "
-        f"{_mm(b.gap)} mm before the guide) on no IK branch on which it can let go and stand "
-        f"back from it at the next guide without hitting itself "
+        f"{b.where}: the other arm ({o_arm}) has no IK branch on which it can come down to "
+        f"the pivot (stopping {_mm(b.gap)} mm before the guide), then let go and stand back "
+        f"from it at the next guide, without hitting itself "
         f"({', '.join(nearest[1]) or 'out of reach'})"
     )
 

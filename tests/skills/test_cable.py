@@ -8,6 +8,7 @@ published quantities worked out by hand for the reference U guide.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
@@ -1119,3 +1120,49 @@ def test_the_other_hand_letting_go_is_screened_once_per_state() -> None:
         "while the other arm (right) lets go of routing.guide1 and stands back 100.0 mm, the "
         "routing arm (left) still; the cell's clearance is 10.0 mm"
     )
+
+
+def test_a_pivot_the_other_hand_cannot_stand_back_from_is_refused_at_its_guide() -> None:
+    """The other hand comes down to the pivot and, at the next guide, lets go and stands
+    back from it: the reference pivot allows that. A pivot 150 mm in front of the other
+    arm's base, at its height, does not on any branch (the tool meets the shoulder): the
+    way is refused at its own guide, not found out at the next one for every way."""
+    world, _ = _world()
+    ctx, state, _, r_arm, o_arm = _after_guide1(world)
+    b = C._basics(world, state, "routing.guide2", r_arm)
+
+    def leave(T: np.ndarray) -> InputError | None:
+        grasp = cg.line(cg.lifted(T, b.up, cg.APPROACH_HEIGHT), T)
+        return C._leave_blocked(ctx, b, o_arm, grasp, b.up)
+
+    assert leave(state.tcp[o_arm]) is None
+    T = np.array(state.tcp[o_arm])
+    T[:3, 3] = ctx.cell.arms[o_arm].T_cell_base[:3, 3] + [0.150, 0.0, 0.0]
+    error = leave(T)
+    assert error is not None and error.problems[0].message == (
+        "steps[2] RouteCable routing.guide2: the other arm (right) has no IK branch on which "
+        "it can come down to the pivot (stopping 25.0 mm before the guide), then let go and "
+        "stand back from it at the next guide, without hitting itself (right/shoulder_link, "
+        "right/tool)"
+    )
+
+
+def test_the_ways_beginning_with_a_release_the_compiler_could_not_run_are_left_out() -> None:
+    """After guide1, guide2's ways begin with the other hand's release, one per stand-back.
+    With the published stand-back's release dead (RouteCable.guide_plans' ``dead``: the
+    compiler could not run it), no way offered stands back that far; with every release
+    dead, none is offered at all."""
+    world, _ = _world()
+    ctx, state, route, _, o_arm = _after_guide1(world)
+    up = cg.platform_up(world, "routing.guide2")
+
+    def release(back: float) -> bytes:
+        return C._stand_back(state, o_arm, up, back).tobytes()
+
+    first = next(route.guide_plans(ctx, state, 1))
+    assert first.stand_back == cg.STAND_BACK
+    dead = {release(cg.STAND_BACK)}
+    offered = list(itertools.islice(route.guide_plans(ctx, state, 1, dead), 3))
+    assert offered and all(gp.stand_back != cg.STAND_BACK for gp in offered)
+    every = {release(back) for back in cg.STAND_BACKS}
+    assert list(route.guide_plans(ctx, state, 1, every)) == []
