@@ -37,7 +37,7 @@ import math
 from collections.abc import Callable, Collection, Iterable, Iterator, Mapping, Sequence, Set
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -350,20 +350,21 @@ class RouteCable(Skill):
             raise whys[0]  # no way's other hand lets go of the last guide
         releases = {b: _stand_back(state, o_arm, up, b).tobytes() for b in released}
         for way in itertools.chain((first,), ways):
-            release = released.get(way.stand_back, ())
+            back = _back_of(way)
+            release = released.get(back, ())
             if isinstance(release, InputError):
                 continue  # the stand-backs that work are among the ways too
-            if releases and releases[way.stand_back] in dead:
+            if releases and releases[back] in dead:
                 if all(r in dead for r in releases.values()):
                     return  # the compiler ran none of them
                 continue
-            key = replace(way, stand_back=cg.STAND_BACK)
+            key = _with_back(way, DEFAULT_BACK)
             if key not in checked:
                 checked[key] = self._checked(ctx, state, guide, way, r_arm, o_arm, screen)
             gp = checked[key]
             if not isinstance(gp, InputError):
-                gp = replace(gp, stand_back=way.stand_back, release=release)
-                gp = _coming(ctx, state, gp, way, (r_arm, o_arm), screen, (way.stand_back,))
+                gp = replace(_with_back(gp, back), release=release)
+                gp = _coming(ctx, state, gp, way, (r_arm, o_arm), screen, (back,))
             if isinstance(gp, InputError):
                 score = gp.distance if isinstance(gp, _Blocked) else -math.inf
                 if closest is None or score > closest[0]:
@@ -455,7 +456,7 @@ class RouteCable(Skill):
         (``screen``): the routing hand's approach, what the routing hand does, the other
         hand's descent."""
         world, arms = ctx.world, (r_arm, o_arm)
-        r_key = replace(way, pivot_lean=cg.PIVOT_LEAN, stand_back=cg.STAND_BACK)
+        r_key = _routing_key(way)
         p_key = (way.gap, way.pivot_lean, way.towards_base)
         a_key = (way.gap, way.lean, way.towards_base)
         approaches, routed, pivots = screen.approaches, screen.routed, screen.pivots
@@ -464,7 +465,7 @@ class RouteCable(Skill):
             approaches.get(a_key),
             routed.get(r_key),
             pivots.get(p_key),
-            screen.came.get(_coming_key(way, cg.STAND_BACK)),
+            screen.came.get(_coming_key(way, DEFAULT_BACK)),
             _coming_blocked(screen, way, backs),
         ):
             if isinstance(seen, InputError):
@@ -484,13 +485,13 @@ class RouteCable(Skill):
                 screen.hows[a_key] = how
             if screen.hows[a_key] != way.approach:
                 way = replace(way, approach=screen.hows[a_key])
-                r_key = replace(way, pivot_lean=cg.PIVOT_LEAN, stand_back=cg.STAND_BACK)
+                r_key = _routing_key(way)
                 built = _guide_plan(
                     world, state, self.cable, guide, r_arm, o_arm, way, screen.prints
                 )
                 gp = replace(built, beside=gp.beside)
             if r_key not in routed:
-                c_key, may = _coming_key(way, cg.STAND_BACK), state.branches_of(r_arm)
+                c_key, may = _coming_key(way, DEFAULT_BACK), state.branches_of(r_arm)
 
                 def came() -> InputError | frozenset[int]:
                     if c_key not in screen.came:
@@ -504,7 +505,7 @@ class RouteCable(Skill):
             found, pivoting = routed[r_key], pivots[p_key]
             if isinstance(found, InputError):
                 return found
-            if pivoting is not None:
+            if isinstance(pivoting, InputError):
                 return pivoting
             coming = _coming(ctx, state, replace(gp, branches=found), way, arms, screen, backs)
             if isinstance(coming, InputError):
@@ -516,7 +517,7 @@ class RouteCable(Skill):
                 e.blames = "arms"  # the routing arm might reach: PickCable decides which
                 raise
             _check_hands(ctx, gp, r_arm, o_arm)
-            gp = replace(gp, branches=_check_pivot_free(ctx, gp, r_arm, o_arm))
+            gp = replace(gp, branches=_check_pivot_free(ctx, gp, r_arm, o_arm, pivoting))
         except InputError as e:
             return e
         return gp
@@ -532,7 +533,10 @@ class _Screen:
     # why not, or the routing arm's branches that can
     routed: dict[GuideWay, InputError | frozenset[int]] = field(default_factory=dict)
     hows: dict[tuple[float, float, float], str] = field(default_factory=dict)  # APPROACHES
-    pivots: dict[tuple[float, float, float], InputError | None] = field(default_factory=dict)
+    # why not, or the other arm's branches that can
+    pivots: dict[tuple[float, float, float], InputError | frozenset[int]] = field(
+        default_factory=dict
+    )
     # why the routing hand cannot come to the guide and slide, or its branches that can
     came: dict[GuideWay, InputError | frozenset[int]] = field(default_factory=dict)
     # the room between the arms per routing branch while the routing hand comes and slides
@@ -545,7 +549,7 @@ Release = tuple[tuple[str, frozenset[int]], ...]  # Segment.branches of a releas
 
 def _letting_go(
     ctx: PlanningContext, state: CableState, arms: tuple[str, str], up: Vec, guide: str
-) -> dict[float, InputError | Release]:
+) -> dict[Back, InputError | Release]:
     """Per stand-back (when the other hand holds the cable at the last guide), why the other
     arm cannot let go and stand back, the routing hand holding still, on the IK branches the
     arms may be on without hitting itself or coming within the cell's clearance of the
@@ -558,16 +562,17 @@ def _letting_go(
     r_arm, o_arm = arms
     if o_arm not in state.held:
         return {}
-    out: dict[float, InputError | Release] = {}
+    out: dict[Back, InputError | Release] = {}
     where = f"steps[{state.step}] RouteCable {guide}"
     what = f"the other arm ({o_arm}) lets go of {state.guides[-1]} and stands back"
     for back in _stand_backs(state, o_arm):
         poses = _stand_back(state, o_arm, up, back)
         may = state.branches_of(o_arm)
         alive, nearest = surviving(ctx.cell, ctx.checker, o_arm, poses, ctx.home, may)
+        how = _back_text(back)
         if not alive:
             out[back] = _error(
-                f"{where}: {what} {_mm(back)} mm on no IK branch it may be on without "
+                f"{where}: {what} {how} on no IK branch it may be on without "
                 f"hitting itself ({', '.join(nearest[1]) or 'out of reach'})"
             )
             continue
@@ -581,7 +586,7 @@ def _letting_go(
                 room - keep,
                 f"{where}: however the two arms are posed, they "
                 + ("collide" if room == -math.inf else f"come within {_mm(room)} mm of each other")
-                + f" while {what} {_mm(back)} mm, the routing arm ({r_arm}) still; the cell's "
+                + f" while {what} {how}, the routing arm ({r_arm}) still; the cell's "
                 f"clearance is {_mm(keep)} mm",
             )
             continue
@@ -802,20 +807,47 @@ def _up(T: Mat, arm: str, up: Vec, height: float) -> ArmPath:
     return _cartesian(arm, cg.line(T, cg.lifted(T, up, height)))
 
 
-def _stand_back(state: CableState, arm: str, up: Vec, distance: float) -> Poses:
-    """Up by RETRACT_HEIGHT, then ``distance`` back along the route (its last two points: the
-    pivot and the slot of the last guide)."""
+# A stand-back: how far the released pivot hand backs off (m), after rising how high (m), in
+# which direction (rad about the vertical from back along the route; positive: to the left)
+Back = tuple[float, float, float]
+DEFAULT_BACK: Back = (cg.STAND_BACK, cg.RETRACT_HEIGHT, 0.0)
+
+
+def _stand_back(state: CableState, arm: str, up: Vec, back: Back) -> Poses:
+    """Up by ``back[1]``, then ``back[0]`` back along the route (its last two points: the
+    pivot and the slot of the last guide), turned by ``back[2]``."""
     last = np.asarray(state.route[-2:], dtype=float)
-    return _stand_back_from(state.tcp[arm], last[-1] - last[0], up, distance)
+    return _stand_back_from(state.tcp[arm], last[-1] - last[0], up, back)
 
 
-def _stand_back_from(T: Mat, along: Vec, up: Vec, distance: float) -> Poses:
+def _stand_back_from(T: Mat, along: Vec, up: Vec, back: Back) -> Poses:
     """_stand_back from ``T``, the route going ``along`` at its end."""
-    T_up = cg.lifted(T, up, cg.RETRACT_HEIGHT)
-    back = -cg.horizontal(along, up)
+    distance, lift, turn = back
+    T_up = cg.lifted(T, up, lift)
+    away = g.axis_angle_to_matrix(up, turn) @ -cg.horizontal(along, up)
     return ip.concatenate(
-        [cg.line(T, T_up), cg.line(T_up, cg.at(T_up, T_up[:3, 3] + distance * back))]
+        [cg.line(T, T_up), cg.line(T_up, cg.at(T_up, T_up[:3, 3] + distance * away))]
     )
+
+
+def _back_of(way: GuideWay | GuidePlan) -> Back:
+    return (way.stand_back, way.stand_lift, way.stand_turn)
+
+
+_Backed = TypeVar("_Backed", "GuideWay", "GuidePlan")
+
+
+def _with_back(way: _Backed, back: Back) -> _Backed:
+    distance, lift, turn = back
+    return replace(way, stand_back=distance, stand_lift=lift, stand_turn=turn)
+
+
+def _back_text(back: Back) -> str:
+    """How a stand-back reads in a message."""
+    distance, lift, turn = back
+    up = "" if lift == cg.RETRACT_HEIGHT else f" from {_mm(lift)} mm up"
+    side = "" if turn == 0.0 else f" to the {'left' if turn > 0.0 else 'right'}"
+    return f"{_mm(distance)} mm{side}{up}"
 
 
 def _vec(v: Any) -> list[float]:
@@ -1358,6 +1390,8 @@ class GuidePlan:
     insert: Poses
     laid: float  # route length from the connector's rear face to Ap
     stand_back: float  # the other hand, released at the previous guide, backs off this far
+    stand_lift: float  # after rising this high
+    stand_turn: float  # turned from back along the route by this (Back)
     # the elements the hands work between (this guide, and the one the cable leaves before
     # the pivot) and, once screened, the next guide (the insert ends before it) and what
     # lies under the cable (_under): cg.CLEARANCE from them, the cell's clearance from
@@ -1433,6 +1467,8 @@ class GuideWay:
     towards_base: float = 1.0
     slide_turn: float = 1.0  # the share of theta the routing hand turns as it slides
     approach: str = "direct"  # how the routing hand comes to the approach pose: APPROACHES
+    stand_lift: float = cg.RETRACT_HEIGHT  # the other hand rises this high, then backs off
+    stand_turn: float = 0.0  # back along the route turned by this (Back)
 
 
 # How the routing hand comes to Ap, the first that keeps clear: straight from where it is;
@@ -1598,7 +1634,15 @@ def _ranked(heads: Sequence[_Head], theta0: float) -> Iterator[GuideWay]:
     tipping towards the base and share of the turn in the slide), ranked by how much longer
     the motion gets, lazily."""
     dims = [
-        (cg.LEANS, cg.PIVOT_LEANS, cg.STAND_BACKS, h.afters, h.firsts, BASES, cg.SLIDE_TURNS)
+        (
+            cg.LEANS,
+            cg.PIVOT_LEANS,
+            _all_backs(),
+            h.afters,
+            h.firsts,
+            BASES,
+            cg.SLIDE_TURNS,
+        )
         for h in heads
     ]
 
@@ -1609,13 +1653,18 @@ def _ranked(heads: Sequence[_Head], theta0: float) -> Iterator[GuideWay]:
     def part(i: int, dim: int, v: Any) -> float:  # a dim's share in the cost, to order it
         if dim == 3:
             d = 0.0 if v is None else abs(v - heads[i].gap) + 0.5 * (v > heads[i].gap)
+        elif dim == 2:
+            d = _back_cost(v)
         else:
-            d = abs(float(v) - (cg.LEAN, cg.PIVOT_LEAN, cg.STAND_BACK, 0, 0.0, 1.0, 1.0)[dim])
+            d = abs(float(v) - (cg.LEAN, cg.PIVOT_LEAN, 0.0, 0, 0.0, 1.0, 1.0)[dim])
         return round(d, COST_DIGITS)
 
     for i, (lean, pivot, back, after, first, base, share) in best_first(dims, cost, part):
         h = heads[i]
-        yield GuideWay(h.theta, h.side, lean, pivot, back, h.gap, after, first, base, share)
+        way = GuideWay(
+            h.theta, h.side, lean, pivot, cg.STAND_BACK, h.gap, after, first, base, share
+        )
+        yield _with_back(way, back)
 
 
 BASES = (1.0, 0.0, -1.0)  # GuideWay.towards_base's values, best first
@@ -1640,7 +1689,7 @@ def _way_cost(
     theta0: float,
     lean: float,
     pivot: float,
-    back: float,
+    back: Back,
     after: float | None,
     first: bool,
     base: float,
@@ -1648,7 +1697,7 @@ def _way_cost(
 ) -> float:
     """How much longer the motion of a way gets than the published one's (a steeper slide
     swings farther), roughly: the ranking of ways."""
-    cost = abs(h.theta - theta0) + 0.05 * h.rank + abs(back - cg.STAND_BACK)
+    cost = abs(h.theta - theta0) + 0.05 * h.rank + _back_cost(back)
     cost += 0.5 * (abs(lean - cg.LEAN) + abs(pivot - cg.PIVOT_LEAN))
     cost += (0.0 if after is None else abs(after - h.gap)) + 0.01 * first
     # ending farther past swings farther: only when nearer does not work
@@ -1756,6 +1805,8 @@ def _guide_plan(
         insert=insert,
         laid=laid,
         stand_back=way.stand_back,
+        stand_lift=way.stand_lift,
+        stand_turn=way.stand_turn,
         beside=_beside(state, guide),
     )
 
@@ -1863,11 +1914,11 @@ def _pivot_blocked(
     arms: tuple[str, str],
     way: GuideWay,
     next_up: Vec | None,
-) -> InputError | None:
+) -> InputError | frozenset[int]:
     """Why the other hand cannot come down to the pivot of ``way`` keeping its clearances
     (what depends only on A, the pivot's tip and its direction: checked before the rest of
     the way is built), or, when a next guide's platform has ``next_up``, then let go and
-    stand back from it (_leave_blocked); or None."""
+    stand back from it (_leave_blocked); else the other arm's IK branches on which it can."""
     r_arm, o_arm = arms
     b = _basics(ctx.world, state, guide, r_arm, way.gap, way.gap_after)
     base = way.towards_base
@@ -1880,7 +1931,7 @@ def _pivot_blocked(
         ctx, o_arm, T_pivot[None], GRASP, beside
     )
     if found is None:
-        return None if next_up is None else _leave_blocked(ctx, b, o_arm, poses, next_up)
+        return _leave_blocked(ctx, b, o_arm, poses, next_up)
     near, limit, own = found
     return _Blocked.of(
         near.distance - limit,
@@ -1891,25 +1942,32 @@ def _pivot_blocked(
 
 
 def _leave_blocked(
-    ctx: PlanningContext, b: _Basics, o_arm: str, grasp: Poses, next_up: Vec
-) -> InputError | None:
-    """Why the other arm, come down to the pivot along ``grasp`` (any branch: it comes on a
-    transit), could not then let go and stand back from it at the next guide (_stand_back,
-    some stand-back) without hitting itself on the branch it grasped on, or None. (Found
-    only at the next guide, it sends the search back through every way of this one.)"""
+    ctx: PlanningContext, b: _Basics, o_arm: str, grasp: Poses, next_up: Vec | None
+) -> InputError | frozenset[int]:
+    """The other arm's IK branches on which it can come down to the pivot along ``grasp``
+    (any branch: it comes on a transit) and, when a next guide's platform has ``next_up``,
+    then let go and stand back from it at that guide (_stand_back, some stand-back), without
+    hitting itself; why not when none can. (Found only at the next guide, it sends the
+    search back through every way of this one; and the arms' pair checks at this guide
+    must not count on a branch the other arm cannot be on.)"""
     from cellengine.execute.following import surviving  # the motion stack: planning only
 
     nearest: tuple[float, tuple[str, str]] = (math.inf, ("", ""))
-    for back in cg.STAND_BACKS:
-        poses = np.concatenate([grasp, _stand_back_from(grasp[-1], b.axis, next_up, back)])
+    backs = _all_backs() if next_up is not None else (None,)
+    can: set[int] = set()
+    for back in backs:
+        poses = grasp
+        if back is not None and next_up is not None:
+            poses = np.concatenate([grasp, _stand_back_from(grasp[-1], b.axis, next_up, back)])
         alive, near = surviving(ctx.cell, ctx.checker, o_arm, poses, ctx.home)
-        if alive:
-            return None
+        can |= set(alive)
         nearest = min(nearest, near)
+    if can:
+        return frozenset(can)
+    then = "" if next_up is None else ", then let go and stand back from it at the next guide,"
     return _error(
         f"{b.where}: the other arm ({o_arm}) has no IK branch on which it can come down to "
-        f"the pivot (stopping {_mm(b.gap)} mm before the guide), then let go and stand back "
-        f"from it at the next guide, without hitting itself "
+        f"the pivot (stopping {_mm(b.gap)} mm before the guide){then} without hitting itself "
         f"({', '.join(nearest[1]) or 'out of reach'})"
     )
 
@@ -2015,7 +2073,7 @@ def _emit_guide(
         # passes on its way to the next guide (a collision on plan_one_turn).
         b.add(
             f"{label}: {RELEASE}",
-            [_cartesian(o_arm, _stand_back(b.state, o_arm, gp.up, gp.stand_back))],
+            [_cartesian(o_arm, _stand_back(b.state, o_arm, gp.up, _back_of(gp)))],
             before=[GripperEvent(o_arm, OPEN)],
             # its pivot's guides; the routing hand stands where it inserted
             near=[
@@ -2362,16 +2420,37 @@ def _pair_blocked(
     return f"the arms {_mm(nearest[0])} mm apart at best ({', '.join(nearest[1])})"
 
 
-def _coming_key(way: GuideWay, stand_back: float) -> GuideWay:
+def _coming_key(way: GuideWay, back: Back) -> GuideWay:
     """What _coming measures depends on: the routing hand's motion (its approach follows from
     the way; the insert's end sets R_cable, how far it slides) and where the other hand
     stands back to."""
-    return replace(way, pivot_lean=cg.PIVOT_LEAN, stand_back=stand_back, approach="direct")
+    return _with_back(replace(way, pivot_lean=cg.PIVOT_LEAN, approach="direct"), back)
 
 
-def _stand_backs(state: CableState, o_arm: str) -> tuple[float, ...]:
+def _routing_key(way: GuideWay) -> GuideWay:
+    """What the routing hand's checks depend on: not the other hand's tip or stand-back."""
+    return _with_back(replace(way, pivot_lean=cg.PIVOT_LEAN), DEFAULT_BACK)
+
+
+def _all_backs() -> tuple[Back, ...]:
+    """Every stand-back, best first (_back_cost): up RETRACT_HEIGHT and back along the route
+    each of STAND_BACKS; just clear of the cable and back STAND_BACK along the route or to
+    either side (STAND_LOWS: where a routing arm reaches over the pivot hand, rising takes
+    its forearm into it)."""
+    backs = [(d, cg.RETRACT_HEIGHT, 0.0) for d in cg.STAND_BACKS]
+    backs += [(cg.STAND_BACK, lift, turn) for lift, turn in cg.STAND_LOWS]
+    return tuple(sorted(backs, key=_back_cost))
+
+
+def _back_cost(back: Back) -> float:
+    """How much a stand-back adds to a way's cost (_way_cost): the farther, the longer."""
+    distance, lift, turn = back
+    return abs(distance - cg.STAND_BACK) + abs(lift - cg.RETRACT_HEIGHT) + 0.05 * abs(turn)
+
+
+def _stand_backs(state: CableState, o_arm: str) -> tuple[Back, ...]:
     """Where the other hand may stand back to: only when it holds the cable at a guide."""
-    return cg.STAND_BACKS if o_arm in state.held else (cg.STAND_BACK,)
+    return _all_backs() if o_arm in state.held else (DEFAULT_BACK,)
 
 
 def _coming(
@@ -2381,7 +2460,7 @@ def _coming(
     way: GuideWay,
     arms: tuple[str, str],
     screen: _Screen,
-    backs: Sequence[float],
+    backs: Sequence[Back],
 ) -> GuidePlan | InputError:
     """gp if, while the other hand stands back from the previous guide (when it holds the
     cable there, to one of ``backs``) and then the routing hand comes to the guide and slides
@@ -2392,12 +2471,12 @@ def _coming(
     kept: set[int] = set()
     best = -math.inf
     # the routing arm's branches that come and slide clear of itself (gp's are among them)
-    came = screen.came.get(_coming_key(way, cg.STAND_BACK))
+    came = screen.came.get(_coming_key(way, DEFAULT_BACK))
     on = came if isinstance(came, frozenset) and -1 not in came else ANY_BRANCH
     for back in backs:
         key = _coming_key(way, back)
         if key not in screen.coming:
-            rooms = _coming_rooms(ctx, state, replace(gp, stand_back=back), arms, on)
+            rooms = _coming_rooms(ctx, state, _with_back(gp, back), arms, on)
             room = max(rooms.values())
             why = _coming_error(ctx, state, gp, arms, room) if room < ctx.clearance else None
             screen.coming[key] = (rooms, why)
@@ -2411,7 +2490,7 @@ def _coming(
     return _coming_error(ctx, state, gp, arms, best)
 
 
-def _coming_blocked(screen: _Screen, way: GuideWay, backs: Sequence[float]) -> InputError | None:
+def _coming_blocked(screen: _Screen, way: GuideWay, backs: Sequence[Back]) -> InputError | None:
     """_coming's error, known before the way is built, when no branch has the room whatever
     the stand-back."""
     known = [screen.coming.get(_coming_key(way, back)) for back in backs]
@@ -2459,7 +2538,7 @@ def _coming_rooms(
     T_r, T_o = state.tcp[r_arm], state.tcp[o_arm]
     poses: list[tuple[Mat, Mat]] = []
     if o_arm in state.held:
-        back = _stand_back(state, o_arm, gp.up, gp.stand_back)
+        back = _stand_back(state, o_arm, gp.up, _back_of(gp))
         poses += [(T_r, T) for T in (*back[::STRIDE], back[-1])]
         T_o = back[-1]
     coming = np.concatenate([p for p in (gp.reorient, gp.approach, gp.slide) if p is not None])
@@ -2469,15 +2548,16 @@ def _coming_rooms(
 
 
 def _check_pivot_free(
-    ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str
+    ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str, o_on: frozenset[int]
 ) -> frozenset[int]:
     """While the routing hand holds still at the slide's end, the other arm comes down to the
-    pivot: some pair of the arms' solutions is free there and above it, and keeps the
-    cell's clearance between the arms, and on to the insert (:func:`_check_pair_along`).
-    The routing arm's branches (of gp.branches) on which it is so."""
+    pivot (on a branch of ``o_on``: those on which it can, _pivot_blocked): some pair of the
+    arms' solutions is free there and above it, and keeps the cell's clearance between the
+    arms, and on to the insert (:func:`_check_pair_along`). The routing arm's branches (of
+    gp.branches) on which it is so."""
     for what, T in (("above the pivot", gp.other_above), ("at the pivot", gp.pivot)):
         poses = {r_arm: gp.slide[-1], o_arm: T}
-        why = _pair_blocked(ctx, poses, ctx.clearance, {r_arm: gp.branches})
+        why = _pair_blocked(ctx, poses, ctx.clearance, {r_arm: gp.branches, o_arm: o_on})
         if why is not None:
             raise _error(
                 f"{gp.where}: every inverse kinematics solution of the other arm {what} is in "
@@ -2492,17 +2572,20 @@ def _check_pivot_free(
         for k in gp.branches
         if all(
             _pair_blocked(
-                ctx, {r_arm: gp.slide[-1], o_arm: T}, ctx.clearance, {r_arm: frozenset({k})}
+                ctx,
+                {r_arm: gp.slide[-1], o_arm: T},
+                ctx.clearance,
+                {r_arm: frozenset({k}), o_arm: o_on},
             )
             is None
             for T in ends
         )
     )
-    return _check_pair_along(ctx, replace(gp, branches=kept or gp.branches), r_arm, o_arm)
+    return _check_pair_along(ctx, replace(gp, branches=kept or gp.branches), r_arm, o_arm, o_on)
 
 
 def _check_pair_along(
-    ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str
+    ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str, o_on: frozenset[int]
 ) -> frozenset[int]:
     """From the other arm coming down to the pivot to the insert (both arms on Cartesian
     paths, so each keeps its IK branch), some pair of branches keeps the cell's clearance
@@ -2516,7 +2599,7 @@ def _check_pair_along(
     held = np.concatenate((gp.pull_path, gp.lift, gp.swing, gp.insert))
     poses = [(gp.slide[-1], T) for T in (*down[::STRIDE], down[-1])]
     poses += [(T, gp.pivot) for T in (*held[::STRIDE], held[-1])]
-    rooms = _pair_rooms(ctx, r_arm, o_arm, poses, ctx.clearance, gp.branches, measure=False)
+    rooms = _pair_rooms(ctx, r_arm, o_arm, poses, ctx.clearance, gp.branches, o_on, measure=False)
     room = max(rooms.values())
     if room < ctx.clearance:
         raise _arms_blocked(

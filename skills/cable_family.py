@@ -15,7 +15,7 @@ from cellengine.errors import InputError, Problem, StepError, at_step
 from cellengine.family import Candidate
 from cellengine.program import Segment
 from cellengine.skill import Skill
-from cellengine.skills import cable_meaning, cable_top
+from cellengine.skills import cable_meaning, cable_swap, cable_top
 from cellengine.skills.cable import (
     RELEASE,
     PickCable,
@@ -156,20 +156,40 @@ def _guide(
 
 def _release_failed(segments: Sequence[Segment], dead: set[bytes], j: int) -> None:
     """Candidate.failed_at of a guide's way: its first segment, the other hand letting go of
-    the last guide, could not be compiled."""
+    the last guide, or a segment of the hand swap (cable_swap) could not be compiled."""
     first = segments[0]
     if j == 0 and first.label.endswith(RELEASE) and len(first.paths) == 1:
         dead.add(np.asarray(first.paths[0].poses).tobytes())
+    if cable_swap.SWAP in segments[j].label:
+        dead.add(cable_swap.key(segments))
 
 
 def _ways(
     ctx: PlanningContext, step: RouteCable, state: CableState, k: int, dead: Set[bytes]
 ) -> Iterator[tuple[list[Segment], CableState]]:
-    """Guide ``k``'s ways: the published slide and pivot's (RouteCable.ways), then, after all
-    of them, laying the cable over the guide's top and pushing it in (cable_top, for a guide
-    too close to the one before): a plan that compiles with the first never reaches the
-    second. When neither has a way, the first's error (it says what blocks the published
-    way)."""
+    """Guide ``k``'s ways: the routing arm's (_routed), then, after all of them, the other
+    arm's once it has taken the cable over (cable_swap, after a routed guide): a plan that
+    compiles with the first never reaches the second. When none has a way, the first error
+    (it says what blocks the published way)."""
+    first: InputError | None = None
+    found = False
+    for ways in (_routed, _swapped):
+        try:
+            for way in ways(ctx, step, state, k, dead):
+                found = True
+                yield way
+        except InputError as e:
+            first = first or e
+    if not found and first is not None:
+        raise first
+
+
+def _routed(
+    ctx: PlanningContext, step: RouteCable, state: CableState, k: int, dead: Set[bytes]
+) -> Iterator[tuple[list[Segment], CableState]]:
+    """The published slide and pivot's ways (RouteCable.ways), then laying the cable over
+    the guide's top and pushing it in (cable_top, for a guide too close to the one before);
+    the first's error when neither has a way."""
     first: InputError | None = None
     try:
         yield from step.ways(ctx, state, k, dead)
@@ -180,6 +200,22 @@ def _ways(
     except InputError:
         if first is not None:
             raise first from None
+
+
+def _swapped(
+    ctx: PlanningContext, step: RouteCable, state: CableState, k: int, dead: Set[bytes]
+) -> Iterator[tuple[list[Segment], CableState]]:
+    """_routed's ways of the other arm, each after a hand swap (cable_swap.hand_swaps), a
+    swap's until the compiler could not run it; none before the first guide (PlaceConnector
+    decides who routes it)."""
+    if k == 0:
+        return
+    for swap, swapped in cable_swap.hand_swaps(ctx, step, state, k, dead):
+        which = cable_swap.key(swap)
+        for segments, after in _routed(ctx, step, swapped, k, dead):
+            if which in dead:
+                break
+            yield [*swap, *segments], after
 
 
 def _stranded(i: int, step: Skill, arms: set[str]) -> InputError:

@@ -124,6 +124,12 @@ PICK_MEETS = tuple(
 # the guide before: upright ones stay between the two
 PIVOT_LEANS = (PIVOT_LEAN, math.radians(20.0), math.radians(40.0), math.radians(10.0), 0.0)
 STAND_BACKS = (STAND_BACK, 0.050, 0.150)
+# The released pivot hand also rises only this high, its fingertips just clear of the cable,
+# then backs off STAND_BACK along the route or to either side: under a routing arm that
+# reaches over it, rising RETRACT_HEIGHT takes its forearm into that arm. (lift m, turn rad
+# about the vertical from back along the route, positive to the left)
+STAND_LOW = 0.030
+STAND_LOWS = ((STAND_LOW, 0.0), (STAND_LOW, -math.pi / 2.0), (STAND_LOW, math.pi / 2.0))
 # A, the routing hand's stop before a guide, smaller where guides stand close together (the
 # slide then starts nearer the guide, and must be steeper: theta > atan((W + W_g) / 2A))
 APPROACH_GAPS = (APPROACH_GAP, 0.015, 0.010)

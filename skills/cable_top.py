@@ -96,10 +96,10 @@ def top_ways(
     of the last guide is ``dead`` (RouteCable.guide_plans)."""
     r_arm, o_arm = step.arms(ctx, state)
     up = cg.platform_up(ctx.world, step.guides[k])
-    released = c._letting_go(ctx, state, (r_arm, o_arm), up, step.guides[k]).get(cg.STAND_BACK)
+    released = c._letting_go(ctx, state, (r_arm, o_arm), up, step.guides[k]).get(c.DEFAULT_BACK)
     if isinstance(released, InputError):
         raise released  # every way lets go of the last guide so
-    if o_arm in state.held and c._stand_back(state, o_arm, up, cg.STAND_BACK).tobytes() in dead:
+    if o_arm in state.held and c._stand_back(state, o_arm, up, c.DEFAULT_BACK).tobytes() in dead:
         return  # the compiler could not run it
     closest: tuple[float, InputError] | None = None
     found = False
@@ -363,7 +363,7 @@ def _emit(
     if o_arm in b.state.held:  # as after any guide: it lets go and backs off along the route
         b.add(
             f"{label}: {c.RELEASE}",
-            [c._cartesian(o_arm, c._stand_back(b.state, o_arm, tp.up, cg.STAND_BACK))],
+            [c._cartesian(o_arm, c._stand_back(b.state, o_arm, tp.up, c.DEFAULT_BACK))],
             before=[GripperEvent(o_arm, c.OPEN)],
             near=[
                 *((o_arm, e) for e in sorted({*map(cg.element_of, state.guides[-2:]), *tp.beside})),

@@ -27,6 +27,7 @@ from cellengine.info.load import load_plan
 from cellengine.motion import interpolate as ip
 from cellengine.program import Segment
 from cellengine.skills import cable as C
+from cellengine.skills import cable_family, cable_swap
 from cellengine.skills import cable_geometry as cg
 from cellengine.skills.cable import PickCable, PlaceConnector, RouteCable, plan_cable_steps
 from cellengine.skills.cable_state import CableState
@@ -580,7 +581,7 @@ def test_the_pivot_hand_closed_on_the_cable_keeps_clear_of_the_guide_before() ->
         "2.4 mm farther from the hand's path (more room between the guides), or the fingers "
         "be narrower"
     )
-    assert blocked(10.0) is None
+    assert not isinstance(blocked(10.0), InputError)  # the other arm's branches that can
     assert math.radians(10.0) in cg.PIVOT_LEANS
 
 
@@ -1022,7 +1023,7 @@ def test_the_arms_are_screened_while_the_routing_hand_comes_and_slides() -> None
     way = C.GuideWay(gp.theta, gp.side, gap=gp.a)
     far = replace(ctx, clearance=0.5)
     blocked = C._coming(
-        far, state, gp, way, ("left", "right"), C._Screen((), gp.up), (cg.STAND_BACK,)
+        far, state, gp, way, ("left", "right"), C._Screen((), gp.up), (C.DEFAULT_BACK,)
     )
     assert isinstance(blocked, C._Blocked)
     near = blocked.distance + 0.5
@@ -1076,9 +1077,9 @@ def test_the_arms_pair_is_screened_from_the_pivot_grasp_to_the_insert() -> None:
     half a metre, no pair can: the way is refused, saying how near every pair comes (true of
     each: no nearer than the pair that stays farthest apart all along)."""
     ctx, _, gp = _straight_guide1()
-    C._check_pair_along(ctx, gp, "left", "right")
+    C._check_pair_along(ctx, gp, "left", "right", C.ANY_BRANCH)
     with pytest.raises(InputError) as err:
-        C._check_pair_along(replace(ctx, clearance=0.5), gp, "left", "right")
+        C._check_pair_along(replace(ctx, clearance=0.5), gp, "left", "right", C.ANY_BRANCH)
     blocked = err.value
     assert isinstance(blocked, C._Blocked)
     near = blocked.distance + 0.5
@@ -1095,6 +1096,26 @@ def test_the_arms_pair_is_screened_from_the_pivot_grasp_to_the_insert() -> None:
     assert 0.01 < best <= near < 0.5
 
 
+def test_the_arms_pair_counts_only_the_branches_the_other_arm_can_grasp_the_pivot_on() -> None:
+    """The pair check of plan_straight's guide1 (the other arm at the pivot, the routing arm
+    laying the cable in) counts only the other arm's branches given (_pivot_blocked's: those
+    on which it can come down to the pivot and later stand back): asked to keep the arms
+    farther apart than some of its branches can, it passes on those and is refused on the
+    others alone."""
+    ctx, _, gp = _straight_guide1()
+    down = C.cg.line(gp.other_above, gp.pivot)
+    held = np.concatenate((gp.pull_path, gp.lift, gp.swing, gp.insert))
+    poses = [(T, gp.slide[-1]) for T in down] + [(gp.pivot, T) for T in held]
+    rooms = C._pair_rooms(ctx, "right", "left", poses, 0.0, C.ANY_BRANCH, gp.branches)
+    keep = (min(rooms.values()) + max(rooms.values())) / 2.0  # some branches keep it
+    assert keep > ctx.clearance
+    ctx = replace(ctx, clearance=keep)
+    good = frozenset(k for k, r in rooms.items() if r >= keep)
+    assert C._check_pair_along(ctx, gp, "left", "right", good)
+    with pytest.raises(C._Blocked):
+        C._check_pair_along(ctx, gp, "left", "right", C.ANY_BRANCH - good)
+
+
 def test_the_other_hand_letting_go_is_screened_once_per_state() -> None:
     """After guide1 the other hand lets go and stands back, the routing hand holding still
     where it inserted: that depends on the state alone. Moved to 150 mm over the pivot hand,
@@ -1105,7 +1126,7 @@ def test_the_other_hand_letting_go_is_screened_once_per_state() -> None:
     ctx, state, route, r_arm, o_arm = _after_guide1(world)
     up = cg.platform_up(world, "routing.guide2")
     free = C._letting_go(ctx, state, (r_arm, o_arm), up, "routing.guide2")
-    assert set(free) == set(cg.STAND_BACKS)
+    assert set(free) == set(C._all_backs())
     for release in free.values():  # each arm's branches on which the release keeps clear
         assert not isinstance(release, InputError)
         assert [arm for arm, _ in release] == sorted((r_arm, o_arm))
@@ -1131,15 +1152,15 @@ def test_a_pivot_the_other_hand_cannot_stand_back_from_is_refused_at_its_guide()
     ctx, state, _, r_arm, o_arm = _after_guide1(world)
     b = C._basics(world, state, "routing.guide2", r_arm)
 
-    def leave(T: np.ndarray) -> InputError | None:
+    def leave(T: np.ndarray) -> InputError | frozenset[int]:
         grasp = cg.line(cg.lifted(T, b.up, cg.APPROACH_HEIGHT), T)
         return C._leave_blocked(ctx, b, o_arm, grasp, b.up)
 
-    assert leave(state.tcp[o_arm]) is None
+    assert state.branches_of(o_arm) & leave(state.tcp[o_arm])  # the one it is on can
     T = np.array(state.tcp[o_arm])
     T[:3, 3] = ctx.cell.arms[o_arm].T_cell_base[:3, 3] + [0.150, 0.0, 0.0]
     error = leave(T)
-    assert error is not None and error.problems[0].message == (
+    assert isinstance(error, InputError) and error.problems[0].message == (
         "steps[2] RouteCable routing.guide2: the other arm (right) has no IK branch on which "
         "it can come down to the pivot (stopping 25.0 mm before the guide), then let go and "
         "stand back from it at the next guide, without hitting itself (right/shoulder_link, "
@@ -1156,13 +1177,51 @@ def test_the_ways_beginning_with_a_release_the_compiler_could_not_run_are_left_o
     ctx, state, route, _, o_arm = _after_guide1(world)
     up = cg.platform_up(world, "routing.guide2")
 
-    def release(back: float) -> bytes:
+    def release(back: C.Back) -> bytes:
         return C._stand_back(state, o_arm, up, back).tobytes()
 
     first = next(route.guide_plans(ctx, state, 1))
-    assert first.stand_back == cg.STAND_BACK
-    dead = {release(cg.STAND_BACK)}
+    assert C._back_of(first) == C.DEFAULT_BACK
+    dead = {release(C.DEFAULT_BACK)}
     offered = list(itertools.islice(route.guide_plans(ctx, state, 1, dead), 3))
-    assert offered and all(gp.stand_back != cg.STAND_BACK for gp in offered)
-    every = {release(back) for back in cg.STAND_BACKS}
+    assert offered and all(C._back_of(gp) != C.DEFAULT_BACK for gp in offered)
+    every = {release(back) for back in C._all_backs()}
     assert list(route.guide_plans(ctx, state, 1, every)) == []
+
+
+def test_the_other_hand_takes_the_cable_over_between_guides() -> None:
+    """After guide1 the hands may swap before guide2: the other hand lets go of guide1 and
+    stands back; the routing hand lets go and moves up and out of the way (first to the side
+    its base is on); the other hand comes down and grasps the cable where the routing hand
+    held it, and routes on from there. Each way out of the way is its own swap; one the
+    compiler could not run is told apart from the others (cable_swap.key)."""
+    world, _ = _world()
+    ctx, state, route, r_arm, o_arm = _after_guide1(world)
+    swaps = list(cable_swap.hand_swaps(ctx, route, state, 1, set()))
+    assert len(swaps) == len(cable_swap.AWAYS) * 3
+    segments, after = swaps[0]
+    said = "RouteCable routing.guide2: the other hand takes the cable over:"
+    assert [s.label for s in segments] == [
+        f"RouteCable routing.guide2: {C.RELEASE}",
+        f"{said} {r_arm} lets go",
+        f"{said} {o_arm} to the cable",
+        f"{said} {o_arm} grasps",
+    ]
+    assert after.routing_arm == o_arm and set(after.held) == {o_arm}
+    T_r, T_take = state.tcp[r_arm], after.tcp[o_arm]
+    assert np.linalg.norm(T_take[:3, 3] - T_r[:3, 3]) < 1e-9
+    slot = np.asarray(state.route[-1])
+    assert after.held[o_arm].s == pytest.approx(
+        state.route_length() + after.pull_distance, abs=1e-9
+    )
+    assert after.pull_distance == pytest.approx(np.linalg.norm((T_r[:3, 3] - slot)[:2]), abs=1e-9)
+    away = segments[1].paths[0].poses[-1][:3, 3] - T_r[:3, 3]
+    assert away[2] == pytest.approx(cg.RETRACT_HEIGHT, abs=1e-9)
+    base = ctx.cell.arms[r_arm].T_cell_base[:3, 3] - T_r[:3, 3]
+    assert np.linalg.norm(away[:2]) == pytest.approx(C.HAND_OVER_AWAY, abs=1e-9)
+    assert float(away[:2] @ base[:2]) > 0.0  # to the side its base is on
+    keys = {cable_swap.key(s) for s, _ in swaps}
+    assert len(keys) == len(swaps) and b"" not in keys
+    dead: set[bytes] = set()
+    cable_family._release_failed(segments, dead, 3)  # its grasp could not be compiled
+    assert dead == {cable_swap.key(segments)}
