@@ -1952,16 +1952,16 @@ def _leave_blocked(
     must not count on a branch the other arm cannot be on.)"""
     from cellengine.execute.following import surviving  # the motion stack: planning only
 
-    nearest: tuple[float, tuple[str, str]] = (math.inf, ("", ""))
-    backs = _all_backs() if next_up is not None else (None,)
-    can: set[int] = set()
-    for back in backs:
-        poses = grasp
-        if back is not None and next_up is not None:
+    can, nearest = surviving(ctx.cell, ctx.checker, o_arm, grasp, ctx.home)
+    if next_up is not None:
+        down, can = can, set()
+        for back in _all_backs():  # each branch that can come down, until one stand-back lets it
             poses = np.concatenate([grasp, _stand_back_from(grasp[-1], b.axis, next_up, back)])
-        alive, near = surviving(ctx.cell, ctx.checker, o_arm, poses, ctx.home)
-        can |= set(alive)
-        nearest = min(nearest, near)
+            alive, near = surviving(ctx.cell, ctx.checker, o_arm, poses, ctx.home, down - can)
+            can |= alive
+            nearest = min(nearest, near)
+            if can == down:
+                break
     if can:
         return frozenset(can)
     then = "" if next_up is None else ", then let go and stand back from it at the next guide,"
@@ -2485,6 +2485,8 @@ def _coming(
             return gp  # no branches: the compiler finds out
         kept |= {k for k in gp.branches if rooms[k] >= ctx.clearance}
         best = max(best, *(rooms[k] for k in gp.branches))
+        if kept == gp.branches:
+            break  # the other stand-backs could keep no more branches
     if kept:
         return replace(gp, branches=frozenset(kept))
     return _coming_error(ctx, state, gp, arms, best)
