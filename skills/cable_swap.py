@@ -7,7 +7,8 @@ guides only the other arm can route, as a person routing with two hands swaps th
 After a guide the routing hand holds the cable along that guide's axis just past it, and
 the other hand holds the pivot before it. The other hand lets go and stands back (as before
 any guide); the routing hand lets go and moves up and out of the way (to the side its base
-is on, the other side or on along the cable: the first that keeps the cell's clearance);
+is on, the other side or on along the cable, AWAYS far: each that keeps the cell's
+clearance is a swap of its own, in that order);
 the other hand comes down and grasps the cable where the routing hand held it (the cable
 from the guide's slot to there is short and straight, as where PlaceConnector's hand-over
 takes it), tipped along the cable and towards its base, or only along it, or away (the
