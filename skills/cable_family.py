@@ -207,7 +207,9 @@ def _swapped(
 ) -> Iterator[tuple[list[Segment], CableState]]:
     """_routed's ways of the other arm, each after a hand swap (cable_swap.hand_swaps), a
     swap's until the compiler could not run it; none before the first guide (PlaceConnector
-    decides who routes it)."""
+    decides who routes it). When the other arm has no way after a swap, the error ends the
+    swaps: the guide's ways are screened in full for each, and where the routing hand went
+    out of the way changes few of their checks."""
     if k == 0:
         return
     for swap, swapped in cable_swap.hand_swaps(ctx, step, state, k, dead):
