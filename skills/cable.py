@@ -2061,6 +2061,29 @@ def _check_length(world: World, name: str, hand: cg.Hand, gp: GuidePlan) -> None
 RELEASE = "release the previous guide"  # the label's end of a guide's first segment
 
 
+def _add_release(
+    b: _Builder,
+    label: str,
+    arms: tuple[str, str],
+    poses: Poses,
+    beside: Sequence[str],
+    branches: Release = (),
+) -> None:
+    """The segment in which the other hand lets go of the cable at the last guide and stands
+    back along ``poses``: near its pivot's guides and ``beside`` (the elements the hands work
+    between next), the routing hand standing where it inserted; ``branches``: the arms'
+    (_letting_go)."""
+    r_arm, o_arm = arms
+    elements = sorted({*map(cg.element_of, b.state.guides[-2:]), *beside})
+    b.add(
+        f"{label}: {RELEASE}",
+        [_cartesian(o_arm, poses)],
+        before=[GripperEvent(o_arm, OPEN)],
+        near=[*((o_arm, e) for e in elements), *((r_arm, e) for e in beside)],
+        branches=branches,
+    )
+
+
 def _emit_guide(
     state: CableState, gp: GuidePlan, r_arm: str, o_arm: str, cable: str
 ) -> tuple[list[Segment], CableState]:
@@ -2071,17 +2094,8 @@ def _emit_guide(
         # The other hand lets go of the cable at the previous guide, moves up and then back
         # along the route: straight up, its wrist stays where the routing arm's forearm
         # passes on its way to the next guide (a collision on plan_one_turn).
-        b.add(
-            f"{label}: {RELEASE}",
-            [_cartesian(o_arm, _stand_back(b.state, o_arm, gp.up, _back_of(gp)))],
-            before=[GripperEvent(o_arm, OPEN)],
-            # its pivot's guides; the routing hand stands where it inserted
-            near=[
-                *((o_arm, e) for e in sorted({*map(cg.element_of, state.guides[-2:]), *gp.beside})),
-                *((r_arm, e) for e in gp.beside),
-            ],
-            branches=gp.release,
-        )
+        poses = _stand_back(b.state, o_arm, gp.up, _back_of(gp))
+        _add_release(b, label, (r_arm, o_arm), poses, gp.beside, gp.release)
     near = [(r_arm, e) for e in gp.beside]  # the hands work between these (GuidePlan)
     if gp.reorient is not None:  # turning in place where it inserted, by that guide
         b.add(

@@ -124,7 +124,7 @@ def _release(
 ) -> None:
     """The other hand lets go of the last guide and stands back, as before any guide: the
     first stand-back the arms can do (c._letting_go) that the compiler did not fail."""
-    r_arm, o_arm = arms
+    o_arm = arms[1]
     released = c._letting_go(ctx, state, arms, up, guide)
     first: InputError | None = None
     for back, release in released.items():
@@ -132,14 +132,7 @@ def _release(
         if isinstance(release, InputError) or poses.tobytes() in dead:
             first = first or (release if isinstance(release, InputError) else None)
             continue
-        elements = sorted({*map(cg.element_of, state.guides[-2:]), *beside})
-        b.add(
-            f"RouteCable {guide}: {c.RELEASE}",
-            [c._cartesian(o_arm, poses)],
-            before=[GripperEvent(o_arm, c.OPEN)],
-            near=[*((o_arm, e) for e in elements), *((r_arm, e) for e in beside)],
-            branches=release,
-        )
+        c._add_release(b, f"RouteCable {guide}", arms, poses, beside, release)
         return
     raise first or c._error(f"steps[{state.step}] RouteCable {guide}: no release was compiled")
 

@@ -361,15 +361,8 @@ def _emit(
     b = c._Builder(state)
     pair = (r_arm, o_arm)
     if o_arm in b.state.held:  # as after any guide: it lets go and backs off along the route
-        b.add(
-            f"{label}: {c.RELEASE}",
-            [c._cartesian(o_arm, c._stand_back(b.state, o_arm, tp.up, c.DEFAULT_BACK))],
-            before=[GripperEvent(o_arm, c.OPEN)],
-            near=[
-                *((o_arm, e) for e in sorted({*map(cg.element_of, state.guides[-2:]), *tp.beside})),
-                *((r_arm, e) for e in tp.beside),
-            ],
-        )
+        poses = c._stand_back(b.state, o_arm, tp.up, c.DEFAULT_BACK)
+        c._add_release(b, label, pair, poses, tp.beside)
     near_r = [(r_arm, e) for e in tp.beside]
     b.add(
         f"{label}: lay the cable over the top",

@@ -1225,3 +1225,28 @@ def test_the_other_hand_takes_the_cable_over_between_guides() -> None:
     dead: set[bytes] = set()
     cable_family._release_failed(segments, dead, 3)  # its grasp could not be compiled
     assert dead == {cable_swap.key(segments)}
+
+
+def test_a_low_stand_back_rises_just_clear_of_the_cable_and_moves_aside() -> None:
+    """Besides rising RETRACT_HEIGHT and backing off along the route, the released pivot hand
+    may rise STAND_LOW and move STAND_BACK to either side of the route (Back's turn, positive
+    to the left): these are among the stand-backs offered, after the published ones, and its
+    path goes exactly there, keeping its orientation."""
+    world, _ = _world()
+    ctx, state, route_step, _, o_arm = _after_guide1(world)
+    up = cg.platform_up(world, "routing.guide2")
+    backs = C._all_backs()
+    assert backs[0] == C.DEFAULT_BACK
+    lows = [b for b in backs if b[1] == cg.STAND_LOW]
+    assert {b[2] for b in lows} == {0.0, math.pi / 2.0, -math.pi / 2.0}
+    assert backs.index(lows[0]) > backs.index((0.150, cg.RETRACT_HEIGHT, 0.0))
+    route = np.asarray(state.route[-2:])
+    along = cg.horizontal(route[-1] - route[0], up)
+    T = state.tcp[o_arm]
+    poses = C._stand_back(state, o_arm, up, (cg.STAND_BACK, cg.STAND_LOW, math.pi / 2.0))
+    moved = poses[-1][:3, 3] - T[:3, 3]
+    left = np.cross(up, -along)  # back along the route, turned a quarter to the left
+    assert np.allclose(moved, cg.STAND_LOW * up + cg.STAND_BACK * left, atol=1e-9)
+    assert np.allclose(poses[-1][:3, :3], T[:3, :3], atol=1e-9)
+    # before a route's first guide the hands do not swap: PlaceConnector decides who routes
+    assert list(cable_family._swapped(ctx, route_step, state, 0, set())) == []
