@@ -141,11 +141,13 @@ class PickCable(Skill):
                     _check_reach(ctx, c_arm, geo.reach(c_arm), where)
                     _check_reach(ctx, f_arm, geo.reach(f_arm), where)
                     _check_both_free(ctx, geo, c_arm, f_arm, where)
+                    segments, after = _emit_pick(self, s, geo, c_arm, f_arm)
+                    segments = _pick_on(ctx, geo, segments, where)
                 except InputError as e:
                     first = first or e
                     continue
                 found = True
-                yield _emit_pick(self, s, geo, c_arm, f_arm)
+                yield segments, after
         if not found:
             raise first or _error(f"{where}: no way to pick it")
 
@@ -1018,8 +1020,77 @@ def _align_z(
     return cg.pair_line(T_c, T_c1, g.inverse(T_c) @ T_f)
 
 
+def _pick_pairs(geo: _PickGeometry) -> list[tuple[Mat, Mat]]:
+    """(connector hand, far hand) poses along the pick, from over the combs to aligned:
+    every path's ends and thirds."""
+    c, f = geo.connector_arm, geo.far_arm
+    above = [cg.lifted(geo.grasp[a], geo.up, cg.APPROACH_HEIGHT) for a in (c, f)]
+    out = [(above[0], above[1]), (geo.grasp[c], geo.grasp[f])]
+    out += _thirds(geo.faced[c], geo.faced[f])
+    if geo.meet:
+        out += _thirds(geo.meet.get(c, geo.faced[c][-1:]), geo.meet.get(f, geo.faced[f][-1:]))
+    T_c = out[-1][0]
+    for path in (geo.lower, geo.slide, geo.raise_):
+        out += _thirds(T_c[None], path)
+    if geo.align is not None:
+        out += _thirds(*geo.align)
+    return out
+
+
+def _thirds(a: Poses, b: Poses) -> list[tuple[Mat, Mat]]:
+    """Pose pairs at the start, a third, two thirds and the end of two paths."""
+    return [(a[round((len(a) - 1) * j / 3)], b[round((len(b) - 1) * j / 3)]) for j in range(4)]
+
+
+def _pick_on(
+    ctx: PlanningContext, geo: _PickGeometry, segments: list[Segment], where: str
+) -> list[Segment]:
+    """The pick's segments from the pick configuration on, requiring of each arm
+    (Segment.branches) the IK branches that follow its Cartesian paths within reach and
+    clear of itself and, paired with one of the other arm's, keep the cell's clearance
+    between the arms at every pose of _pick_pairs (a continuous motion keeps its branches).
+    An error when no pair does: the hands meet where these combs and grasps put them."""
+    from cellengine.execute.following import surviving  # the motion stack: planning only
+
+    c, f = geo.connector_arm, geo.far_arm
+    follow = {}
+    for arm in (c, f):
+        poses = [p.poses for s in segments[1:] for p in s.paths if p.arm == arm]
+        follow[arm], _ = surviving(ctx.cell, ctx.checker, arm, np.concatenate(poses), ctx.home)
+    least = _pair_least(
+        ctx,
+        c,
+        f,
+        _pick_pairs(geo),
+        ctx.clearance,
+        frozenset(follow[c]),
+        frozenset(follow[f]),
+        measure=False,
+    )
+    if least is None:
+        return segments  # solved numerically: no branches, the compiler finds out
+    alive = least >= ctx.clearance
+    if not alive.any():
+        best = float(least.max())
+        how = f"{_mm(best)} mm at best" if best > -math.inf else "they collide"
+        raise _error(
+            f"{where}: no pair of the arms' inverse kinematics branches that follow this pick "
+            f"keeps the cell's clearance ({_mm(ctx.clearance)} mm) between them all along it "
+            f"({how}): the hands meet where these combs and grasps put them"
+        )
+    on = (
+        (c, frozenset(int(k) for k in np.flatnonzero(alive.any(axis=1)))),
+        (f, frozenset(int(k) for k in np.flatnonzero(alive.any(axis=0)))),
+    )
+    return segments[:1] + [replace(seg, branches=on) for seg in segments[1:]]
+
+
 def _emit_pick(
-    step: PickCable, state: CableState, geo: _PickGeometry, c_arm: str, f_arm: str
+    step: PickCable,
+    state: CableState,
+    geo: _PickGeometry,
+    c_arm: str,
+    f_arm: str,
 ) -> tuple[list[Segment], CableState]:
     name = step.cable
     label = f"PickCable {name}"
@@ -2354,22 +2425,41 @@ def _pair_rooms(
     measure: bool = True,
 ) -> dict[int, float]:
     """For each IK branch of ``a`` in ``a_on``, how far apart (m) the two arms can stay while
-    their tools pass ``poses`` (T_cell_tcp of ``a``, of ``b``), over ``b``'s branches (in
-    ``b_on``): the most, over the pairs of branches that keep ``keep`` between the arms at
-    every pose, of their least distance there (the arms against each other only: the
-    tools' contacts with the cell are the skills' other checks); just ``keep`` when not
-    ``measure`` (a yes/no per pose, cheaper: for callers that only compare with ``keep``).
-    Below ``keep`` when no pair does: the most, over the pairs, of how near they came when
-    they first came nearer than ``keep`` (each pair comes within it; measuring on would
-    cost far more); -inf when every pair meets. {-1: inf} for an arm solved numerically (it
-    has no branches). A continuous motion keeps its branches."""
+    their tools pass ``poses``: the most of _pair_least over ``b``'s branches. {-1: inf} for
+    an arm solved numerically (it has no branches)."""
+    least = _pair_least(ctx, a, b, poses, keep, a_on, b_on, measure)
+    if least is None:
+        return {-1: math.inf}  # no branches: the compiler finds out
+    room = least.max(axis=1)
+    return {k: float(room[k]) for k in sorted(a_on)}
+
+
+def _pair_least(
+    ctx: PlanningContext,
+    a: str,
+    b: str,
+    poses: Sequence[tuple[Mat, Mat]],
+    keep: float,
+    a_on: frozenset[int] = ANY_BRANCH,
+    b_on: frozenset[int] = ANY_BRANCH,
+    measure: bool = True,
+) -> NDArray[np.float64] | None:
+    """For each pair of IK branches (``a``'s in ``a_on``, ``b``'s in ``b_on``; 8 x 8), how
+    far apart (m) the two arms stay while their tools pass ``poses`` (T_cell_tcp of ``a``,
+    of ``b``): their least distance there when it keeps ``keep`` at every pose (the arms
+    against each other only: the tools' contacts with the cell are the skills' other
+    checks); just ``keep`` when not ``measure`` (a yes/no per pose, cheaper: for callers
+    that only compare with ``keep``). Below ``keep`` when the pair comes within it: how near
+    it came then (measuring on would cost far more); -inf where the pair meets, has no
+    solution or is not asked for. None for an arm solved numerically. A continuous motion
+    keeps its branches."""
     on_a, on_b = np.isin(np.arange(8), sorted(a_on)), np.isin(np.arange(8), sorted(b_on))
     alive = np.outer(on_a, on_b).reshape(64)  # pair i: a's branch i // 8, b's i % 8
     least = np.where(alive, math.inf, -math.inf)
     for T_a, T_b in poses:
         q_a, q_b = ctx.iks[a].by_branch(T_a), ctx.iks[b].by_branch(T_b)
         if q_a is None or q_b is None:
-            return {-1: math.inf}  # no branches: the compiler finds out
+            return None
         Q = _solution_pairs(ctx, a, q_a, b, q_b)
         ok: NDArray[np.bool_] = alive & ~np.isnan(Q).any(axis=1)
         least[alive & ~ok] = -math.inf  # no solution there
@@ -2382,8 +2472,8 @@ def _pair_rooms(
         alive = ok & (least >= keep)
         if not alive.any():
             break
-    room = least.reshape(8, 8).max(axis=1)
-    return {k: float(room[k]) for k in sorted(a_on)}
+    out: NDArray[np.float64] = least.reshape(8, 8)
+    return out
 
 
 def _solutions(ctx: PlanningContext, arm: str, T: Mat, on: frozenset[int] | None) -> Vec:
