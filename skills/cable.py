@@ -69,6 +69,11 @@ CENTRING_STEP = 0.001  # m: how finely the room after a guide is measured for a 
 # PlaceConnector carries the pair to over the connector guide: turned to the guide where it
 # is first (as published), turned while carried, or turned over the guide
 PLACE_ORDERS = ("align first", "together", "approach first")
+# PickCable: how much farther from the connector hand than placing needs (m) the far hand ends
+# its slide: where PlaceConnector's other hand may hold the cable (cg.PLACE_HOLDS, carried
+# without a regrasp). Hands picked at the edge of both arms' reach leave the wrists closer than
+# the cell's clearance at the published spacing.
+PICK_FARTHER = tuple(sorted({farther for _, farther in cg.PLACE_HOLDS}))
 HAND_OVER_AWAY = 0.150  # m: the hand handing the cable over moves this far out of the way
 
 
@@ -101,8 +106,11 @@ class PickCable(Skill):
         that follows lets either arm place it, so then the other arm too), with each tip of
         the hands (cg.LEANS, the default first), the far hand grasping as published, then
         turned half a turn; all of those first as published, then with the hands meeting
-        between the combs before the slide (cg.PICK_MEETS); the first way's error when none
-        reaches. ``then``: where the connector arm, and the routing arm, work after the pick
+        between the combs before the slide (cg.PICK_MEETS); all of those with the far hand
+        sliding up to the connector hand as published, then ending its slide farther from it
+        (PICK_FARTHER). Left out: a way on which no pair of the arms' IK branches keeps the
+        cell's clearance (_pick_on). The first way's error when none reaches. ``then``:
+        where the connector arm, and the routing arm, work after the pick
         (the connector guide, the route's last guide): with either arm, the arms not crossing
         there either first."""
         world = ctx.world
@@ -132,11 +140,14 @@ class PickCable(Skill):
         found = False
         for c_arm in c_arms:
             f_arm = _other(arms, c_arm)
-            for meet, lean, flip in itertools.product(cg.PICK_MEETS, cg.LEANS, (False, True)):
+            for farther, meet, lean, flip in itertools.product(
+                PICK_FARTHER, cg.PICK_MEETS, cg.LEANS, (False, True)
+            ):
                 s = replace(state, lean=lean)
                 geo = _pick_geometry(
-                    world, s, self.cable, conn_ref, free_ref, c_arm, f_arm, lean, flip, meet
-                )
+                    world, s, self.cable, conn_ref, free_ref, c_arm, f_arm, lean, flip, meet,
+                    farther,
+                )  # fmt: skip
                 try:
                     _check_reach(ctx, c_arm, geo.reach(c_arm), where)
                     _check_reach(ctx, f_arm, geo.reach(f_arm), where)
@@ -691,7 +702,7 @@ def plan_cable_steps(
     for i in range(len(steps)):
         more, state = next(step_ways(ctx, steps, i, state))
         segments += more
-    more, state = release_and_retract(state)
+    more, state = release_and_retract(ctx, state)
     return segments + more, state
 
 
@@ -717,7 +728,7 @@ def step_ways(
             return
         segments: list[Segment] = []
         if state.held:
-            segments, state = release_and_retract(state)
+            segments, state = release_and_retract(ctx, state)
         state = _look_ahead(ctx.world, replace(state, step=i), step, steps[i + 1 :])
         either = _placed_by_either(steps[i + 1 :], step.cable)
         then = _works_at(steps[i + 1 :], step.cable)
@@ -725,8 +736,11 @@ def step_ways(
             yield segments + more, after
 
 
-def release_and_retract(state: CableState) -> tuple[list[Segment], CableState]:
-    """Algorithm 1, line 35: every gripper that holds the cable opens and goes up."""
+def release_and_retract(
+    ctx: PlanningContext, state: CableState
+) -> tuple[list[Segment], CableState]:
+    """Algorithm 1, line 35: every gripper that holds the cable opens and goes up
+    (_retract)."""
     holding = [a for a in state.arms if a in state.held]
     if not holding:
         return [], state
@@ -734,14 +748,29 @@ def release_and_retract(state: CableState) -> tuple[list[Segment], CableState]:
     b = _Builder(state)
     b.add(
         label,
-        # Back out along each tool's axis (up, tipped by the hand's lean).
-        [_up(state.tcp[a], a, -state.tcp[a][:3, 2], cg.RETRACT_HEIGHT) for a in holding],
+        [_retract(ctx, state, a) for a in holding],
         before=[GripperEvent(a, OPEN) for a in holding],
     )
     done = replace(
         b.state, cable=None, connector_arm=None, routing_arm=None, place_guide=None, route=()
     )
     return b.segments, replace(done, guides=(), pull_distance=0.0, lean=cg.LEAN)
+
+
+def _retract(ctx: PlanningContext, state: CableState, arm: str) -> ArmPath:
+    """The open hand backing out RETRACT_HEIGHT along its tool axis (up, tipped by its lean),
+    as published; or straight up (the last guide's platform's up) where, the tool tipped
+    towards the arm's base, backing out along its axis brings the open fingers into the
+    arm's own shoulder on a branch it may be on (a transit before looks ahead at these poses
+    too: it would leave the arm on a branch the route was not checked on)."""
+    from cellengine.execute.following import surviving  # the motion stack: planning only
+
+    T, may = state.tcp[arm], state.branches_of(arm)
+    up = cg.platform_up(ctx.world, state.guides[-1]) if state.guides else np.eye(3)[2]
+    ways = [_up(T, arm, -T[:3, 2], cg.RETRACT_HEIGHT), _up(T, arm, up, cg.RETRACT_HEIGHT)]
+    kept = [surviving(ctx.cell, ctx.checker, arm, w.poses, ctx.home, may)[0] for w in ways]
+    best = max(range(len(ways)), key=lambda k: (kept[k] >= may, len(kept[k]), -k))
+    return ways[best]
 
 
 # =========================================================================== building segments
@@ -872,7 +901,7 @@ class _PickGeometry:
     align: tuple[Poses, Poses] | None  # both hands: z along the routing platform's -z
     s: Mapping[str, float]  # where each hand holds the cable, at the grasp
     s_slid: float  # where the far hand holds it after the slide
-    spacing: float  # connector hand to far hand after the slide (what placing needs)
+    spacing: float  # connector hand to far hand after the slide (what placing holds)
     connector_arm: str
     far_arm: str
 
@@ -904,6 +933,7 @@ def _pick_geometry(
     lean: float,
     flip: bool = False,
     meet: tuple[float, float] = (0.0, 0.0),
+    farther: float = 0.0,
 ) -> _PickGeometry:
     cable = world.cable(name)
     up = cg.platform_up(world, conn_ref)
@@ -944,7 +974,7 @@ def _pick_geometry(
     axis = g.cross(chord, up)
     down = cg.slide_down_angle(float(np.linalg.norm(T_f_last[:3, 3] - centre)))
     lower = cg.arc(T_f_last, centre, axis, -down, turn=True)
-    spacing = _connector_spacing(world, state.place_guide, conn_len, hand_f)
+    spacing = _connector_spacing(world, state.place_guide, conn_len, hand_f) + farther
     towards = g.unit(lower[-1][:3, 3] - centre)
     slide = cg.line(lower[-1], cg.at(lower[-1], centre + spacing * towards))
     raise_ = cg.arc(slide[-1], centre, axis, down, turn=True)
@@ -1021,25 +1051,34 @@ def _align_z(
 
 
 def _pick_pairs(geo: _PickGeometry) -> list[tuple[Mat, Mat]]:
-    """(connector hand, far hand) poses along the pick, from over the combs to aligned:
-    every path's ends and thirds."""
+    """(connector hand, far hand) poses along the pick, from over the combs to aligned
+    (_along each path)."""
     c, f = geo.connector_arm, geo.far_arm
     above = [cg.lifted(geo.grasp[a], geo.up, cg.APPROACH_HEIGHT) for a in (c, f)]
     out = [(above[0], above[1]), (geo.grasp[c], geo.grasp[f])]
-    out += _thirds(geo.faced[c], geo.faced[f])
+    out += _along(geo.faced[c], geo.faced[f])
     if geo.meet:
-        out += _thirds(geo.meet.get(c, geo.faced[c][-1:]), geo.meet.get(f, geo.faced[f][-1:]))
+        out += _along(geo.meet.get(c, geo.faced[c][-1:]), geo.meet.get(f, geo.faced[f][-1:]))
     T_c = out[-1][0]
     for path in (geo.lower, geo.slide, geo.raise_):
-        out += _thirds(T_c[None], path)
+        out += _along(T_c[None], path)
     if geo.align is not None:
-        out += _thirds(*geo.align)
+        out += _along(*geo.align)
     return out
 
 
-def _thirds(a: Poses, b: Poses) -> list[tuple[Mat, Mat]]:
-    """Pose pairs at the start, a third, two thirds and the end of two paths."""
-    return [(a[round((len(a) - 1) * j / 3)], b[round((len(b) - 1) * j / 3)]) for j in range(4)]
+def _along(a: Poses, b: Poses, stride: int = 4) -> list[tuple[Mat, Mat]]:
+    """Pose pairs evenly along two paths, from start to end, at most ``stride`` poses apart
+    on the longer (the skills' poses are at most 5 mm or 2 deg apart: a hand passing another
+    arm is seen): the hands moving at once, and, when both move, each with the other at its
+    path's start or end (a strategy may move one after the other)."""
+    n = max(1, math.ceil((max(len(a), len(b)) - 1) / stride))
+    a_s = [a[round((len(a) - 1) * j / n)] for j in range(n + 1)]
+    b_s = [b[round((len(b) - 1) * j / n)] for j in range(n + 1)]
+    out = list(zip(a_s, b_s, strict=True))
+    if len(a) > 1 and len(b) > 1:  # or one after the other, either first (split, async)
+        out += [(T, b[k]) for T in a_s for k in (0, -1)] + [(a[k], T) for T in b_s for k in (0, -1)]
+    return out
 
 
 def _pick_on(
@@ -1392,6 +1431,7 @@ def _hand_over(
     if float(side @ _towards_base(ctx.world, f_arm, T_f[:3, 3], up)) < 0.0:
         side = -side
     why: str | None = None
+    on: tuple[tuple[str, frozenset[int]], ...] = ()
     for away in (side, -side, geo.axis):
         T_away = cg.at(T_up, T_up[:3, 3] + HAND_OVER_AWAY * away)
         whys = (
@@ -1399,7 +1439,14 @@ def _hand_over(
         )
         why = next((w for w in whys if w is not None), None)
         if why is None:
-            break
+            lets_go = np.concatenate([cg.line(T_f, T_up), cg.line(T_up, T_away)[1:]])
+            poses = [(state.tcp[c_arm], T) for T in lets_go[::4]]  # the other arm still
+            poses += [(T_above, T_away), (T_take, T_away)]
+            taking = _taking_branches(ctx, c_arm, f_arm, poses)
+            if taking is not None:
+                on = taking
+                break
+            why = "not on one pair of IK branches at both"
     if why is not None:
         raise _error(
             f"{where}: handing the cable over, no pair of the arms' inverse kinematics "
@@ -1411,8 +1458,9 @@ def _hand_over(
     b = _Builder(state)
     b.add(
         f"{label}: {f_arm} lets go",
-        [_cartesian(f_arm, np.concatenate([cg.line(T_f, T_up), cg.line(T_up, T_away)[1:]]))],
+        [_cartesian(f_arm, lets_go)],
         before=[GripperEvent(f_arm, OPEN)],
+        branches=on,
     )
     b.add(f"{label}: {c_arm} to the cable", [_transit(c_arm, T_above)])
     b.add(
@@ -1420,9 +1468,31 @@ def _hand_over(
         [_cartesian(c_arm, cg.line(T_above, T_take))],
         after=[GripperEvent(c_arm, GRASP, cable)],
         near=[(c_arm, element)],
+        branches=on,
     )
     after = b.state.hold(c_arm, cable, geo.s_other).transited(c_arm)
     return b.segments, replace(after, routing_arm=c_arm)
+
+
+def _taking_branches(
+    ctx: PlanningContext, c_arm: str, f_arm: str, poses: Sequence[tuple[Mat, Mat]]
+) -> tuple[tuple[str, frozenset[int]], ...] | None:
+    """Segment.branches of a hand taking the cable over: each arm's IK branches in a pair
+    that keeps the cell's clearance at every pose of ``poses`` (the taking hand's, the
+    other's: the other letting go and moving out of the way, then the taking hand coming
+    down); () for arms solved numerically; None when no pair does. The routing that follows
+    must be possible on them: a transit to the cable cannot reach a branch on which the
+    taking arm meets the other one."""
+    least = _pair_least(ctx, c_arm, f_arm, poses, ctx.clearance, measure=False)
+    if least is None:
+        return ()
+    alive = least >= ctx.clearance
+    if not alive.any():
+        return None
+    return (
+        (c_arm, frozenset(int(k) for k in np.flatnonzero(alive.any(axis=1)))),
+        (f_arm, frozenset(int(k) for k in np.flatnonzero(alive.any(axis=0)))),
+    )
 
 
 # =========================================================================== RouteCable

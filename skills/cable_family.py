@@ -70,7 +70,7 @@ def _from(
     """The candidates for ``steps[i]`` from ``state`` (for a RouteCable, its first guide's);
     after the last step, the release."""
     if i == len(steps):
-        segments, _ = release_and_retract(state)
+        segments, _ = release_and_retract(ctx, state)
         yield Candidate(tuple(segments))
         return
     step = steps[i]

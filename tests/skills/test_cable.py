@@ -827,14 +827,23 @@ def test_the_remodel_sample_plans_end_to_end(tmp_path: Path) -> None:
 
 
 def test_pick_cable_ways_vary_the_tip_then_the_arm() -> None:
-    """PickCable's ways, in order: the default tip first, then the other tips; with either
-    arm allowed, then the other arm on the connector end. The state after keeps the tip."""
+    """PickCable's ways, in order: the default tip first, then the other tips; the far hand
+    sliding to where placing needs it first, then farther; with either arm allowed, then the
+    other arm on the connector end. The state after keeps the tip."""
     world, steps = _world()
     home = replace(CableState.at_home(context(world)), connector_arm="right")
     pick = steps[0]
     assert isinstance(pick, PickCable)
     every = list(pick.ways(context(world), home))
-    meeting = [any(s.label.endswith(MEET) for s in segs) for segs, _ in every]
+    spacing = [
+        next(s.facts["spacing"] for s in segs if s.label.endswith("connector")) for segs, _ in every
+    ]
+    assert spacing == sorted(spacing)  # the far hand ending its slide farther: after the others
+    meeting = [
+        any(s.label.endswith(MEET) for s in segs)
+        for (segs, _), d in zip(every, spacing, strict=True)
+        if d == spacing[0]
+    ]
     one = every[: meeting.index(True)]  # as published: the far hand slides all the way
     assert all(meeting[len(one) :])  # then the ways meeting between the combs
     # each tip with the far hand as published, then turned half a turn; tipped 5 deg, the
@@ -1250,3 +1259,20 @@ def test_a_low_stand_back_rises_just_clear_of_the_cable_and_moves_aside() -> Non
     assert np.allclose(poses[-1][:3, :3], T[:3, :3], atol=1e-9)
     # before a route's first guide the hands do not swap: PlaceConnector decides who routes
     assert list(cable_family._swapped(ctx, route_step, state, 0, set())) == []
+
+
+def test_taking_the_cable_over_requires_the_branches_that_keep_the_arms_apart() -> None:
+    """_taking_branches: each arm's IK branches in a pair that keeps the cell's clearance at
+    every pose given (the taking hand's, the other's); None when the hands are where no pair
+    can (both tools at one place)."""
+    world, _ = _world()
+    ctx = context(world)
+    T_left, T_right = ctx.tcp_home("left"), ctx.tcp_home("right")
+    on = C._taking_branches(ctx, "right", "left", [(T_right, T_left)])
+    assert on is not None and [arm for arm, _ in on] == ["right", "left"]
+    (_, right), (_, left) = on
+    least = C._pair_least(ctx, "right", "left", [(T_right, T_left)], ctx.clearance, measure=False)
+    assert least is not None
+    assert right == {k for k in range(8) if (least[k] >= ctx.clearance).any()}
+    assert left == {k for k in range(8) if (least[:, k] >= ctx.clearance).any()}
+    assert C._taking_branches(ctx, "right", "left", [(T_right, T_right)]) is None

@@ -32,6 +32,7 @@ from cellengine.family import Candidate, SkillFamily
 from cellengine.motion.ik import arm_ik
 from cellengine.pipeline import compile_plan
 from cellengine.skill import Skill
+from cellengine.skills import cable
 from cellengine.skills import cable_geometry as cg
 from cellengine.skills.cable import RELEASE
 from tests.conftest import CELLS
@@ -187,11 +188,14 @@ def test_placing_the_connector_sends_the_search_back_to_another_pick(
     assert plan(path, out) == 0, capsys.readouterr().err
     # choices: PickCable, PlaceConnector, guide1, release. Every pick is drawn when the first
     # refusal blames the arms (all give the right arm the connector end: three tips, the far
-    # hand as published or turned, each as published then meeting the other hand, PICK_MEETS;
-    # but not those tipped 5 deg: on them no pair of the arms' branches keeps the hands 10 mm
-    # apart all along the pick, skills.cable._pick_on); then the second, then the third is tried.
-    n = 4 * len(cg.PICK_MEETS)
-    assert [watch.at(d) for d in range(4)] == [list(range(n)), [0], [0], [0]]
+    # hand as published or turned, each as published then meeting the other hand, PICK_MEETS,
+    # all of those with the far hand ending its slide where placing needs it, then farther;
+    # but not those on which no pair of the arms' branches keeps the hands 10 mm apart all
+    # along the pick, skills.cable._pick_on: at the published spacing, the ways tipped 5 deg);
+    # then the second, then the third is tried.
+    drawn = watch.at(0)
+    assert drawn == list(range(len(drawn))) and len(drawn) > 4 * len(cg.PICK_MEETS)
+    assert [watch.at(d) for d in range(1, 4)] == [[0], [0], [0]]
     picks = [c for p, _, c in watch.taken if p == ()]
     assert {c.decides["arms"] for c in picks} == {"right holds the connector"}
     assert [where for where, _ in watch.refused] == [(0,), (1,)]  # PlaceConnector after each
@@ -201,9 +205,10 @@ def test_placing_the_connector_sends_the_search_back_to_another_pick(
             "cable, the arms cannot keep the cell's clearance from each other carrying the "
             "connector to the guide (the cell's clearance is 10.0 mm)"
         )
-    tips = [15.0, 15.0, 25.0, 25.0] * len(cg.PICK_MEETS)
-    assert [round(math.degrees(tip(c, "left")), 9) for c in picks] == tips
-    assert [round(math.degrees(tip(c, "right")), 9) for c in picks] == tips
+    leans = {round(math.degrees(lean), 9) for lean in cg.LEANS}
+    for arm in ("left", "right"):
+        tips = [round(math.degrees(tip(c, arm)), 9) for c in picks]
+        assert tips[:3] == [15.0, 15.0, 25.0] and set(tips) <= leans
     # what was compiled is the third pick and what followed it
     kept = [s.label for p, _, c in watch.taken if p != () or c is picks[2] for s in c.segments]
     report = json.loads((out / "report.json").read_text())
@@ -255,6 +260,53 @@ def test_a_hand_coming_in_at_an_angle_approaches_along_the_guide(tmp_path: Path)
     label, how = approaches[0]
     assert label == "RouteCable routing.guide1: approach sliding"
     assert how in ("along the axis", "from above")
+    result = check_compiled(compiled)
+    assert result.ok, result.failures
+
+
+def test_a_pick_at_the_edge_of_both_arms_reach_ends_its_slide_farther(tmp_path: Path) -> None:
+    """The REMODEL sample imported turned 0 deg, its combs far out in front of the robots
+    (the connector comb 730 mm from the bases' line, as bench_boards.py's '0 far' placement):
+    sliding up to the connector hand as placing needs, the far hand leaves the wrists within
+    the cell's clearance on every pair of IK branches that follow the pick (the ways are not
+    offered); ending the slide 40 mm farther (where PlaceConnector's other hand may hold the
+    cable), they keep it, and the plan compiles and passes the benchmark's check."""
+    from tests.conftest import REMODEL
+
+    dest = tmp_path / "cell"
+    assert main(["import", "remodel", str(REMODEL), str(dest), "--pose=743.5 52.5 0 0 0 0"]) == 0
+    compiled = compile_plan(dest / "plan.yaml", "split")
+    (slide,) = [
+        s.segment for s in compiled.program.segments if s.segment.label.endswith("connector")
+    ]
+    farther = {f for _, f in cg.PLACE_HOLDS} - {0.0}
+    assert len(farther) == 1
+    world = compiled.world
+    hand = cable._hand(world, "right")
+    published = cable._connector_spacing(world, "platform.J8.1", 46.55e-3, hand)
+    assert slide.facts["spacing"] == pytest.approx(published + farther.pop(), abs=1e-9)
+    result = check_compiled(compiled)
+    assert result.ok, result.failures
+
+
+def test_a_route_ending_by_the_routing_arms_base_retracts_straight_up(tmp_path: Path) -> None:
+    """Board 50 of bench/boards.py: the route ends 225 mm from the right arm's base, its tool
+    tipped towards it. Backing out along the tool axis at the end, the open fingers would
+    meet its shoulder on the IK branches the route was checked on, and the transit that
+    takes the cable over looks ahead to there: it chose another branch and the route was
+    refused on it. The hand retracts straight up instead, and the plan compiles."""
+    make_board(50, tmp_path / "board")
+    compiled = compile_plan(tmp_path / "board" / "plan.yaml", "split")
+    (end,) = [
+        s.segment
+        for s in compiled.program.segments
+        if s.segment.label.endswith(": release and retract")
+    ]
+    paths = {p.arm: p.poses for p in end.paths}
+    right = paths["right"][-1][:3, 3] - paths["right"][0][:3, 3]
+    assert right == pytest.approx([0.0, 0.0, cg.RETRACT_HEIGHT], abs=1e-9)
+    tipped = -paths["right"][0][:3, 2]
+    assert math.degrees(math.acos(tipped[2])) > 10.0  # its axis was not straight up
     result = check_compiled(compiled)
     assert result.ok, result.failures
 
