@@ -1117,19 +1117,23 @@ def _pick_on(
             f"keeps the cell's clearance ({_mm(ctx.clearance)} mm) between them all along it "
             f"({how}): the hands meet where these combs and grasps put them"
         )
-    on = (
-        (c, frozenset(int(k) for k in np.flatnonzero(alive.any(axis=1)))),
-        (f, frozenset(int(k) for k in np.flatnonzero(alive.any(axis=0)))),
-    )
+    on = _branch_sets(c, f, alive)
     return segments[:1] + [replace(seg, branches=on) for seg in segments[1:]]
 
 
+def _branch_sets(
+    a: str, b: str, alive: NDArray[np.bool_]
+) -> tuple[tuple[str, frozenset[int]], ...]:
+    """Segment.branches from the pairs of IK branches that can (``alive``, 8 x 8: ``a``'s
+    by ``b``'s): each arm's branches in one of them."""
+    return (
+        (a, frozenset(int(k) for k in np.flatnonzero(alive.any(axis=1)))),
+        (b, frozenset(int(k) for k in np.flatnonzero(alive.any(axis=0)))),
+    )
+
+
 def _emit_pick(
-    step: PickCable,
-    state: CableState,
-    geo: _PickGeometry,
-    c_arm: str,
-    f_arm: str,
+    step: PickCable, state: CableState, geo: _PickGeometry, c_arm: str, f_arm: str
 ) -> tuple[list[Segment], CableState]:
     name = step.cable
     label = f"PickCable {name}"
@@ -1440,13 +1444,13 @@ def _hand_over(
         why = next((w for w in whys if w is not None), None)
         if why is None:
             lets_go = np.concatenate([cg.line(T_f, T_up), cg.line(T_up, T_away)[1:]])
-            poses = [(state.tcp[c_arm], T) for T in lets_go[::4]]  # the other arm still
+            poses = _along(state.tcp[c_arm][None], lets_go)  # the connector arm still
             poses += [(T_above, T_away), (T_take, T_away)]
             taking = _taking_branches(ctx, c_arm, f_arm, poses)
             if taking is not None:
                 on = taking
                 break
-            why = "not on one pair of IK branches at both"
+            why = "none keeps it from the other hand letting go to the connector hand taking"
     if why is not None:
         raise _error(
             f"{where}: handing the cable over, no pair of the arms' inverse kinematics "
@@ -1487,12 +1491,7 @@ def _taking_branches(
     if least is None:
         return ()
     alive = least >= ctx.clearance
-    if not alive.any():
-        return None
-    return (
-        (c_arm, frozenset(int(k) for k in np.flatnonzero(alive.any(axis=1)))),
-        (f_arm, frozenset(int(k) for k in np.flatnonzero(alive.any(axis=0)))),
-    )
+    return _branch_sets(c_arm, f_arm, alive) if alive.any() else None
 
 
 # =========================================================================== RouteCable
