@@ -75,6 +75,7 @@ PLACE_ORDERS = ("align first", "together", "approach first")
 # the cell's clearance at the published spacing.
 PICK_FARTHER = tuple(sorted({farther for _, farther in cg.PLACE_HOLDS}))
 HAND_OVER_AWAY = 0.150  # m: the hand handing the cable over moves this far out of the way
+Required = tuple[tuple[str, frozenset[int]], ...]  # Segment.branches: IK branches by arm
 
 
 class PickCable(Skill):
@@ -557,7 +558,7 @@ class _Screen:
     coming: dict[GuideWay, tuple[dict[int, float], _Blocked | None]] = field(default_factory=dict)
 
 
-Release = tuple[tuple[str, frozenset[int]], ...]  # Segment.branches of a release
+Release = Required  # Segment.branches of a release
 
 
 def _letting_go(
@@ -1121,9 +1122,7 @@ def _pick_on(
     return segments[:1] + [replace(seg, branches=on) for seg in segments[1:]]
 
 
-def _branch_sets(
-    a: str, b: str, alive: NDArray[np.bool_]
-) -> tuple[tuple[str, frozenset[int]], ...]:
+def _branch_sets(a: str, b: str, alive: NDArray[np.bool_]) -> Required:
     """Segment.branches from the pairs of IK branches that can (``alive``, 8 x 8: ``a``'s
     by ``b``'s): each arm's branches in one of them."""
     return (
@@ -1435,7 +1434,7 @@ def _hand_over(
     if float(side @ _towards_base(ctx.world, f_arm, T_f[:3, 3], up)) < 0.0:
         side = -side
     why: str | None = None
-    on: tuple[tuple[str, frozenset[int]], ...] = ()
+    on: tuple[Required, Required] = ((), ())
     for away in (side, -side, geo.axis):
         T_away = cg.at(T_up, T_up[:3, 3] + HAND_OVER_AWAY * away)
         whys = (
@@ -1444,9 +1443,10 @@ def _hand_over(
         why = next((w for w in whys if w is not None), None)
         if why is None:
             lets_go = np.concatenate([cg.line(T_f, T_up), cg.line(T_up, T_away)[1:]])
-            poses = _along(state.tcp[c_arm][None], lets_go)  # the connector arm still
-            poses += [(T_above, T_away), (T_take, T_away)]
-            taking = _taking_branches(ctx, c_arm, f_arm, poses)
+            letting = _along(state.tcp[c_arm][None], lets_go)  # the connector arm still
+            taking = _taking_branches(
+                ctx, c_arm, f_arm, letting, [(T_above, T_away), (T_take, T_away)]
+            )
             if taking is not None:
                 on = taking
                 break
@@ -1464,7 +1464,7 @@ def _hand_over(
         f"{label}: {f_arm} lets go",
         [_cartesian(f_arm, lets_go)],
         before=[GripperEvent(f_arm, OPEN)],
-        branches=on,
+        branches=on[0],
     )
     b.add(f"{label}: {c_arm} to the cable", [_transit(c_arm, T_above)])
     b.add(
@@ -1472,26 +1472,36 @@ def _hand_over(
         [_cartesian(c_arm, cg.line(T_above, T_take))],
         after=[GripperEvent(c_arm, GRASP, cable)],
         near=[(c_arm, element)],
-        branches=on,
+        branches=on[1],
     )
     after = b.state.hold(c_arm, cable, geo.s_other).transited(c_arm)
     return b.segments, replace(after, routing_arm=c_arm)
 
 
 def _taking_branches(
-    ctx: PlanningContext, c_arm: str, f_arm: str, poses: Sequence[tuple[Mat, Mat]]
-) -> tuple[tuple[str, frozenset[int]], ...] | None:
-    """Segment.branches of a hand taking the cable over: each arm's IK branches in a pair
-    that keeps the cell's clearance at every pose of ``poses`` (the taking hand's, the
-    other's: the other letting go and moving out of the way, then the taking hand coming
-    down); () for arms solved numerically; None when no pair does. The routing that follows
-    must be possible on them: a transit to the cable cannot reach a branch on which the
-    taking arm meets the other one."""
-    least = _pair_least(ctx, c_arm, f_arm, poses, ctx.clearance, measure=False)
-    if least is None:
-        return ()
-    alive = least >= ctx.clearance
-    return _branch_sets(c_arm, f_arm, alive) if alive.any() else None
+    ctx: PlanningContext,
+    c_arm: str,
+    f_arm: str,
+    letting: Sequence[tuple[Mat, Mat]],
+    taking: Sequence[tuple[Mat, Mat]],
+) -> tuple[Required, Required] | None:
+    """Segment.branches of the other hand letting go and moving out of the way (``letting``:
+    the connector hand's pose and the other's) and of the connector hand taking the cable
+    (``taking``), the other arm on one branch throughout (the connector arm transits between:
+    on any): pairs that keep the cell's clearance at every pose. () for arms solved
+    numerically; None when no pair does. The routing that follows must be possible on them:
+    a transit to the cable cannot reach a branch on which the taking arm meets the other."""
+    keep = ctx.clearance
+    first = _pair_least(ctx, c_arm, f_arm, letting, keep, measure=False)
+    then = _pair_least(ctx, c_arm, f_arm, taking, keep, measure=False)
+    if first is None or then is None:
+        return (), ()
+    both = (first >= keep).any(axis=0) & (then >= keep).any(axis=0)  # the other arm's
+    if not both.any():
+        return None
+    return _branch_sets(c_arm, f_arm, (first >= keep) & both), _branch_sets(
+        c_arm, f_arm, (then >= keep) & both
+    )
 
 
 # =========================================================================== RouteCable
