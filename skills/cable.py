@@ -1064,20 +1064,21 @@ def _pick_pairs(geo: _PickGeometry) -> list[tuple[Mat, Mat]]:
     for path in (geo.lower, geo.slide, geo.raise_):
         out += _along(T_c[None], path)
     if geo.align is not None:
-        out += _along(*geo.align)
+        out += _along(*geo.align, together=True)  # a closed chain
     return out
 
 
-def _along(a: Poses, b: Poses, stride: int = 4) -> list[tuple[Mat, Mat]]:
+def _along(a: Poses, b: Poses, stride: int = 4, together: bool = False) -> list[tuple[Mat, Mat]]:
     """Pose pairs evenly along two paths, from start to end, at most ``stride`` poses apart
     on the longer (the skills' poses are at most 5 mm or 2 deg apart: a hand passing another
     arm is seen): the hands moving at once, and, when both move, each with the other at its
-    path's start or end (a strategy may move one after the other)."""
+    path's start or end (a strategy may move one after the other), unless ``together`` (a
+    closed chain)."""
     n = max(1, math.ceil((max(len(a), len(b)) - 1) / stride))
     a_s = [a[round((len(a) - 1) * j / n)] for j in range(n + 1)]
     b_s = [b[round((len(b) - 1) * j / n)] for j in range(n + 1)]
     out = list(zip(a_s, b_s, strict=True))
-    if len(a) > 1 and len(b) > 1:  # or one after the other, either first (split, async)
+    if len(a) > 1 and len(b) > 1 and not together:  # or one after the other, either first
         out += [(T, b[k]) for T in a_s for k in (0, -1)] + [(a[k], T) for T in b_s for k in (0, -1)]
     return out
 
