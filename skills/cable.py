@@ -1435,7 +1435,6 @@ def _hand_over(
     if float(side @ _towards_base(ctx.world, f_arm, T_f[:3, 3], up)) < 0.0:
         side = -side
     why: str | None = None
-    on: tuple[Required, Required] = ((), ())
     for away in (side, -side, geo.axis):
         T_away = cg.at(T_up, T_up[:3, 3] + HAND_OVER_AWAY * away)
         whys = (
@@ -1443,15 +1442,7 @@ def _hand_over(
         )
         why = next((w for w in whys if w is not None), None)
         if why is None:
-            lets_go = np.concatenate([cg.line(T_f, T_up), cg.line(T_up, T_away)[1:]])
-            letting = _along(state.tcp[c_arm][None], lets_go)  # the connector arm still
-            taking = _taking_branches(
-                ctx, c_arm, f_arm, letting, [(T_above, T_away), (T_take, T_away)]
-            )
-            if taking is not None:
-                on = taking
-                break
-            why = "none keeps it from the other hand letting go to the connector hand taking"
+            break
     if why is not None:
         raise _error(
             f"{where}: handing the cable over, no pair of the arms' inverse kinematics "
@@ -1463,9 +1454,8 @@ def _hand_over(
     b = _Builder(state)
     b.add(
         f"{label}: {f_arm} lets go",
-        [_cartesian(f_arm, lets_go)],
+        [_cartesian(f_arm, np.concatenate([cg.line(T_f, T_up), cg.line(T_up, T_away)[1:]]))],
         before=[GripperEvent(f_arm, OPEN)],
-        branches=on[0],
     )
     b.add(f"{label}: {c_arm} to the cable", [_transit(c_arm, T_above)])
     b.add(
@@ -1473,36 +1463,9 @@ def _hand_over(
         [_cartesian(c_arm, cg.line(T_above, T_take))],
         after=[GripperEvent(c_arm, GRASP, cable)],
         near=[(c_arm, element)],
-        branches=on[1],
     )
     after = b.state.hold(c_arm, cable, geo.s_other).transited(c_arm)
     return b.segments, replace(after, routing_arm=c_arm)
-
-
-def _taking_branches(
-    ctx: PlanningContext,
-    c_arm: str,
-    f_arm: str,
-    letting: Sequence[tuple[Mat, Mat]],
-    taking: Sequence[tuple[Mat, Mat]],
-) -> tuple[Required, Required] | None:
-    """Segment.branches of the other hand letting go and moving out of the way (``letting``:
-    the connector hand's pose and the other's) and of the connector hand taking the cable
-    (``taking``), the other arm on one branch throughout (the connector arm transits between:
-    on any): pairs that keep the cell's clearance at every pose. () for arms solved
-    numerically; None when no pair does. The routing that follows must be possible on them:
-    a transit to the cable cannot reach a branch on which the taking arm meets the other."""
-    keep = ctx.clearance
-    first = _pair_least(ctx, c_arm, f_arm, letting, keep, measure=False)
-    then = _pair_least(ctx, c_arm, f_arm, taking, keep, measure=False)
-    if first is None or then is None:
-        return (), ()
-    both = (first >= keep).any(axis=0) & (then >= keep).any(axis=0)  # the other arm's
-    if not both.any():
-        return None
-    return _branch_sets(c_arm, f_arm, (first >= keep) & both), _branch_sets(
-        c_arm, f_arm, (then >= keep) & both
-    )
 
 
 # =========================================================================== RouteCable

@@ -1259,24 +1259,3 @@ def test_a_low_stand_back_rises_just_clear_of_the_cable_and_moves_aside() -> Non
     assert np.allclose(poses[-1][:3, :3], T[:3, :3], atol=1e-9)
     # before a route's first guide the hands do not swap: PlaceConnector decides who routes
     assert list(cable_family._swapped(ctx, route_step, state, 0, set())) == []
-
-
-def test_taking_the_cable_over_requires_the_branches_that_keep_the_arms_apart() -> None:
-    """_taking_branches: the branches of pairs that keep the cell's clearance, for the other
-    hand letting go (the connector arm still) and for the connector hand taking the cable
-    (after a transit: on any branch of its own), the other arm on one branch through both;
-    None when the hands are where no pair can (both tools at one place)."""
-    world, _ = _world()
-    ctx = context(world)
-    T_left, T_right = ctx.tcp_home("left"), ctx.tcp_home("right")
-    apart = [(T_right, T_left)]
-    on = C._taking_branches(ctx, "right", "left", apart, apart)
-    assert on is not None
-    letting, taking = on
-    assert letting == taking and [arm for arm, _ in letting] == ["right", "left"]
-    least = C._pair_least(ctx, "right", "left", apart, ctx.clearance, measure=False)
-    assert least is not None
-    (_, right), (_, left) = letting
-    assert right == {k for k in range(8) if (least[k] >= ctx.clearance).any()}
-    assert left == {k for k in range(8) if (least[:, k] >= ctx.clearance).any()}
-    assert C._taking_branches(ctx, "right", "left", apart, [(T_right, T_right)]) is None
