@@ -1060,7 +1060,7 @@ def _pick_pairs(geo: _PickGeometry) -> list[tuple[Mat, Mat]]:
     out += _along(geo.faced[c], geo.faced[f])
     if geo.meet:
         out += _along(geo.meet.get(c, geo.faced[c][-1:]), geo.meet.get(f, geo.faced[f][-1:]))
-    T_c = out[-1][0]
+    T_c = geo.meet[c][-1] if c in geo.meet else geo.faced[c][-1]  # the far hand goes about it
     for path in (geo.lower, geo.slide, geo.raise_):
         out += _along(T_c[None], path)
     if geo.align is not None:
