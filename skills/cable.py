@@ -75,7 +75,6 @@ PLACE_ORDERS = ("align first", "together", "approach first")
 # the cell's clearance at the published spacing.
 PICK_FARTHER = tuple(sorted({farther for _, farther in cg.PLACE_HOLDS}))
 HAND_OVER_AWAY = 0.150  # m: the hand handing the cable over moves this far out of the way
-Required = tuple[tuple[str, frozenset[int]], ...]  # Segment.branches: IK branches by arm
 
 
 class PickCable(Skill):
@@ -558,7 +557,7 @@ class _Screen:
     coming: dict[GuideWay, tuple[dict[int, float], _Blocked | None]] = field(default_factory=dict)
 
 
-Release = Required  # Segment.branches of a release
+Release = tuple[tuple[str, frozenset[int]], ...]  # Segment.branches of a release
 
 
 def _letting_go(
@@ -1119,17 +1118,11 @@ def _pick_on(
             f"keeps the cell's clearance ({_mm(ctx.clearance)} mm) between them all along it "
             f"({how}): the hands meet where these combs and grasps put them"
         )
-    on = _branch_sets(c, f, alive)
-    return segments[:1] + [replace(seg, branches=on) for seg in segments[1:]]
-
-
-def _branch_sets(a: str, b: str, alive: NDArray[np.bool_]) -> Required:
-    """Segment.branches from the pairs of IK branches that can (``alive``, 8 x 8: ``a``'s
-    by ``b``'s): each arm's branches in one of them."""
-    return (
-        (a, frozenset(int(k) for k in np.flatnonzero(alive.any(axis=1)))),
-        (b, frozenset(int(k) for k in np.flatnonzero(alive.any(axis=0)))),
+    on = (
+        (c, frozenset(int(k) for k in np.flatnonzero(alive.any(axis=1)))),
+        (f, frozenset(int(k) for k in np.flatnonzero(alive.any(axis=0)))),
     )
+    return segments[:1] + [replace(seg, branches=on) for seg in segments[1:]]
 
 
 def _emit_pick(
