@@ -360,7 +360,12 @@ class RouteCable(Skill):
         released = _letting_go(ctx, state, (r_arm, o_arm), screen.up, guide)
         whys = [e for e in released.values() if isinstance(e, InputError)]
         if released and len(whys) == len(released):
-            raise whys[0]  # no way's other hand lets go of the last guide
+            # no way's other hand lets go of the last guide: in the other roles the arms
+            # stand elsewhere (PlaceConnector decides who routes, PickCable who holds what)
+            why = max(whys, key=lambda e: e.distance if isinstance(e, _Blocked) else -math.inf)
+            why.blames = "arms"
+            raise why
+        state = _still_on(state, r_arm, released)
         releases = {b: _stand_back(state, o_arm, up, b).tobytes() for b in released}
         for way in itertools.chain((first,), ways):
             back = _back_of(way)
@@ -611,6 +616,19 @@ def _letting_go(
             if -1 not in found  # an arm solved numerically has no branches
         )
     return out
+
+
+def _still_on(
+    state: CableState, r_arm: str, released: Mapping[Back, InputError | Release]
+) -> CableState:
+    """``state`` with the routing arm on only the IK branches on which, holding still, it
+    lets the other hand go (some stand-back of ``released``): it routes the guide on from
+    there in Cartesian paths, and the ways' checks need look at no other branch."""
+    kept = [dict(r).get(r_arm, ANY_BRANCH) for r in released.values() if isinstance(r, tuple)]
+    if not kept:
+        return state
+    on = state.branches_of(r_arm) & frozenset().union(*kept)
+    return replace(state, branches={**state.branches, r_arm: on})
 
 
 def _approach_blocked(ctx: PlanningContext, gp: GuidePlan, r_arm: str) -> InputError | None:
@@ -1414,6 +1432,8 @@ def _hand_over(
     from the seated connector to there is short and straight), to route it. The other arm
     becomes the pivot arm. An error when the connector arm cannot reach there or no way out
     of the way leaves the arms free of each other."""
+    from cellengine.execute.following import surviving  # the motion stack: planning only
+
     label = f"PlaceConnector {geo.guide}: hand the cable over"
     up, T_f = geo.up, state.tcp[f_arm]
     T_take = cg.nearer_turn(
@@ -1430,8 +1450,18 @@ def _hand_over(
     why: str | None = None
     for away in (side, -side, geo.axis):
         T_away = cg.at(T_up, T_up[:3, 3] + HAND_OVER_AWAY * away)
+        lets_go = np.concatenate([cg.line(T_f, T_up), cg.line(T_up, T_away)[1:]])
+        # the branches the other arm can be on out of the way: it moves there in a line
+        alive, _ = surviving(
+            ctx.cell, ctx.checker, f_arm, lets_go, ctx.home, state.branches_of(f_arm)
+        )
+        if not alive:
+            why = f"{f_arm} cannot move out of the way on a branch it may be on"
+            continue
+        on = {f_arm: frozenset(alive)}
         whys = (
-            _pair_blocked(ctx, {c_arm: T, f_arm: T_away}, ctx.clearance) for T in (T_above, T_take)
+            _pair_blocked(ctx, {c_arm: T, f_arm: T_away}, ctx.clearance, on)
+            for T in (T_above, T_take)
         )
         why = next((w for w in whys if w is not None), None)
         if why is None:
@@ -1447,7 +1477,7 @@ def _hand_over(
     b = _Builder(state)
     b.add(
         f"{label}: {f_arm} lets go",
-        [_cartesian(f_arm, np.concatenate([cg.line(T_f, T_up), cg.line(T_up, T_away)[1:]]))],
+        [_cartesian(f_arm, lets_go)],
         before=[GripperEvent(f_arm, OPEN)],
     )
     b.add(f"{label}: {c_arm} to the cable", [_transit(c_arm, T_above)])
@@ -2818,26 +2848,33 @@ def _check_self(
     ctx: PlanningContext, gp: GuidePlan, r_arm: str, may: frozenset[int], coming: bool
 ) -> frozenset[int]:
     """The IK branches of ``may`` (those the routing arm may be on: it does not change branch
-    from its last transit on) on which it follows the way's paths, from the approach to the
-    slide's end (``coming``), or from there to the insert, without its tool or links coming
-    within the checker's clearance of its own links: near its base, the tool turned to a
-    guide can meet the shoulder on every branch. None does: an error that blames the arms
-    (the other arm might route this guide)."""
-    from cellengine.execute.following import surviving  # the motion stack: planning only
-
+    from its last transit on) on which it follows the way's paths, from turning to face the
+    guide to the slide's end (``coming``), or from there to the insert, without its tool or
+    links coming within the checker's clearance of its own links: near its base, the tool
+    turned to a guide can meet the shoulder on every branch (_routing_follows)."""
     paths = (
-        (gp.approach, gp.slide)
+        (gp.reorient, gp.approach, gp.slide)
         if coming
         else (gp.slide[-1:], gp.pull_path, gp.lift, gp.swing, gp.insert)
     )
-    poses = np.concatenate(paths)
+    poses = np.concatenate([p for p in paths if p is not None])
+    return _routing_follows(ctx, r_arm, poses, may, gp.where, gp.guide)
+
+
+def _routing_follows(
+    ctx: PlanningContext, r_arm: str, poses: Poses, may: frozenset[int], where: str, guide: str
+) -> frozenset[int]:
+    """The branches of ``may`` on which the routing arm follows ``poses`` (a guide's) clear
+    of itself; none: an error that blames the arms (the other arm might route the guide)."""
+    from cellengine.execute.following import surviving  # the motion stack: planning only
+
     alive, nearest = surviving(ctx.cell, ctx.checker, r_arm, poses, ctx.home, may)
     if not alive:
         which = "any of its IK branches" if may == ANY_BRANCH else "the IK branches it may be on"
         error = _error(
-            f"{gp.where}: the routing arm ({r_arm}) cannot follow this guide's paths on "
+            f"{where}: the routing arm ({r_arm}) cannot follow this guide's paths on "
             f"{which} without hitting itself ({', '.join(nearest[1])}; the guide "
-            f"is {_mm(_base_distance(ctx, r_arm, gp.guide))} mm from its base)"
+            f"is {_mm(_base_distance(ctx, r_arm, guide))} mm from its base)"
         )
         error.blames = "arms"  # the other arm might route it: PickCable decides which
         raise error

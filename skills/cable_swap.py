@@ -8,7 +8,9 @@ After a guide the routing hand holds the cable along that guide's axis just past
 the other hand holds the pivot before it. The other hand lets go and stands back (as before
 any guide); the routing hand lets go and moves up and out of the way (to the side its base
 is on, the other side or on along the cable, AWAYS far: each that keeps the cell's
-clearance is a swap of its own, in that order);
+clearance is a swap of its own, in that order); then the same with the routing hand going
+first (where the routing arm reaches across over the other, the other arm cannot stand back
+from under it);
 the other hand comes down and grasps the cable where the routing hand held it (the cable
 from the guide's slot to there is short and straight, as where PlaceConnector's hand-over
 takes it), tipped along the cable and towards its base, or only along it, or away (the
@@ -20,7 +22,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Iterator, Sequence, Set
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -51,64 +53,103 @@ def hand_swaps(
     hand taking the cable (_take), those the screens pass in that order; the first error
     when none does (``dead``: the other hand's releases the compiler could not run, see
     RouteCable.guide_plans)."""
-    world, guide = ctx.world, step.guides[k]
-    where = f"steps[{state.step}] RouteCable {guide}"
+    world = ctx.world
     r_arm, o_arm = step.arms(ctx, state)
-    last = state.guides[-1]
-    up = cg.platform_up(world, last)
+    up = cg.platform_up(world, state.guides[-1])
     slot = np.asarray(state.route[-1], dtype=float)
-    T_r = state.tcp[r_arm]
-    along = cg.horizontal(T_r[:3, 3] - slot, up)  # the laid cable, from the slot out
-    released = c._Builder(state)
-    beside = (*c._beside(state, guide), *c._under(ctx, slot, up))
-    if o_arm in state.held:
-        _release(ctx, released, state, (r_arm, o_arm), up, guide, dead, beside)
-    T_o = released.state.tcp[o_arm]
-    label = f"RouteCable {guide}: {SWAP}"
-    cable = step.cable
-    held = float((T_r[:3, 3] - slot) @ along)  # cable from the slot to the fingertips
+    along = cg.horizontal(state.tcp[r_arm][:3, 3] - slot, up)  # the laid cable, out
     side = g.cross(up, along)
-    if float(side @ c._towards_base(world, r_arm, T_r[:3, 3], up)) < 0.0:
+    if float(side @ c._towards_base(world, r_arm, state.tcp[r_arm][:3, 3], up)) < 0.0:
         side = -side
+    swap = _Swap(ctx, step, state, k, dead, up, slot, along)
+    aways = [d * a for d, a in itertools.product(AWAYS, (side, -side, along))]
     first: InputError | None = None
     found = False
-    for distance, away in itertools.product(AWAYS, (side, -side, along)):
+    # with the other hand not at the last guide, the orders are one
+    for routing_first in (False, True) if o_arm in state.held else (False,):
         try:
-            path = _away(ctx, (r_arm, o_arm), T_r, T_o, away * distance, up, where)
-            b = c._Builder(released.state)
-            b.add(
-                f"{label}: {r_arm} lets go",
-                [c._cartesian(r_arm, path)],
-                before=[GripperEvent(r_arm, c.OPEN)],
-                near=[(r_arm, e) for e in beside],
-            )
-            T_above, T_take = _take(ctx, (r_arm, o_arm), b.state, T_r, along, up, where)
+            for way in swap.ways(aways, routing_first):
+                found = True
+                yield way
         except InputError as e:
             first = first or e
-            continue
-        b.add(f"{label}: {o_arm} to the cable", [c._transit(o_arm, T_above)])
-        b.add(
-            f"{label}: {o_arm} grasps",
-            [c._cartesian(o_arm, cg.line(T_above, T_take))],
-            after=[GripperEvent(o_arm, c.GRASP, cable)],
-            near=[(o_arm, e) for e in beside],
-        )
-        after = b.state.hold(o_arm, cable, state.route_length() + held).transited(o_arm)
-        found = True
-        yield (
-            [*released.segments, *b.segments],
-            replace(after, routing_arm=o_arm, pull_distance=held),
-        )
     if not found and first is not None:
         raise first
 
 
+@dataclass(frozen=True)
+class _Swap:
+    """One guide's hand swaps from one state (hand_swaps)."""
+
+    ctx: PlanningContext
+    step: c.RouteCable
+    state: CableState
+    k: int
+    dead: Set[bytes]
+    up: np.ndarray
+    slot: np.ndarray  # the last guide's, where the cable was laid
+    along: np.ndarray  # the laid cable, from the slot out
+
+    def ways(
+        self, aways: Sequence[np.ndarray], routing_first: bool
+    ) -> Iterator[tuple[list[Segment], CableState]]:
+        """The swaps with the routing hand moving by each of ``aways`` out of the way, after
+        the other hand lets go of the last guide, or before it (``routing_first``: where
+        the routing arm reaches over the other, the other's arm cannot stand back from
+        under it); the first error when none passes the screens."""
+        ctx, state, guide = self.ctx, self.state, self.step.guides[self.k]
+        where = f"steps[{state.step}] RouteCable {guide}"
+        arms = r_arm, o_arm = self.step.arms(ctx, state)
+        T_r = state.tcp[r_arm]
+        beside = (*c._beside(state, guide), *c._under(ctx, self.slot, self.up))
+        label = f"RouteCable {guide}: {SWAP}"
+        held = float((T_r[:3, 3] - self.slot) @ self.along)  # cable from slot to fingertips
+        released = c._Builder(state)
+        if o_arm in state.held and not routing_first:  # as before any guide
+            _release(ctx, released, state, arms, self.up, guide, self.dead, beside)
+        first: InputError | None = None
+        found = False
+        for away in aways:
+            try:
+                b = c._Builder(released.state)
+                path, r_on = _away(ctx, arms, b.state, away, self.up, where)
+                b.add(
+                    f"{label}: {r_arm} lets go",
+                    [c._cartesian(r_arm, path)],
+                    before=[GripperEvent(r_arm, c.OPEN)],
+                    near=[(r_arm, e) for e in beside],
+                )
+                if o_arm in b.state.held:
+                    # a segment of the swap: the compiler failing it fails this swap
+                    _release(ctx, b, b.state, arms, self.up, guide, self.dead, beside, label)
+                T_above, T_take = _take(ctx, arms, b.state, r_on, T_r, self.along, self.up, where)
+            except InputError as e:
+                first = first or e
+                continue
+            b.add(f"{label}: {o_arm} to the cable", [c._transit(o_arm, T_above)])
+            b.add(
+                f"{label}: {o_arm} grasps",
+                [c._cartesian(o_arm, cg.line(T_above, T_take))],
+                after=[GripperEvent(o_arm, c.GRASP, self.step.cable)],
+                near=[(o_arm, e) for e in beside],
+            )
+            after = b.state.hold(o_arm, self.step.cable, state.route_length() + held)
+            yield (
+                [*released.segments, *b.segments],
+                replace(after.transited(o_arm), routing_arm=o_arm, pull_distance=held),
+            )
+            found = True
+        if not found and first is not None:
+            raise first
+
+
 def key(segments: Sequence[Segment]) -> bytes:
     """What tells one swap from another in a guide's dead releases: its routing hand's path
-    out of the way (b"" when ``segments`` have no swap)."""
-    for s in segments:
+    out of the way, and whether the other hand let go before it (b"" when ``segments`` have
+    no swap)."""
+    for j, s in enumerate(segments):
         if SWAP in s.label:
-            return np.asarray(s.paths[0].poses).tobytes()
+            return bytes([j]) + np.asarray(s.paths[0].poses).tobytes()
     return b""
 
 
@@ -121,18 +162,21 @@ def _release(
     guide: str,
     dead: Set[bytes],
     beside: tuple[str, ...],
+    label: str = "",
 ) -> None:
     """The other hand lets go of the last guide and stands back, as before any guide: the
-    first stand-back the arms can do (c._letting_go) that the compiler did not fail."""
+    first stand-back the arms can do (c._letting_go) that the compiler did not fail; in the
+    swap (``label``) after the routing hand went out of the way, the first the arms can do
+    (the compiler failing it fails the swap: key)."""
     o_arm = arms[1]
     released = c._letting_go(ctx, state, arms, up, guide)
     first: InputError | None = None
     for back, release in released.items():
         poses = c._stand_back(state, o_arm, up, back)
-        if isinstance(release, InputError) or poses.tobytes() in dead:
+        if isinstance(release, InputError) or (not label and poses.tobytes() in dead):
             first = first or (release if isinstance(release, InputError) else None)
             continue
-        c._add_release(b, f"RouteCable {guide}", arms, poses, beside, release)
+        c._add_release(b, label or f"RouteCable {guide}", arms, poses, beside, release)
         return
     raise first or c._error(f"steps[{state.step}] RouteCable {guide}: no release was compiled")
 
@@ -141,6 +185,7 @@ def _take(
     ctx: PlanningContext,
     arms: tuple[str, str],
     state: CableState,
+    r_on: frozenset[int],
     T_r: Mat,
     along: np.ndarray,
     up: np.ndarray,
@@ -150,7 +195,8 @@ def _take(
     it: tipped as a routing hand tips, along the cable and towards its base, or along it
     only, or away from the base (near its base an arm reaches a hand tipped towards it only
     with its wrist folded back), the first that some pair of the arms' IK solutions reaches
-    keeping the cell's clearance, the routing hand out of the way (where ``state`` has it)."""
+    keeping the cell's clearance, the routing hand out of the way (where ``state`` has it, on
+    a branch of ``r_on``)."""
     r_arm, o_arm = arms
     p = T_r[:3, 3]
     towards = c._towards_base(ctx.world, o_arm, p, up)
@@ -164,7 +210,7 @@ def _take(
         T_above = cg.lifted(T_take, up, cg.APPROACH_HEIGHT)
         T_away = state.tcp[r_arm]
         whys = (
-            c._pair_blocked(ctx, {r_arm: T_away, o_arm: T}, ctx.clearance)
+            c._pair_blocked(ctx, {r_arm: T_away, o_arm: T}, ctx.clearance, {r_arm: r_on})
             for T in (T_above, T_take)
         )
         found = next((w for w in whys if w is not None), None)
@@ -182,22 +228,29 @@ def _take(
 def _away(
     ctx: PlanningContext,
     arms: tuple[str, str],
-    T_r: Mat,
-    T_o: Mat,
+    state: CableState,
     away: np.ndarray,
     up: np.ndarray,
     where: str,
-) -> np.ndarray:
+) -> tuple[np.ndarray, frozenset[int]]:
     """The routing hand's path up RETRACT_HEIGHT and by ``away`` (m, horizontal) out of the
-    other's way, when some pair of the arms' IK solutions keeps the cell's clearance there,
-    the other arm's hand at ``T_o``."""
+    other's way, and the IK branches the routing arm can be on there (it moves in lines, on
+    one it may be on in ``state``), when some pair of the arms' IK solutions on branches
+    they can be on keeps the cell's clearance there, the other hand where ``state`` has
+    it."""
+    from cellengine.execute.following import surviving  # the motion stack: planning only
+
     r_arm, o_arm = arms
+    T_r, T_o = state.tcp[r_arm], state.tcp[o_arm]
     T_up = cg.lifted(T_r, up, cg.RETRACT_HEIGHT)
     T_away = cg.at(T_up, T_up[:3, 3] + away)
-    whys = (c._pair_blocked(ctx, {o_arm: T_o, r_arm: T}, ctx.clearance) for T in (T_up, T_away))
-    why = next((w for w in whys if w is not None), None)
+    path = ip.concatenate([cg.line(T_r, T_up), cg.line(T_up, T_away)])
+    alive, _ = surviving(ctx.cell, ctx.checker, r_arm, path, ctx.home, state.branches_of(r_arm))
+    on = {r_arm: frozenset(alive), o_arm: state.branches_of(o_arm)}
+    whys = (c._pair_blocked(ctx, {o_arm: T_o, r_arm: T}, ctx.clearance, on) for T in (T_up, T_away))
+    why = next((w for w in whys if w is not None), None) if alive else ""
     if why is None:
-        return ip.concatenate([cg.line(T_r, T_up), cg.line(T_up, T_away)])
+        return path, frozenset(alive)
     raise c._error(
         f"{where}: handing the cable over to the other arm ({o_arm}), no pair of the arms' "
         f"inverse kinematics solutions keeps the cell's clearance ({c._mm(ctx.clearance)} mm) "

@@ -40,7 +40,7 @@ from cellengine.motion import interpolate as ip
 from cellengine.program import Anchor, GripperEvent, Segment
 from cellengine.skills import cable as c
 from cellengine.skills import cable_geometry as cg
-from cellengine.skills.cable_state import CableState
+from cellengine.skills.cable_state import ANY_BRANCH, CableState
 
 if TYPE_CHECKING:
     from cellengine.context import PlanningContext
@@ -101,6 +101,8 @@ def top_ways(
         raise released  # every way lets go of the last guide so
     if o_arm in state.held and c._stand_back(state, o_arm, up, c.DEFAULT_BACK).tobytes() in dead:
         return  # the compiler could not run it
+    # the branches the routing arm may be on, still while the other hand lets go
+    may = state.branches_of(r_arm) & dict(released or ()).get(r_arm, ANY_BRANCH)
     closest: tuple[float, InputError] | None = None
     found = False
     memo: Memo = {}
@@ -120,7 +122,7 @@ def top_ways(
             except InputError as e:
                 why = e
             else:
-                failed = _check(ctx, step.cable, tp, (r_arm, o_arm), memo)
+                failed = _check(ctx, step.cable, tp, (r_arm, o_arm), memo, may)
                 if failed is None:
                     found = True
                     yield _emit(state, tp, r_arm, o_arm, step.cable)
@@ -251,12 +253,18 @@ Memo = dict[tuple[object, ...], InputError | None]
 
 
 def _check(
-    ctx: PlanningContext, cable: str, tp: TopPlan, arms: tuple[str, str], memo: Memo
+    ctx: PlanningContext,
+    cable: str,
+    tp: TopPlan,
+    arms: tuple[str, str],
+    memo: Memo,
+    may: frozenset[int],
 ) -> tuple[str, InputError] | None:
     """Why not, and what it depends on ("pusher": where the pusher stands; "routing": where
     the routing hand ends; "hands": both): reach, the cable's length, each hand's
     clearances (cg.CLEARANCE from the elements it works between, the cell's from everything
-    else) and the two hands' from each other; each check made once for the poses it looks
+    else), the routing arm's from itself on a branch of ``may`` (it lays and inserts in
+    lines) and the two hands' from each other; each check made once for the poses it looks
     at (``memo``)."""
     world, (r_arm, o_arm) = ctx.world, arms
     hand = c._hand(world, r_arm)
@@ -290,6 +298,11 @@ def _check(
                 ("routing", r_arm, "laying the cable over the top", SLIDE, tp.lay, tp.beside),
                 ("routing", r_arm, "inserting", GRASP, tp.insert, tp.beside),
             )
+        ),
+        (
+            "routing",
+            (r_arm, "itself", tp.lay.tobytes(), tp.insert.tobytes()),
+            functools.partial(_itself, ctx, tp, r_arm, may),
         ),
         *(
             (
@@ -337,6 +350,16 @@ def _env(
         f"{tp.where}: {near.tool} {c._passes(near, limit)} {what} over the top; "
         + c._env_fix(ctx, near, own, limit),
     )
+
+
+def _itself(
+    ctx: PlanningContext, tp: TopPlan, r_arm: str, may: frozenset[int]
+) -> InputError | None:
+    try:
+        c._routing_follows(ctx, r_arm, np.concatenate([tp.lay, tp.insert]), may, tp.where, tp.guide)
+    except InputError as e:
+        return e
+    return None
 
 
 def _hands(
