@@ -601,6 +601,21 @@ def _after_guide1(world: World) -> tuple[PlanningContext, CableState, RouteCable
     return ctx, state, route, r_arm, o_arm
 
 
+def test_the_routing_hand_turning_to_face_the_guide_is_screened() -> None:
+    """Where it turns in place to face the next guide (GuidePlan.reorient) the routing arm
+    stays on its IK branch, as on the approach and the slide: the screen of its own links
+    (_check_self, coming) looks at the turn too. A turn it cannot follow on any branch (here
+    out of reach) refuses the way."""
+    world, _ = _world()
+    ctx, state, route, r_arm, _ = _after_guide1(world)
+    gp = next(route.guide_plans(ctx, state, 1))
+    assert C._check_self(ctx, replace(gp, reorient=None), r_arm, C.ANY_BRANCH, True)
+    far = np.array(gp.approach[:1])
+    far[0, :3, 3] += [3.0, 0.0, 0.0]
+    with pytest.raises(InputError, match=rf"the routing arm \({r_arm}\) cannot follow"):
+        C._check_self(ctx, replace(gp, reorient=far), r_arm, C.ANY_BRANCH, True)
+
+
 def test_the_routing_hand_leaving_the_guide_before_is_screened() -> None:
     """guide2 moved so the route turns at guide1: approaching guide2 in a straight line from
     where it inserted into guide1, the routing hand cuts the corner through guide1's post.
@@ -1202,14 +1217,23 @@ def test_the_other_hand_takes_the_cable_over_between_guides() -> None:
     """After guide1 the hands may swap before guide2: the other hand lets go of guide1 and
     stands back; the routing hand lets go and moves up and out of the way (first to the side
     its base is on); the other hand comes down and grasps the cable where the routing hand
-    held it, and routes on from there. Each way out of the way is its own swap; one the
-    compiler could not run is told apart from the others (cable_swap.key)."""
+    held it, and routes on from there. Then the same with the routing hand letting go first.
+    Each way out of the way, in each order, is its own swap; one the compiler could not run
+    is told apart from the others (cable_swap.key)."""
     world, _ = _world()
     ctx, state, route, r_arm, o_arm = _after_guide1(world)
     swaps = list(cable_swap.hand_swaps(ctx, route, state, 1, set()))
-    assert len(swaps) == len(cable_swap.AWAYS) * 3
-    segments, after = swaps[0]
+    assert len(swaps) == 2 * len(cable_swap.AWAYS) * 3
     said = "RouteCable routing.guide2: the other hand takes the cable over:"
+    first, _ = swaps[len(swaps) // 2]  # the routing hand first, then the other's release
+    assert [s.label for s in first] == [
+        f"{said} {r_arm} lets go",
+        f"{said} {C.RELEASE}",
+        f"{said} {o_arm} to the cable",
+        f"{said} {o_arm} grasps",
+    ]
+    assert np.allclose(first[1].paths[0].poses, swaps[0][0][0].paths[0].poses, atol=1e-9)
+    segments, after = swaps[0]
     assert [s.label for s in segments] == [
         f"RouteCable routing.guide2: {C.RELEASE}",
         f"{said} {r_arm} lets go",
@@ -1234,6 +1258,9 @@ def test_the_other_hand_takes_the_cable_over_between_guides() -> None:
     dead: set[bytes] = set()
     cable_family._release_failed(segments, dead, 3)  # its grasp could not be compiled
     assert dead == {cable_swap.key(segments)}
+    dead.clear()
+    cable_family._release_failed(first, dead, 1)  # its release after the routing hand's
+    assert dead == {cable_swap.key(first)}
 
 
 def test_a_low_stand_back_rises_just_clear_of_the_cable_and_moves_aside() -> None:

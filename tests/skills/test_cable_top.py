@@ -4,15 +4,21 @@ cell with guide2 moved close behind guide1."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from bench.board_check import check_compiled
+from cellengine.context import build_context
 from cellengine.errors import InputError
+from cellengine.execute.following import surviving
+from cellengine.info.load import load_plan
 from cellengine.pipeline import compile_plan
-from cellengine.skills import cable_family
+from cellengine.skills import cable as C
+from cellengine.skills import cable_family, cable_top
+from cellengine.skills.cable_state import ANY_BRANCH, CableState
 from tests.skills.test_cable_search import board
 
 GUIDE2, GUIDE3 = "Guide_U_001", "Guide_U_002"  # routing.guide2, routing.guide3 (map.csv)
@@ -75,3 +81,43 @@ def test_without_it_the_close_guide_is_refused(
     with pytest.raises(InputError) as e:
         compile_plan(close_board(tmp_path), "split")
     assert "RouteCable routing.guide2" in str(e.value)
+
+
+def test_the_routing_arm_laying_over_the_top_is_screened_for_its_own_links(
+    tmp_path: Path,
+) -> None:
+    """The routing arm lays the cable over guide2 and inserts in lines, on the IK branch it
+    was on: a way passes the checks only if the arm follows them clear of itself on a branch
+    it may be on (before, the family dropped each such way after building it)."""
+    loaded = load_plan(close_board(tmp_path))
+    ctx, steps = build_context(loaded.world), loaded.plan.steps
+    state = CableState.at_home(ctx)
+    for i in range(2):
+        _, state = next(C.step_ways(ctx, steps, i, state))
+    route = steps[2]
+    assert isinstance(route, C.RouteCable)
+    state = replace(state, step=2)
+    arms = r_arm, o_arm = route.arms(ctx, state)
+    state = next(route.guide_plans(ctx, state, 0)).after(state, r_arm, o_arm, route.cable)
+    for way in cable_top._ways(ctx, state, route, 1, r_arm, o_arm):
+        try:
+            tp = cable_top._plan(ctx, state, route, 1, r_arm, o_arm, way)
+        except InputError:
+            continue
+        if cable_top._check(ctx, route.cable, tp, arms, {}, ANY_BRANCH) is None:
+            break
+    alive, _ = surviving(
+        ctx.cell, ctx.checker, r_arm, np.concatenate([tp.lay, tp.insert]), ctx.home
+    )
+    on = frozenset(alive)
+    assert cable_top._check(ctx, route.cable, tp, arms, {}, on) is None
+    failed = cable_top._check(ctx, route.cable, tp, arms, {}, ANY_BRANCH - on)
+    assert failed is not None and failed[0] == "routing"
+    assert (
+        failed[1]
+        .problems[0]
+        .message.startswith(
+            f"steps[2] RouteCable routing.guide2: the routing arm ({r_arm}) cannot follow this "
+            "guide's paths on the IK branches it may be on without hitting itself"
+        )
+    )
