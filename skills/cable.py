@@ -767,7 +767,7 @@ def release_and_retract(
     b = _Builder(state)
     b.add(
         label,
-        [_retract(ctx, state, a) for a in holding],
+        _retracts(ctx, state, holding),
         before=[GripperEvent(a, OPEN) for a in holding],
     )
     done = replace(
@@ -776,20 +776,38 @@ def release_and_retract(
     return b.segments, replace(done, guides=(), pull_distance=0.0, lean=cg.LEAN)
 
 
-def _retract(ctx: PlanningContext, state: CableState, arm: str) -> ArmPath:
+def _retracts(ctx: PlanningContext, state: CableState, arms: Sequence[str]) -> list[ArmPath]:
+    """Each arm's retract (_retract's ways, its best first); for two arms, the first pair of
+    ways on which some pair of the IK branches they may be on keeps the cell's clearance
+    between them (the hands retract at once, or one after the other), else the best
+    ways."""
+    ways = [_retract_ways(ctx, state, a) for a in arms]
+    if len(arms) == 2:
+        a, b = arms
+        for way_a, way_b in itertools.product(*ways):
+            pairs = _along(way_a.poses, way_b.poses)
+            on_a, on_b = state.branches_of(a), state.branches_of(b)
+            least = _pair_least(ctx, a, b, pairs, ctx.clearance, on_a, on_b, measure=False)
+            if least is None or (least >= ctx.clearance).any():
+                return [way_a, way_b]
+    return [w[0] for w in ways]
+
+
+def _retract_ways(ctx: PlanningContext, state: CableState, arm: str) -> list[ArmPath]:
     """The open hand backing out RETRACT_HEIGHT along its tool axis (up, tipped by its lean),
-    as published; or straight up (the last guide's platform's up) where, the tool tipped
-    towards the arm's base, backing out along its axis brings the open fingers into the
-    arm's own shoulder on a branch it may be on (a transit before looks ahead at these poses
-    too: it would leave the arm on a branch the route was not checked on)."""
+    as published, and straight up (the last guide's platform's up); straight up first where,
+    the tool tipped towards the arm's base, backing out along its axis brings the open
+    fingers into the arm's own shoulder on a branch it may be on (a transit before looks
+    ahead at these poses too: it would leave the arm on a branch the route was not checked
+    on)."""
     from cellengine.execute.following import surviving  # the motion stack: planning only
 
     T, may = state.tcp[arm], state.branches_of(arm)
     up = cg.platform_up(ctx.world, state.guides[-1]) if state.guides else np.eye(3)[2]
     ways = [_up(T, arm, -T[:3, 2], cg.RETRACT_HEIGHT), _up(T, arm, up, cg.RETRACT_HEIGHT)]
     kept = [surviving(ctx.cell, ctx.checker, arm, w.poses, ctx.home, may)[0] for w in ways]
-    best = max(range(len(ways)), key=lambda k: (kept[k] >= may, len(kept[k]), -k))
-    return ways[best]
+    order = sorted(range(len(ways)), key=lambda k: (kept[k] >= may, len(kept[k]), -k))
+    return [ways[k] for k in reversed(order)]
 
 
 # =========================================================================== building segments

@@ -1286,3 +1286,29 @@ def test_a_low_stand_back_rises_just_clear_of_the_cable_and_moves_aside() -> Non
     assert np.allclose(poses[-1][:3, :3], T[:3, :3], atol=1e-9)
     # before a route's first guide the hands do not swap: PlaceConnector decides who routes
     assert list(cable_family._swapped(ctx, route_step, state, 0, set())) == []
+
+
+def test_the_last_retracts_keep_the_arms_apart(monkeypatch: pytest.MonkeyPatch) -> None:
+    """At the end both hands let go and retract at once, each along its tool axis or straight
+    up (C._retract_ways, its best first). The pair of ways taken is the first on which some
+    pair of the arms' IK branches keeps the cell's clearance: with the best ways coming
+    within it (here made so), the next pair is taken."""
+    world, _ = _world()
+    ctx, state, _, r_arm, o_arm = _after_guide1(world)
+    arms = (r_arm, o_arm)
+    best = [C._retract_ways(ctx, state, a)[0] for a in arms]
+    taken = C._retracts(ctx, state, arms)
+    assert [p.poses.tobytes() for p in taken] == [p.poses.tobytes() for p in best]
+    measured = C._pair_least
+    calls: list[int] = []
+
+    def first_too_near(*args: object, **kwargs: object) -> object:
+        least = measured(*args, **kwargs)  # type: ignore[arg-type]
+        calls.append(1)
+        return np.minimum(least, ctx.clearance / 2.0) if len(calls) == 1 else least
+
+    monkeypatch.setattr(C, "_pair_least", first_too_near)
+    taken = C._retracts(ctx, state, arms)
+    second = list(itertools.product(*(C._retract_ways(ctx, state, a) for a in arms)))[1]
+    assert len(calls) == 2
+    assert [p.poses.tobytes() for p in taken] == [p.poses.tobytes() for p in second]
