@@ -535,8 +535,7 @@ class RouteCable(Skill):
                 e.blames = "arms"  # the routing arm might reach: PickCable decides which
                 raise
             _check_hands(ctx, gp, r_arm, o_arm)
-            kept, at_pivot = _check_pivot_free(ctx, gp, r_arm, o_arm, pivoting)
-            gp = replace(gp, branches=kept, pivot_branches=at_pivot)
+            gp = replace(gp, branches=_check_pivot_free(ctx, gp, r_arm, o_arm, pivoting))
         except InputError as e:
             return e
         return gp
@@ -1555,9 +1554,6 @@ class GuidePlan:
     beside: tuple[str, ...]
     # the routing arm's IK branches that can do it (of those it may be on), once screened
     branches: frozenset[int] = ANY_BRANCH
-    # the other arm's at the pivot, each in a pair with one of those that keeps the arms the
-    # cell's clearance apart to the insert (_check_pair_along), once screened
-    pivot_branches: frozenset[int] = ANY_BRANCH
     # each arm's IK branches on which the other hand's release (the first segment) keeps the
     # arms the cell's clearance apart, the routing arm standing (_letting_go), once screened
     release: tuple[tuple[str, frozenset[int]], ...] = ()
@@ -1592,8 +1588,11 @@ class GuidePlan:
             guides=(*state.guides, self.guide),
             route=route,
             pull_distance=self.radius - (self.dims.length / 2.0 + self.x_offset),
-            # the other arm came to the pivot on a transit: on one of pivot_branches
-            branches={**state.branches, r_arm: self.branches, o_arm: self.pivot_branches},
+            # the other arm came to the pivot on a transit: on any branch
+            branches={
+                **{a: b for a, b in state.branches.items() if a != o_arm},
+                r_arm: self.branches,
+            },
         )
         s = s.hold(o_arm, cable, self.laid)
         return s.hold(r_arm, cable, self.laid + self.radius)
@@ -2297,8 +2296,6 @@ def _emit_guide(
         [_cartesian(o_arm, cg.line(gp.other_above, gp.pivot))],
         after=[GripperEvent(o_arm, GRASP, cable)],
         near=[(o_arm, e) for e in gp.beside],
-        # the transit before looks ahead at them: a branch off them meets the routing arm
-        branches=((o_arm, gp.pivot_branches),) if gp.pivot_branches != ANY_BRANCH else (),
     )
     # From here the other hand stands at the pivot, between the guides.
     near = [*near, *((o_arm, e) for e in gp.beside)]
@@ -2742,12 +2739,12 @@ def _coming_rooms(
 
 def _check_pivot_free(
     ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str, o_on: frozenset[int]
-) -> tuple[frozenset[int], frozenset[int]]:
+) -> frozenset[int]:
     """While the routing hand holds still at the slide's end, the other arm comes down to the
     pivot (on a branch of ``o_on``: those on which it can, _pivot_blocked): some pair of the
     arms' solutions is free there and above it, and keeps the cell's clearance between the
     arms, and on to the insert (:func:`_check_pair_along`). The routing arm's branches (of
-    gp.branches) and the other's (of ``o_on``) in pairs that are so."""
+    gp.branches) on which it is so."""
     for what, T in (("above the pivot", gp.other_above), ("at the pivot", gp.pivot)):
         poses = {r_arm: gp.slide[-1], o_arm: T}
         why = _pair_blocked(ctx, poses, ctx.clearance, {r_arm: gp.branches, o_arm: o_on})
@@ -2779,41 +2776,22 @@ def _check_pivot_free(
 
 def _check_pair_along(
     ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str, o_on: frozenset[int]
-) -> tuple[frozenset[int], frozenset[int]]:
+) -> frozenset[int]:
     """From the other arm coming down to the pivot to the insert (both arms on Cartesian
     paths, so each keeps its IK branch), some pair of branches keeps the cell's clearance
-    between the arms at poses along the way (every STRIDE-th; every one for a pair that came
-    within NEAR of it at one of those): near the pivot the routing arm's wrist passes over
-    the other arm's forearm on some boards and under it on others. The routing arm's
-    branches (of gp.branches) and the other's (of ``o_on``) in such pairs; else the way is
-    refused, by how much it falls short."""
-    from cellengine.execute.following import NEAR, STRIDE  # the motion stack: planning only
+    between the arms at poses along the way (every STRIDE-th): near the pivot the routing
+    arm's wrist passes over the other arm's forearm on some boards and under it on others.
+    The routing arm's branches (of gp.branches) in such a pair; else the way is refused, by
+    how much it falls short."""
+    from cellengine.execute.following import STRIDE  # the motion stack: planning only
 
     down = cg.line(gp.other_above, gp.pivot)
     held = np.concatenate((gp.pull_path, gp.lift, gp.swing, gp.insert))
-    keep = ctx.clearance
-
-    def least(stride: int, on: frozenset[int], margin: float) -> NDArray[np.float64] | None:
-        poses = [(gp.slide[-1], T) for T in (*down[::stride], down[-1])]
-        poses += [(T, gp.pivot) for T in (*held[::stride], held[-1])]
-        return _pair_least(ctx, r_arm, o_arm, poses, keep + margin, on, o_on, measure=False)
-
-    pairs = least(STRIDE, gp.branches, NEAR)
-    if pairs is None:
-        return gp.branches, o_on  # solved numerically: no branches, the compiler finds out
-    # a pair that came within NEAR of the clearance at a sample may dip below it between
-    # two: the routing arm's branches in one are measured at every pose (as
-    # following.surviving does for one arm)
-    near = frozenset(
-        int(k) for k in np.flatnonzero(((pairs >= keep) & (pairs < keep + NEAR)).any(axis=1))
-    )
-    if near:
-        dense = least(1, near, 0.0)
-        assert dense is not None
-        rows = sorted(near)
-        pairs[rows] = np.where(pairs[rows] >= keep + NEAR, pairs[rows], dense[rows])
-    room = float(pairs.max())
-    if room < keep:
+    poses = [(gp.slide[-1], T) for T in (*down[::STRIDE], down[-1])]
+    poses += [(T, gp.pivot) for T in (*held[::STRIDE], held[-1])]
+    rooms = _pair_rooms(ctx, r_arm, o_arm, poses, ctx.clearance, gp.branches, o_on, measure=False)
+    room = max(rooms.values())
+    if room < ctx.clearance:
         raise _arms_blocked(
             ctx,
             gp,
@@ -2822,11 +2800,7 @@ def _check_pair_along(
             f"(sliding at theta = {math.degrees(gp.theta):.1f} deg, stopping {_mm(gp.a)} mm "
             "before the guide)",
         )
-    alive = pairs >= keep
-    return (
-        frozenset(int(k) for k in np.flatnonzero(alive.any(axis=1))),
-        frozenset(int(k) for k in np.flatnonzero(alive.any(axis=0))),
-    )
+    return frozenset(k for k, r in rooms.items() if k >= 0 and r >= ctx.clearance) or gp.branches
 
 
 def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, coming: bool) -> None:
