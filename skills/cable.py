@@ -776,16 +776,16 @@ def release_and_retract(
 
 
 def _retracts(ctx: PlanningContext, state: CableState, arms: Sequence[str]) -> list[ArmPath]:
-    """Each arm's retract (_retract's ways, its best first); for two arms, the first pair of
+    """Each arm's retract (of _retract_ways, its best first); for two arms, the first pair of
     ways on which some pair of the IK branches they may be on keeps the cell's clearance
     between them (the hands retract at once, or one after the other), else the best
     ways."""
     ways = [_retract_ways(ctx, state, a) for a in arms]
     if len(arms) == 2:
         a, b = arms
+        on_a, on_b = state.branches_of(a), state.branches_of(b)
         for way_a, way_b in itertools.product(*ways):
             pairs = _along(way_a.poses, way_b.poses)
-            on_a, on_b = state.branches_of(a), state.branches_of(b)
             least = _pair_least(ctx, a, b, pairs, ctx.clearance, on_a, on_b, measure=False)
             if least is None or (least >= ctx.clearance).any():
                 return [way_a, way_b]
