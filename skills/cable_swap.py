@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Iterator, Sequence, Set
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -61,14 +61,13 @@ def hand_swaps(
     side = g.cross(up, along)
     if float(side @ c._towards_base(world, r_arm, state.tcp[r_arm][:3, 3], up)) < 0.0:
         side = -side
-    swap = _Swap(ctx, step, state, k, dead, up, slot, along)
     aways = [d * a for d, a in itertools.product(AWAYS, (side, -side, along))]
     first: InputError | None = None
     found = False
     # with the other hand not at the last guide, the orders are one
     for routing_first in (False, True) if o_arm in state.held else (False,):
         try:
-            for way in swap.ways(aways, routing_first):
+            for way in _swaps(ctx, step, state, k, dead, (up, slot, along), aways, routing_first):
                 found = True
                 yield way
         except InputError as e:
@@ -77,70 +76,66 @@ def hand_swaps(
         raise first
 
 
-@dataclass(frozen=True)
-class _Swap:
-    """One guide's hand swaps from one state (hand_swaps)."""
-
-    ctx: PlanningContext
-    step: c.RouteCable
-    state: CableState
-    k: int
-    dead: Set[bytes]
-    up: np.ndarray
-    slot: np.ndarray  # the last guide's, where the cable was laid
-    along: np.ndarray  # the laid cable, from the slot out
-
-    def ways(
-        self, aways: Sequence[np.ndarray], routing_first: bool
-    ) -> Iterator[tuple[list[Segment], CableState]]:
-        """The swaps with the routing hand moving by each of ``aways`` out of the way, after
-        the other hand lets go of the last guide, or before it (``routing_first``: where
-        the routing arm reaches over the other, the other's arm cannot stand back from
-        under it); the first error when none passes the screens."""
-        ctx, state, guide = self.ctx, self.state, self.step.guides[self.k]
-        where = f"steps[{state.step}] RouteCable {guide}"
-        arms = r_arm, o_arm = self.step.arms(ctx, state)
-        T_r = state.tcp[r_arm]
-        beside = (*c._beside(state, guide), *c._under(ctx, self.slot, self.up))
-        label = f"RouteCable {guide}: {SWAP}"
-        held = float((T_r[:3, 3] - self.slot) @ self.along)  # cable from slot to fingertips
-        released = c._Builder(state)
-        if o_arm in state.held and not routing_first:  # as before any guide
-            _release(ctx, released, state, arms, self.up, guide, self.dead, beside)
-        first: InputError | None = None
-        found = False
-        for away in aways:
-            try:
-                b = c._Builder(released.state)
-                path, r_on = _away(ctx, arms, b.state, away, self.up, where)
-                b.add(
-                    f"{label}: {r_arm} lets go",
-                    [c._cartesian(r_arm, path)],
-                    before=[GripperEvent(r_arm, c.OPEN)],
-                    near=[(r_arm, e) for e in beside],
-                )
-                if o_arm in b.state.held:
-                    # a segment of the swap: the compiler failing it fails this swap
-                    _release(ctx, b, b.state, arms, self.up, guide, self.dead, beside, label)
-                T_above, T_take = _take(ctx, arms, b.state, r_on, T_r, self.along, self.up, where)
-            except InputError as e:
-                first = first or e
-                continue
-            b.add(f"{label}: {o_arm} to the cable", [c._transit(o_arm, T_above)])
+def _swaps(
+    ctx: PlanningContext,
+    step: c.RouteCable,
+    state: CableState,
+    k: int,
+    dead: Set[bytes],
+    laid: tuple[np.ndarray, np.ndarray, np.ndarray],
+    aways: Sequence[np.ndarray],
+    routing_first: bool,
+) -> Iterator[tuple[list[Segment], CableState]]:
+    """The swaps with the routing hand moving by each of ``aways`` out of the way, after the
+    other hand lets go of the last guide, or before it (``routing_first``: where the routing
+    arm reaches over the other, the other's arm cannot stand back from under it); the first
+    error when none passes the screens. ``laid``: the last guide's platform's up, its slot
+    and the laid cable's direction from it."""
+    up, slot, along = laid
+    guide = step.guides[k]
+    where = f"steps[{state.step}] RouteCable {guide}"
+    arms = r_arm, o_arm = step.arms(ctx, state)
+    T_r = state.tcp[r_arm]
+    beside = (*c._beside(state, guide), *c._under(ctx, slot, up))
+    label = f"RouteCable {guide}: {SWAP}"
+    held = float((T_r[:3, 3] - slot) @ along)  # cable from slot to fingertips
+    released = c._Builder(state)
+    if o_arm in state.held and not routing_first:  # as before any guide
+        _release(ctx, released, state, arms, up, guide, dead, beside)
+    first: InputError | None = None
+    found = False
+    for away in aways:
+        try:
+            b = c._Builder(released.state)
+            path, r_on = _away(ctx, arms, b.state, away, up, where)
             b.add(
-                f"{label}: {o_arm} grasps",
-                [c._cartesian(o_arm, cg.line(T_above, T_take))],
-                after=[GripperEvent(o_arm, c.GRASP, self.step.cable)],
-                near=[(o_arm, e) for e in beside],
+                f"{label}: {r_arm} lets go",
+                [c._cartesian(r_arm, path)],
+                before=[GripperEvent(r_arm, c.OPEN)],
+                near=[(r_arm, e) for e in beside],
             )
-            after = b.state.hold(o_arm, self.step.cable, state.route_length() + held)
-            yield (
-                [*released.segments, *b.segments],
-                replace(after.transited(o_arm), routing_arm=o_arm, pull_distance=held),
-            )
-            found = True
-        if not found and first is not None:
-            raise first
+            if o_arm in b.state.held:
+                # a segment of the swap: the compiler failing it fails this swap
+                _release(ctx, b, b.state, arms, up, guide, dead, beside, label)
+            T_above, T_take = _take(ctx, arms, b.state, r_on, T_r, along, up, where)
+        except InputError as e:
+            first = first or e
+            continue
+        b.add(f"{label}: {o_arm} to the cable", [c._transit(o_arm, T_above)])
+        b.add(
+            f"{label}: {o_arm} grasps",
+            [c._cartesian(o_arm, cg.line(T_above, T_take))],
+            after=[GripperEvent(o_arm, c.GRASP, step.cable)],
+            near=[(o_arm, e) for e in beside],
+        )
+        after = b.state.hold(o_arm, step.cable, state.route_length() + held)
+        yield (
+            [*released.segments, *b.segments],
+            replace(after.transited(o_arm), routing_arm=o_arm, pull_distance=held),
+        )
+        found = True
+    if not found and first is not None:
+        raise first
 
 
 def key(segments: Sequence[Segment]) -> bytes:
