@@ -108,7 +108,9 @@ class PickCable(Skill):
         turned half a turn; all of those first as published, then with the hands meeting
         between the combs before the slide (cg.PICK_MEETS); all of those with the far hand
         sliding up to the connector hand as published, then ending its slide farther from it
-        (PICK_FARTHER). Left out: a way on which no pair of the arms' IK branches keeps the
+        (PICK_FARTHER); then, where the cable must turn round between the combs and the
+        connector guide (_asides), the far hand first taking the free end aside on its own
+        (each farther and tip). Left out: a way on which no pair of the arms' IK branches keeps the
         cell's clearance (_pick_on). The first way's error when none reaches. ``then``:
         where the connector arm, and the routing arm, work after the pick
         (the connector guide, the route's last guide): with either arm, the arms not crossing
@@ -140,13 +142,16 @@ class PickCable(Skill):
         found = False
         for c_arm in c_arms:
             f_arm = _other(arms, c_arm)
-            for farther, meet, lean, flip in itertools.product(
-                PICK_FARTHER, cg.PICK_MEETS, cg.LEANS, (False, True)
-            ):
+            asides = _asides(world, state, conn_ref, free_ref)
+            ways = itertools.chain(
+                itertools.product(PICK_FARTHER, cg.PICK_MEETS, cg.LEANS, (False, True), (0.0,)),
+                itertools.product(PICK_FARTHER, ((0.0, 0.0),), cg.LEANS, (False,), asides),
+            )
+            for farther, meet, lean, flip, aside in ways:
                 s = replace(state, lean=lean)
                 geo = _pick_geometry(
                     world, s, self.cable, conn_ref, free_ref, c_arm, f_arm, lean, flip, meet,
-                    farther,
+                    farther, aside,
                 )  # fmt: skip
                 try:
                     _check_reach(ctx, c_arm, geo.reach(c_arm), where)
@@ -230,6 +235,7 @@ class PlaceConnector(Skill):
                 _check_reach(ctx, c_arm, geo.reach(c_arm), where)
                 _check_reach(ctx, f_arm, geo.reach(f_arm), where)
                 segments, after = _emit_place(self, state, geo, c_arm, f_arm)
+                segments = _place_apart(ctx, state, segments, (c_arm, f_arm), where)
                 if swap:
                     more, after = _hand_over(ctx, after, geo, c_arm, f_arm, self.cable, where)
                     segments += more
@@ -940,10 +946,16 @@ class _PickGeometry:
     spacing: float  # connector hand to far hand after the slide (what placing holds)
     connector_arm: str
     far_arm: str
+    # the far hand first takes the free end out of its comb on its own and away from the
+    # connector, the way the cable leaves the connector guide (PickCable.ways): then the
+    # connector hand picks; None: both at once, as published
+    aside: Poses | None = None
 
     def reach(self, arm: str) -> list[tuple[str, Mat]]:
         out = [("pick approach", cg.lifted(self.grasp[arm], self.up, cg.APPROACH_HEIGHT))]
         out += [("pick grasp", self.grasp[arm]), ("pick retract", self.retracted[arm])]
+        if arm == self.far_arm and self.aside is not None:
+            out += [("free end aside", self.aside[-1])]
         out += [("turn along the cable", self.faced[arm][-1])]
         if arm in self.meet:
             out += [("met", self.meet[arm][-1])]
@@ -970,7 +982,11 @@ def _pick_geometry(
     flip: bool = False,
     meet: tuple[float, float] = (0.0, 0.0),
     farther: float = 0.0,
+    aside: float = 0.0,
 ) -> _PickGeometry:
+    """The pick's poses (see PickCable.ways for the choices). ``aside`` (m, > 0): the far
+    hand first takes the free end this far from the connector's retract pose, along the
+    coming connector guide's cable (state.place_guide), and turns there along it."""
     cable = world.cable(name)
     up = cg.platform_up(world, conn_ref)
     hand_f = _hand(world, f_arm)
@@ -998,8 +1014,17 @@ def _pick_geometry(
     T_c_up = cg.lifted(T_c, up, cg.RETRACT_HEIGHT)
     T_f_up = cg.lifted(T_f, up, cg.RETRACT_HEIGHT)
     chord = cg.horizontal(T_f_up[:3, 3] - T_c_up[:3, 3], up)
+    away = None
+    if aside > 0.0 and state.place_guide is not None:
+        chord = cg.horizontal(cg.keypoint_x(world, state.place_guide), up)
+        T_aside = cg.tcp_frame(T_c_up[:3, 3] + aside * chord, chord, up, chord, lean)
+        away = cg.line(T_f_up, cg.nearer_turn(T_f_up, T_aside))  # it holds only the cable
     faced_c = cg.turn_in_place(T_c_up, cg.tcp_frame(T_c_up[:3, 3], chord, up, -chord, lean))
-    faced_f = cg.turn_in_place(T_f_up, cg.tcp_frame(T_f_up[:3, 3], chord, up, chord, lean))
+    faced_f = (
+        away[-1:]
+        if away is not None
+        else cg.turn_in_place(T_f_up, cg.tcp_frame(T_f_up[:3, 3], chord, up, chord, lean))
+    )
     met, chord = _meet({c_arm: faced_c[-1], f_arm: faced_f[-1]}, c_arm, chord, up, lean, meet)
     T_c_last = met[c_arm][-1] if c_arm in met else faced_c[-1]
     T_f_last = met[f_arm][-1] if f_arm in met else faced_f[-1]
@@ -1033,7 +1058,25 @@ def _pick_geometry(
         spacing=spacing,
         connector_arm=c_arm,
         far_arm=f_arm,
+        aside=away,
     )
+
+
+def _asides(world: World, state: CableState, conn_ref: str, free_ref: str) -> tuple[float, ...]:
+    """How far from the connector (m) the far hand may take the free end first, when the
+    cable must turn round between the combs and the coming connector guide (it runs from
+    the connector towards the free end's comb more against the guide's cable than along
+    it): as far as the combs are apart, then half as far again (_PickGeometry.aside). None
+    otherwise, or with no connector guide to come."""
+    if state.place_guide is None:
+        return ()
+    up = cg.platform_up(world, conn_ref)
+    span = cg.horizontal(world.pose(free_ref)[:3, 3] - world.pose(conn_ref)[:3, 3], up)
+    along = cg.horizontal(cg.keypoint_x(world, state.place_guide), up)
+    if float(span @ along) >= 0.0:
+        return ()
+    apart = float(np.linalg.norm(world.pose(free_ref)[:3, 3] - world.pose(conn_ref)[:3, 3]))
+    return (apart, 1.5 * apart)
 
 
 def _meet(
@@ -1091,8 +1134,13 @@ def _pick_pairs(geo: _PickGeometry) -> list[tuple[Mat, Mat]]:
     (_along each path)."""
     c, f = geo.connector_arm, geo.far_arm
     above = [cg.lifted(geo.grasp[a], geo.up, cg.APPROACH_HEIGHT) for a in (c, f)]
-    out = [(above[0], above[1]), (geo.grasp[c], geo.grasp[f])]
-    out += _along(geo.faced[c], geo.faced[f])
+    if geo.aside is not None:  # the connector hand picks with the far one aside
+        T_f = geo.aside[-1]
+        out = _along(np.array([above[0], geo.grasp[c], geo.retracted[c]]), T_f[None])
+        out += _along(geo.faced[c], T_f[None])
+    else:
+        out = [(above[0], above[1]), (geo.grasp[c], geo.grasp[f])]
+        out += _along(geo.faced[c], geo.faced[f])
     if geo.meet:
         out += _along(geo.meet.get(c, geo.faced[c][-1:]), geo.meet.get(f, geo.faced[f][-1:]))
     T_c = geo.meet[c][-1] if c in geo.meet else geo.faced[c][-1]  # the far hand goes about it
@@ -1131,7 +1179,7 @@ def _pick_on(
     c, f = geo.connector_arm, geo.far_arm
     follow = {}
     for arm in (c, f):
-        poses = [p.poses for s in segments[1:] for p in s.paths if p.arm == arm]
+        poses = [p.poses for s in segments for p in s.paths if p.arm == arm]
         follow[arm], _ = surviving(ctx.cell, ctx.checker, arm, np.concatenate(poses), ctx.home)
     least = _pair_least(
         ctx,
@@ -1154,11 +1202,54 @@ def _pick_on(
             f"keeps the cell's clearance ({_mm(ctx.clearance)} mm) between them all along it "
             f"({how}): the hands meet where these combs and grasps put them"
         )
-    on = (
-        (c, frozenset(int(k) for k in np.flatnonzero(alive.any(axis=1)))),
-        (f, frozenset(int(k) for k in np.flatnonzero(alive.any(axis=0)))),
+    on = {
+        c: frozenset(int(k) for k in np.flatnonzero(alive.any(axis=1))),
+        f: frozenset(int(k) for k in np.flatnonzero(alive.any(axis=0))),
+    }
+    # each arm's from the segment after its transit to the pick (where it was before, the
+    # skill did not look at: the connector arm stands while the far hand goes first)
+    out, started = [], set[str]()
+    for seg in segments:
+        out.append(replace(seg, branches=tuple((a, on[a]) for a in (c, f) if a in started)))
+        started |= {p.arm for p in seg.paths if p.kind == "transit"}
+    return out
+
+
+def _emit_grasp(b: _Builder, step: PickCable, geo: _PickGeometry, arms: tuple[str, ...]) -> None:
+    """``arms`` go over their combs, grasp and retract together; a far hand on its own then
+    takes the free end aside (_PickGeometry.aside)."""
+    name, label = step.cable, f"PickCable {step.cable}"
+    refs = dict(zip((geo.connector_arm, geo.far_arm), step.from_, strict=True))
+    above = {a: cg.lifted(geo.grasp[a], geo.up, cg.APPROACH_HEIGHT) for a in arms}
+    alone = "" if len(arms) == 2 else f" ({geo.end(arms[0])})"
+    b.add(
+        f"{label}: pick configuration{alone}",
+        [_transit(a, above[a]) for a in arms],
+        before=[GripperEvent(a, OPEN) for a in arms],
     )
-    return segments[:1] + [replace(seg, branches=on) for seg in segments[1:]]
+    # each hand's fingers go down beside the comb they grasp in
+    combs = tuple((a, cg.element_of(refs[a])) for a in arms)
+    b.add(
+        f"{label}: approach and grasp{alone}",
+        [_cartesian(a, cg.line(above[a], geo.grasp[a])) for a in arms],
+        after=[GripperEvent(a, GRASP, name) for a in arms],
+        near=combs,
+        facts={
+            "cable": name,
+            "grasps": {a: {"from": refs[a], "end": geo.end(a), "s": geo.s[a]} for a in arms},
+        },
+    )
+    for a in arms:
+        b.state = b.state.hold(a, name, geo.s[a])
+    # Both hands lift the cable out of the combs together: one object, moved rigidly.
+    b.add(
+        f"{label}: retract{alone}",
+        [_cartesian(a, cg.line(geo.grasp[a], geo.retracted[a])) for a in arms],
+        closed_chain=arms if len(arms) == 2 else None,
+        near=combs,
+    )
+    if arms == (geo.far_arm,) and geo.aside is not None:
+        b.add(f"{label}: take the free end aside", [_cartesian(geo.far_arm, geo.aside)])
 
 
 def _emit_pick(
@@ -1167,38 +1258,12 @@ def _emit_pick(
     name = step.cable
     label = f"PickCable {name}"
     b = _Builder(replace(state, cable=name, connector_arm=c_arm).transited(c_arm, f_arm))
-    arms = (c_arm, f_arm)
-    above = {a: cg.lifted(geo.grasp[a], geo.up, cg.APPROACH_HEIGHT) for a in arms}
-    b.add(
-        f"{label}: pick configuration",
-        [_transit(a, above[a]) for a in arms],
-        before=[GripperEvent(a, OPEN) for a in arms],
-    )
-    # each hand's fingers go down beside the comb they grasp in
-    combs = tuple((a, cg.element_of(ref)) for a, ref in zip(arms, step.from_, strict=True))
-    b.add(
-        f"{label}: approach and grasp",
-        [_cartesian(a, cg.line(above[a], geo.grasp[a])) for a in arms],
-        after=[GripperEvent(a, GRASP, name) for a in arms],
-        near=combs,
-        facts={
-            "cable": name,
-            "grasps": {
-                a: {"from": ref, "end": geo.end(a), "s": geo.s[a]}
-                for a, ref in zip(arms, step.from_, strict=True)
-            },
-        },
-    )
-    for a in arms:
-        b.state = b.state.hold(a, name, geo.s[a])
-    # Both hands lift the cable out of the combs together: one object, moved rigidly.
-    b.add(
-        f"{label}: retract",
-        [_cartesian(a, cg.line(geo.grasp[a], geo.retracted[a])) for a in arms],
-        closed_chain=(c_arm, f_arm),
-        near=combs,
-    )
-    b.add(f"{label}: turn along the cable", [_cartesian(a, geo.faced[a]) for a in arms])
+    both = (c_arm, f_arm)
+    # the far hand first, alone, when it takes the free end aside; else both hands at once
+    for arms in ((f_arm,), (c_arm,)) if geo.aside is not None else (both,):
+        _emit_grasp(b, step, geo, arms)
+    turned = both if geo.aside is None else (c_arm,)  # the far hand turned going aside
+    b.add(f"{label}: turn along the cable", [_cartesian(a, geo.faced[a]) for a in turned])
     if geo.meet:
         b.add(f"{label}: meet", [_cartesian(a, poses) for a, poses in geo.meet.items()])
     b.add(f"{label}: down", [_cartesian(f_arm, geo.lower)], keep_distance=(c_arm, f_arm))
@@ -1423,6 +1488,57 @@ def _emit_place(
         route=(_point(geo.rear),),
         pull_distance=geo.pull_distance,
     )
+
+
+def _place_apart(
+    ctx: PlanningContext,
+    state: CableState,
+    segments: Sequence[Segment],
+    arms: tuple[str, str],
+    where: str,
+) -> list[Segment]:
+    """The placing's segments requiring of each arm (Segment.branches) the IK branches it may
+    be on that follow the placing's Cartesian paths and, paired with one of the other arm's,
+    keep the cell's clearance between them at poses along it (_along; the pair carried as
+    one rigid piece moves together); an error (blaming the arms: PickCable decides which
+    holds the connector) when no pair does: the hands' places cross the arms. Numerical IK,
+    or an arm that follows on no branch (the family says so): not screened."""
+    from cellengine.execute.following import surviving  # the motion stack: planning only
+
+    follow: dict[str, frozenset[int]] = {}
+    for arm in arms:
+        poses = [p.poses for s in segments for p in s.paths if p.arm == arm]
+        alive, _ = surviving(
+            ctx.cell, ctx.checker, arm, np.concatenate(poses), ctx.home, state.branches_of(arm)
+        )
+        if not alive:
+            return list(segments)
+        follow[arm] = frozenset(alive)
+    a, b = arms
+    pairs: list[tuple[Mat, Mat]] = []
+    for s in segments:
+        paths = {p.arm: p.poses for p in s.paths}
+        if a in paths and b in paths:
+            pairs += _along(paths[a], paths[b], together=s.closed_chain is not None)
+    least = _pair_least(ctx, a, b, pairs, ctx.clearance, follow[a], follow[b], measure=False)
+    if least is None:
+        return list(segments)
+    kept = least >= ctx.clearance
+    if kept.any():
+        on = (
+            (a, frozenset(int(k) for k in np.flatnonzero(kept.any(axis=1)))),
+            (b, frozenset(int(k) for k in np.flatnonzero(kept.any(axis=0)))),
+        )
+        return [replace(s, branches=on) for s in segments]
+    best = float(least.max())
+    how = f"{_mm(best)} mm at best" if best > -math.inf else "they collide"
+    error = _error(
+        f"{where}: no pair of the arms' inverse kinematics branches that follow this placing "
+        f"keeps the cell's clearance ({_mm(ctx.clearance)} mm) between them all along it "
+        f"({how}): with {a} holding the connector, the arms cross to place it"
+    )
+    error.blames = "arms"
+    raise error
 
 
 def _crossed(ctx: PlanningContext, c_arm: str, f_arm: str, place: str, route_end: str) -> bool:
@@ -2478,11 +2594,13 @@ def _check_both_free(
     of the two arms' inverse kinematics solutions is free of collisions, between the arms
     and with the cell: else the way is not handed to the compiler."""
     above = {a: cg.lifted(geo.grasp[a], geo.up, cg.APPROACH_HEIGHT) for a in (c_arm, f_arm)}
+    over = f"{f_arm} over {geo.end(f_arm)}"
+    if geo.aside is not None:
+        above[f_arm], over = geo.aside[-1], f"{f_arm} with the {geo.end(f_arm)} aside"
     turned = {a: geo.faced[a][-1] for a in (c_arm, f_arm)}
     met = {a: geo.meet[a][-1] if a in geo.meet else turned[a] for a in (c_arm, f_arm)}
     configurations = (
-        (f"the pick configuration ({c_arm} over {geo.end(c_arm)}, {f_arm} over "
-         f"{geo.end(f_arm)})", above),
+        (f"the pick configuration ({c_arm} over {geo.end(c_arm)}, {over})", above),
         ("both hands turned along the cable", turned),
         *((("the hands met between the combs", met),) if geo.meet else ()),
         (f"{f_arm} slid to the connector hand", {c_arm: met[c_arm], f_arm: geo.slide[-1]}),
