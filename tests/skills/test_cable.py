@@ -1022,6 +1022,93 @@ def test_placing_keeps_the_published_hold_first_then_the_most_room() -> None:
     assert rooms == sorted(rooms, reverse=True)
 
 
+def _board(n: int, tmp_path: Path) -> tuple[PlanningContext, CableState, list[object]]:
+    """Board ``n`` of bench/boards.py: its context, the state at home, its steps."""
+    from bench.boards import make_board
+
+    make_board(n, tmp_path / "board")
+    loaded = load_plan(tmp_path / "board" / "plan.yaml")
+    ctx = context(loaded.world)
+    return ctx, CableState.at_home(ctx), list(loaded.plan.steps)
+
+
+def test_a_placing_on_which_the_arms_cross_is_refused_blaming_the_arms(tmp_path: Path) -> None:
+    """Board 55 of bench/boards.py: the connector's comb (200, -140) mm is on the right arm's
+    side, the connector guide (388, 201) mm on the left's, its cable running out towards the
+    right arm. With the right hand on the connector (the published pick), the hand holding
+    the cable behind it is on the right arm's side of it at the guide: on every pair of the
+    IK branches that follow the placing the arms come within the clearance (9.3 mm at best;
+    the pose pairs sampled along the carry and the insert). The placing is refused, and the
+    error blames the arms: PickCable decides who holds the connector."""
+    ctx, home, steps = _board(55, tmp_path)
+    pick, place = steps[0], steps[1]
+    assert isinstance(pick, PickCable) and isinstance(place, PlaceConnector)
+    _, state = next(pick.ways(ctx, replace(home, connector_arm="right")))
+    assert state.connector_arm == "right"
+    with pytest.raises(InputError) as err:
+        next(place.ways(ctx, replace(state, step=1)))
+    assert err.value.blames == "arms"
+    (problem,) = err.value.problems
+    assert problem.message == (
+        "steps[1] PlaceConnector routing.connector: no pair of the arms' inverse kinematics "
+        "branches that follow this placing keeps the cell's clearance (10.0 mm) between them "
+        "all along it (9.3 mm at best): with right holding the connector, the arms cross to "
+        "place it"
+    )
+
+
+def test_the_free_end_is_taken_aside_only_where_the_cable_turns_round(tmp_path: Path) -> None:
+    """On the reference cell the cable runs from the connector's comb towards the free end's
+    comb the way it leaves the connector guide: no pick takes the free end aside. On board 55
+    it runs the other way: the far hand may first take the free end as far from the
+    connector as the combs are apart (120 mm), then half as far again, along the guide's
+    cable, before the connector hand picks; those ways come after the others of each arm."""
+    world, steps = _world()
+    ctx = context(world)
+    pick = steps[0]
+    assert isinstance(pick, PickCable)
+    ahead = C._look_ahead(world, CableState.at_home(ctx), pick, steps[1:])
+    assert ahead.place_guide == CONNECTOR_GUIDE
+    assert C._asides(world, ahead, *pick.from_) == ()
+    ctx, home, board_steps = _board(55, tmp_path)
+    pick = board_steps[0]
+    assert isinstance(pick, PickCable)
+    ahead = C._look_ahead(ctx.world, home, pick, board_steps[1:])  # type: ignore[arg-type]
+    assert C._asides(ctx.world, ahead, *pick.from_) == pytest.approx((0.120, 0.180), abs=1e-9)
+    ways = list(pick.ways(ctx, ahead, either_arm=True))
+    aside = [any(s.label.endswith("take the free end aside") for s in segs) for segs, _ in ways]
+    assert any(aside)
+    for arm in ("left", "right"):  # per connector arm: the aside ways last
+        mine = [a for a, (_, st) in zip(aside, ways, strict=True) if st.connector_arm == arm]
+        assert mine == sorted(mine)
+    segs, state = ways[aside.index(True)]
+    f_arm = "right" if state.connector_arm == "left" else "left"
+    labels = [s.label.split(": ", 1)[1] for s in segs]
+    assert labels[:8] == [
+        "pick configuration (free end)",
+        "approach and grasp (free end)",
+        "retract (free end)",
+        "take the free end aside",
+        "pick configuration (connector end)",
+        "approach and grasp (connector end)",
+        "retract (connector end)",
+        "turn along the cable",
+    ]
+    assert [p.arm for s in segs[:4] for p in s.paths] == [f_arm] * 4
+    assert {p.arm for s in segs[4:8] for p in s.paths} == {state.connector_arm}
+    # the far hand ends aside along the guide's cable from the connector hand, 120 mm away
+    T_f = segs[3].paths[0].poses[-1]
+    T_c = segs[7].paths[0].poses[-1]
+    up = np.array([0.0, 0.0, 1.0])
+    d = cg.horizontal(T_f[:3, 3] - T_c[:3, 3], up)
+    x = cg.horizontal(cg.keypoint_x(ctx.world, CONNECTOR_GUIDE), up)
+    assert np.allclose(d, x, atol=1e-9)
+    assert float(np.linalg.norm(T_f[:3, 3] - T_c[:3, 3])) == pytest.approx(0.120, abs=1e-9)
+    # the connector arm picks only once the far hand is aside: its branches required from then
+    assert [a for a, _ in segs[3].branches] == [f_arm]
+    assert {a for a, _ in segs[5].branches} == {"left", "right"}
+
+
 def _straight_guide1() -> tuple[PlanningContext, CableState, C.GuidePlan]:
     """plan_straight after PickCable and PlaceConnector, and guide1's first way from there."""
     world, steps = _world()

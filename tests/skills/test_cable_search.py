@@ -289,6 +289,30 @@ def test_a_pick_at_the_edge_of_both_arms_reach_ends_its_slide_farther(tmp_path: 
     assert result.ok, result.failures
 
 
+def test_a_connector_comb_on_the_other_side_is_picked_with_the_free_end_aside(
+    tmp_path: Path, watch: Watch
+) -> None:
+    """Board 48 of bench/boards.py: both combs on the right arm's side (the connector's at
+    (200, -140) mm, the free end's 120 mm towards the left arm), the connector guide's cable
+    running out towards the right arm. The right hand on the connector crosses the arms at
+    the placing (refused, blaming the arms), and the left hand on it with the right on the
+    free end crosses them at the pick. The right hand first takes the free end aside, along
+    the guide's cable, then the left picks the connector: the plan compiles, the left arm
+    placing the connector, and passes the benchmark's check."""
+    make_board(48, tmp_path / "board")
+    compiled = compile_plan(tmp_path / "board" / "plan.yaml", "split")
+    picks = [c for p, _, c in watch.taken if p == ()]
+    assert picks[-1].decides["arms"] == "left holds the connector"
+    segments = [s.segment for s in compiled.program.segments]
+    (aside,) = [s for s in segments if s.label.endswith("take the free end aside")]
+    assert [p.arm for p in aside.paths] == ["right"]
+    (insert,) = [s for s in segments if s.label == "PlaceConnector routing.connector: insert"]
+    assert insert.facts["connector_arm"] == "left"
+    result = check_compiled(compiled)
+    assert result.ok, result.failures
+    assert result.min_arm_distance is not None and result.min_arm_distance >= 0.010
+
+
 def test_a_route_ending_by_the_routing_arms_base_retracts_straight_up(tmp_path: Path) -> None:
     """Board 50 of bench/boards.py: the route ends 225 mm from the right arm's base, its tool
     tipped towards it. Backing out along the tool axis at the end, the open fingers would
