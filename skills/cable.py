@@ -770,22 +770,22 @@ def release_and_retract(
         return [], state
     label = f"{state.cable}: release and retract"
     b = _Builder(state)
-    b.add(
-        label,
-        _retracts(ctx, state, holding),
-        before=[GripperEvent(a, OPEN) for a in holding],
-    )
+    paths, on = _retracts(ctx, state, holding)
+    b.add(label, paths, before=[GripperEvent(a, OPEN) for a in holding], branches=on)
     done = replace(
         b.state, cable=None, connector_arm=None, routing_arm=None, place_guide=None, route=()
     )
     return b.segments, replace(done, guides=(), pull_distance=0.0, lean=cg.LEAN)
 
 
-def _retracts(ctx: PlanningContext, state: CableState, arms: Sequence[str]) -> list[ArmPath]:
+def _retracts(
+    ctx: PlanningContext, state: CableState, arms: Sequence[str]
+) -> tuple[list[ArmPath], tuple[tuple[str, frozenset[int]], ...]]:
     """Each arm's retract (of _retract_ways, its best first); for two arms, the first pair of
     ways on which some pair of the IK branches they may be on keeps the cell's clearance
-    between them (the hands retract at once, or one after the other), else the best
-    ways."""
+    between them (the hands retract at once, or one after the other), with the branches of
+    those pairs required (Segment.branches: the transits before look ahead at them), else
+    the best ways."""
     ways = [_retract_ways(ctx, state, a) for a in arms]
     if len(arms) == 2:
         a, b = arms
@@ -793,9 +793,15 @@ def _retracts(ctx: PlanningContext, state: CableState, arms: Sequence[str]) -> l
         for way_a, way_b in itertools.product(*ways):
             pairs = _along(way_a.poses, way_b.poses)
             least = _pair_least(ctx, a, b, pairs, ctx.clearance, on_a, on_b, measure=False)
-            if least is None or (least >= ctx.clearance).any():
-                return [way_a, way_b]
-    return [w[0] for w in ways]
+            if least is None:
+                return [way_a, way_b], ()
+            kept = least >= ctx.clearance
+            if kept.any():
+                return [way_a, way_b], (
+                    (a, frozenset(int(k) for k in np.flatnonzero(kept.any(axis=1)))),
+                    (b, frozenset(int(k) for k in np.flatnonzero(kept.any(axis=0)))),
+                )
+    return [w[0] for w in ways], ()
 
 
 def _retract_ways(ctx: PlanningContext, state: CableState, arm: str) -> list[ArmPath]:

@@ -1379,13 +1379,26 @@ def test_the_last_retracts_keep_the_arms_apart(monkeypatch: pytest.MonkeyPatch) 
     """At the end both hands let go and retract at once, each along its tool axis or straight
     up (C._retract_ways, its best first). The pair of ways taken is the first on which some
     pair of the arms' IK branches keeps the cell's clearance: with the best ways coming
-    within it (here made so), the next pair is taken."""
+    within it (here made so), the next pair is taken. The IK branches of the pairs that keep
+    it are required of the arms there."""
     world, _ = _world()
     ctx, state, _, r_arm, o_arm = _after_guide1(world)
     arms = (r_arm, o_arm)
     best = [C._retract_ways(ctx, state, a)[0] for a in arms]
-    taken = C._retracts(ctx, state, arms)
+    taken, on = C._retracts(ctx, state, arms)
     assert [p.poses.tobytes() for p in taken] == [p.poses.tobytes() for p in best]
+    # the branches of the pairs that keep it are required of the arms there
+    pairs = C._along(taken[0].poses, taken[1].poses)
+    least = C._pair_least(
+        ctx, *arms, pairs, ctx.clearance, state.branches_of(r_arm), state.branches_of(o_arm)
+    )
+    assert least is not None
+    kept = least >= ctx.clearance
+    assert dict(on) == {
+        r_arm: frozenset(int(k) for k in np.flatnonzero(kept.any(axis=1))),
+        o_arm: frozenset(int(k) for k in np.flatnonzero(kept.any(axis=0))),
+    }
+    assert all(on_arm for _, on_arm in on)
     measured = C._pair_least
     calls: list[int] = []
 
@@ -1395,7 +1408,7 @@ def test_the_last_retracts_keep_the_arms_apart(monkeypatch: pytest.MonkeyPatch) 
         return np.minimum(least, ctx.clearance / 2.0) if len(calls) == 1 else least
 
     monkeypatch.setattr(C, "_pair_least", first_too_near)
-    taken = C._retracts(ctx, state, arms)
+    taken, _ = C._retracts(ctx, state, arms)
     second = list(itertools.product(*(C._retract_ways(ctx, state, a) for a in arms)))[1]
     assert len(calls) == 2
     assert [p.poses.tobytes() for p in taken] == [p.poses.tobytes() for p in second]
