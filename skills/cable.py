@@ -234,6 +234,7 @@ class PlaceConnector(Skill):
             try:
                 _check_reach(ctx, c_arm, geo.reach(c_arm), where)
                 _check_reach(ctx, f_arm, geo.reach(f_arm), where)
+                _check_insert(ctx, geo, c_arm, where)
                 segments, after = _emit_place(self, state, geo, c_arm, f_arm)
                 segments = _place_apart(ctx, state, segments, (c_arm, f_arm), where)
                 if swap:
@@ -289,6 +290,26 @@ def _place_carries(
         error.blames = "arms"  # the other arm might place it: PickCable decides which
         raise error
     return [(hold, order) for *_, hold, order in sorted(kept)]
+
+
+def _check_insert(ctx: PlanningContext, geo: _PlaceGeometry, c_arm: str, where: str) -> None:
+    """Along the insert the connector hand's tool, closed on the connector, stays out of the
+    connector guide (its fingers go down beside it: the collision checker's margin) and the
+    cell's clearance from everything else: else no carry or hold can place it so (a pocket
+    as deep as the connector is tall takes the fingers in with it)."""
+    from cellengine.motion.collision import DEFAULT_CLEARANCE  # the motion stack
+
+    guide = (cg.element_of(geo.guide),)
+    found = _env_near(ctx, c_arm, geo.insert[0], GRASP, guide, DEFAULT_CLEARANCE)
+    if found is None:
+        return
+    near, limit, own = found
+    fix = (
+        f"the tool keeps {_mm(limit)} mm from the guide it inserts into"
+        if own
+        else _env_fix(ctx, near, own, limit)
+    )
+    raise _error(f"{where}: {near.tool} {_passes(near, limit)} inserting the connector; {fix}")
 
 
 def _samples(paths: tuple[Poses, Poses], n: int = 4) -> list[tuple[Mat, Mat]]:

@@ -425,3 +425,20 @@ def test_a_guide_out_of_reach_of_both_arms_is_refused_at_the_step(
     assert routes[0] == "left routes" and set(routes) == {"left routes", "right routes"}
     arms = [re.findall(r"out of reach of arm '(\w+)'", why) for _, why in watch.refused]
     assert arms == [["left"], ["right"]] * (MAX_TRIES // 2) + [["left"]]
+
+
+def test_a_connector_as_tall_as_its_pocket_is_deep_is_refused_at_the_placing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Board 61 of bench/boards.py: the connector is 14 mm tall and its guide's pocket 14 mm
+    deep, so seated it is flush with the guide's top and the fingers holding it would go
+    down into the guide with it (0.9 mm from it, inside the collision checker's 1 mm). The
+    placing is refused at its step, before anything is compiled (the compiler found it at
+    every placing and the search ran past 300 s)."""
+    make_board(61, tmp_path / "board")
+    path = tmp_path / "board" / "plan.yaml"
+    assert refused(path, tmp_path / "out", capsys) == (
+        f"{path}:9:5: steps[1] PlaceConnector routing.connector: left/tool/finger_left would "
+        "pass 0.9 mm from routing.connector inserting the connector; the tool keeps 1.0 mm "
+        "from the guide it inserts into\n"
+    )
