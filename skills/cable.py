@@ -1527,7 +1527,8 @@ def _place_apart(
     """The placing's segments requiring of each arm (Segment.branches) the IK branches it may
     be on that follow the placing's Cartesian paths and, paired with one of the other arm's,
     keep the cell's clearance between them at poses along it (_along; the pair carried as
-    one rigid piece moves together); an error (blaming the arms: PickCable decides which
+    one rigid piece moves together; an arm moving alone, as the connector hand retracting,
+    with the other where it stands); an error (blaming the arms: PickCable decides which
     holds the connector) when no pair does: the hands' places cross the arms. Numerical IK,
     or an arm that follows on no branch (the family says so): not screened."""
     from cellengine.execute.following import surviving  # the motion stack: planning only
@@ -1543,10 +1544,13 @@ def _place_apart(
         follow[arm] = frozenset(alive)
     a, b = arms
     pairs: list[tuple[Mat, Mat]] = []
+    at = {arm: state.tcp[arm][None] for arm in arms}  # where each arm stands
     for s in segments:
         paths = {p.arm: p.poses for p in s.paths}
-        if a in paths and b in paths:
-            pairs += _along(paths[a], paths[b], together=s.closed_chain is not None)
+        if a in paths or b in paths:  # one arm moving (the retract) with the other standing
+            moving = {arm: paths.get(arm, at[arm]) for arm in arms}
+            pairs += _along(moving[a], moving[b], together=s.closed_chain is not None)
+        at |= {arm: poses[-1:] for arm, poses in paths.items()}
     least = _pair_least(ctx, a, b, pairs, ctx.clearance, follow[a], follow[b], measure=False)
     if least is None:
         return list(segments)
