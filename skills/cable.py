@@ -2499,8 +2499,11 @@ def _mm(x: float) -> str:
 
 
 def _short(x: float) -> str:
-    """A shortfall in mm: to 0.01 mm where it rounds to 0.0 (it is not nothing)."""
-    return _mm(x) if _mm(x) != "0.0" else f"{x * 1000.0:.2f}"
+    """A shortfall in mm: to 0.01 mm where it rounds to 0.0, and "less than 0.01" where that
+    does too (it is not nothing)."""
+    if _mm(x) != "0.0":
+        return _mm(x)
+    return f"{x * 1000.0:.2f}" if x >= 0.5e-5 else "less than 0.01"
 
 
 def _two_arms(world: World, where: str) -> tuple[str, str]:

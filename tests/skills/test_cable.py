@@ -1022,6 +1022,15 @@ def test_placing_keeps_the_published_hold_first_then_the_most_room() -> None:
     assert rooms == sorted(rooms, reverse=True)
 
 
+def test_a_shortfall_is_never_printed_as_nothing() -> None:
+    """Board 146 of bench/boards.py was refused with a finger 4.999 mm from a guide, where a
+    hand keeps 5 mm: "would have to stand 0.00 mm farther". A shortfall is printed to 0.1
+    mm, to 0.01 mm where that rounds to nothing, and as less than 0.01 mm below that."""
+    assert C._short(0.0123) == "12.3"
+    assert C._short(0.00004) == "0.04"
+    assert C._short(0.000001) == "less than 0.01"
+
+
 def _board(n: int, tmp_path: Path) -> tuple[PlanningContext, CableState, list[object]]:
     """Board ``n`` of bench/boards.py: its context, the state at home, its steps."""
     from bench.boards import make_board
