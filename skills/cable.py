@@ -1093,7 +1093,7 @@ def _asides(world: World, state: CableState, conn_ref: str, free_ref: str) -> tu
     """How far from the connector (m) the far hand may take the free end first, when the
     cable must turn round between the combs and the coming connector guide (it runs from
     the connector towards the free end's comb more against the guide's cable than along
-    it): as far as the combs are apart, then half as far again (_PickGeometry.aside). None
+    it): as far as the combs are apart, then half as far again (_PickGeometry.aside); none
     otherwise, or with no connector guide to come."""
     if state.place_guide is None:
         return ()
