@@ -2438,14 +2438,15 @@ def _emit_guide(
         before=b.mode_event(o_arm, OPEN, None),
         near=near,  # the routing hand stands at the slide's end
     )
+    # From here the other hand works between the guides, the routing hand still standing
+    # at the slide's end there.
+    near = [*near, *((o_arm, e) for e in gp.beside)]
     b.add(
         f"{label}: other arm grasps",
         [_cartesian(o_arm, cg.line(gp.other_above, gp.pivot))],
         after=[GripperEvent(o_arm, GRASP, cable)],
-        near=[(o_arm, e) for e in gp.beside],
+        near=near,
     )
-    # From here the other hand stands at the pivot, between the guides.
-    near = [*near, *((o_arm, e) for e in gp.beside)]
     # The distance between the hands grows by the pull here, by design: no keep_distance.
     b.add(
         f"{label}: pull to tension",

@@ -108,11 +108,14 @@ def _swaps(
         try:
             b = c._Builder(released.state)
             path, r_on = _away(ctx, arms, b.state, away, up, where)
+            # the other hand, when it lets go after, stands at its pivot by the last guides
+            standing = {*map(cg.element_of, state.guides[-2:]), *beside}
+            holding = sorted(standing) if o_arm in b.state.held else []
             b.add(
                 f"{label}: {r_arm} lets go",
                 [c._cartesian(r_arm, path)],
                 before=[GripperEvent(r_arm, c.OPEN)],
-                near=[(r_arm, e) for e in beside],
+                near=[*((r_arm, e) for e in beside), *((o_arm, e) for e in holding)],
             )
             if o_arm in b.state.held:
                 # a segment of the swap: the compiler failing it fails this swap

@@ -1315,7 +1315,8 @@ def test_the_other_hand_takes_the_cable_over_between_guides() -> None:
     its base is on); the other hand comes down and grasps the cable where the routing hand
     held it, and routes on from there. Then the same with the routing hand letting go first.
     Each way out of the way, in each order, is its own swap; one the compiler could not run
-    is told apart from the others (cable_swap.key)."""
+    is told apart from the others (cable_swap.key). While the routing hand lets go, the
+    other hand's margins by the guides it stands between are declared when it still holds."""
     world, _ = _world()
     ctx, state, route, r_arm, o_arm = _after_guide1(world)
     swaps = list(cable_swap.hand_swaps(ctx, route, state, 1, set()))
@@ -1329,7 +1330,10 @@ def test_the_other_hand_takes_the_cable_over_between_guides() -> None:
         f"{said} {o_arm} grasps",
     ]
     assert np.allclose(first[1].paths[0].poses, swaps[0][0][0].paths[0].poses, atol=1e-9)
+    # the other hand still stands at its pivot by guide1 while the routing hand lets go
+    assert (o_arm, "routing.guide1") in first[0].near
     segments, after = swaps[0]
+    assert {a for a, _ in segments[1].near} == {r_arm}  # the other hand has let go already
     assert [s.label for s in segments] == [
         f"RouteCable routing.guide2: {C.RELEASE}",
         f"{said} {r_arm} lets go",

@@ -313,6 +313,26 @@ def test_a_connector_comb_on_the_other_side_is_picked_with_the_free_end_aside(
     assert result.min_arm_distance is not None and result.min_arm_distance >= 0.010
 
 
+def test_the_routing_hand_standing_by_the_next_guide_keeps_its_margin_there(
+    tmp_path: Path,
+) -> None:
+    """Board 69 of bench/boards.py: the routing hand ends its slide into guide1 6.2 mm from
+    guide2, which it works beside (5 mm kept from it, the 10 mm clearance from the rest).
+    While the other hand came down to the pivot the routing hand's pairs with guide2 were
+    not declared (only the other hand's), so the gate measured the standing hand at 10 mm
+    and every way failed there. They are declared now: it compiles and passes the check."""
+    make_board(69, tmp_path / "board")
+    compiled = compile_plan(tmp_path / "board" / "plan.yaml", "split")
+    segments = [s.segment for s in compiled.program.segments]
+    (grasps,) = [s for s in segments if s.label == "RouteCable routing.guide1: other arm grasps"]
+    (slide,) = [s for s in segments if s.label == "RouteCable routing.guide1: slide R_cable"]
+    (r_arm,) = {p.arm for p in slide.paths}
+    assert set(slide.near) <= set(grasps.near)
+    assert (r_arm, "routing.guide2") in grasps.near
+    result = check_compiled(compiled)
+    assert result.ok, result.failures
+
+
 def test_a_route_ending_by_the_routing_arms_base_retracts_straight_up(tmp_path: Path) -> None:
     """Board 50 of bench/boards.py: the route ends 225 mm from the right arm's base, its tool
     tipped towards it. Backing out along the tool axis at the end, the open fingers would
