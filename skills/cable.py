@@ -818,10 +818,7 @@ def _retracts(
                 return [way_a, way_b], ()
             kept = least >= ctx.clearance
             if kept.any():
-                return [way_a, way_b], (
-                    (a, frozenset(int(k) for k in np.flatnonzero(kept.any(axis=1)))),
-                    (b, frozenset(int(k) for k in np.flatnonzero(kept.any(axis=0)))),
-                )
+                return [way_a, way_b], _kept_branches(kept, a, b)
     return [w[0] for w in ways], ()
 
 
@@ -1229,10 +1226,7 @@ def _pick_on(
             f"keeps the cell's clearance ({_mm(ctx.clearance)} mm) between them all along it "
             f"({how}): the hands meet where these combs and grasps put them"
         )
-    on = {
-        c: frozenset(int(k) for k in np.flatnonzero(alive.any(axis=1))),
-        f: frozenset(int(k) for k in np.flatnonzero(alive.any(axis=0))),
-    }
+    on = dict(_kept_branches(alive, c, f))
     # each arm's from the segment after its transit to the pick (where it was before, the
     # skill did not look at: the connector arm stands while the far hand goes first)
     out, started = [], set[str]()
@@ -1556,10 +1550,7 @@ def _place_apart(
         return list(segments)
     kept = least >= ctx.clearance
     if kept.any():
-        on = (
-            (a, frozenset(int(k) for k in np.flatnonzero(kept.any(axis=1)))),
-            (b, frozenset(int(k) for k in np.flatnonzero(kept.any(axis=0)))),
-        )
+        on = _kept_branches(kept, a, b)
         return [replace(s, branches=on) for s in segments]
     best = float(least.max())
     how = f"{_mm(best)} mm at best" if best > -math.inf else "they collide"
@@ -2711,6 +2702,17 @@ def _pair_least(
             break
     out: NDArray[np.float64] = least.reshape(8, 8)
     return out
+
+
+def _kept_branches(
+    kept: NDArray[np.bool_], a: str, b: str
+) -> tuple[tuple[str, frozenset[int]], tuple[str, frozenset[int]]]:
+    """(arm, IK branches) of ``a`` and of ``b`` in some pair of ``kept`` (8 x 8: _pair_least
+    compared with a clearance), as Segment.branches."""
+    return (
+        (a, frozenset(int(k) for k in np.flatnonzero(kept.any(axis=1)))),
+        (b, frozenset(int(k) for k in np.flatnonzero(kept.any(axis=0)))),
+    )
 
 
 def _solutions(ctx: PlanningContext, arm: str, T: Mat, on: frozenset[int] | None) -> Vec:
