@@ -377,7 +377,7 @@ class RouteCable(Skill):
         found = False
         # Where the other hand stands back to matters only to the arms' clearance while the
         # routing hand comes (_coming): ways that differ only in it are otherwise checked once.
-        checked: dict[GuideWay, GuidePlan | InputError] = {}
+        checked: dict[WayKey, GuidePlan | InputError] = {}
         up = cg.platform_up(world, guide)
         screen = _Screen(tuple(cg.footprints(world, guide, up)), up)
         heads, theta0 = _way_heads(world, state, guide, r_arm, self._clear_from(ctx, state, k))
@@ -403,7 +403,7 @@ class RouteCable(Skill):
                 if all(r in dead for r in releases.values()):
                     return  # the compiler ran none of them
                 continue
-            key = _with_back(way, DEFAULT_BACK)
+            key = _backless_key(way)
             if key not in checked:
                 checked[key] = self._checked(ctx, state, guide, way, r_arm, o_arm, screen)
             gp = checked[key]
@@ -568,6 +568,12 @@ class RouteCable(Skill):
         return gp
 
 
+# The screens' keys are tuples of a way's fields, not ways: a guide's screen looks up
+# hundreds of thousands of ways, and building a way (a frozen dataclass) per lookup costs
+# more than the lookups.
+WayKey = tuple[Any, ...]
+
+
 @dataclass
 class _Screen:
     """What RouteCable.guide_plans found of one guide's ways so far, by what it depends on."""
@@ -576,17 +582,17 @@ class _Screen:
     up: Vec  # the guide's platform's
     approaches: dict[tuple[float, float, float], InputError | None] = field(default_factory=dict)
     # why not, or the routing arm's branches that can
-    routed: dict[GuideWay, InputError | frozenset[int]] = field(default_factory=dict)
+    routed: dict[WayKey, InputError | frozenset[int]] = field(default_factory=dict)
     hows: dict[tuple[float, float, float], str] = field(default_factory=dict)  # APPROACHES
     # why not, or the other arm's branches that can
     pivots: dict[tuple[float, float, float], InputError | frozenset[int]] = field(
         default_factory=dict
     )
     # why the routing hand cannot come to the guide and slide, or its branches that can
-    came: dict[GuideWay, InputError | frozenset[int]] = field(default_factory=dict)
+    came: dict[WayKey, InputError | frozenset[int]] = field(default_factory=dict)
     # the room between the arms per routing branch while the routing hand comes and slides
     # (and why not, when no branch has it)
-    coming: dict[GuideWay, tuple[dict[int, float], _Blocked | None]] = field(default_factory=dict)
+    coming: dict[WayKey, tuple[dict[int, float], _Blocked | None]] = field(default_factory=dict)
 
 
 Release = tuple[tuple[str, frozenset[int]], ...]  # Segment.branches of a release
@@ -1954,10 +1960,11 @@ def _ranked(heads: Sequence[_Head], theta0: float) -> Iterator[GuideWay]:
 
     for i, (lean, pivot, back, after, first, base, share) in best_first(dims, cost, part):
         h = heads[i]
-        way = GuideWay(
-            h.theta, h.side, lean, pivot, cg.STAND_BACK, h.gap, after, first, base, share
-        )
-        yield _with_back(way, back)
+        distance, lift, turn = back
+        yield GuideWay(
+            h.theta, h.side, lean, pivot, distance, h.gap, after, first, base, share,
+            stand_lift=lift, stand_turn=turn,
+        )  # fmt: skip
 
 
 BASES = (1.0, 0.0, -1.0)  # GuideWay.towards_base's values, best first
@@ -2763,16 +2770,27 @@ def _pair_blocked(
     return f"the arms {_mm(nearest[0])} mm apart at best ({', '.join(nearest[1])})"
 
 
-def _coming_key(way: GuideWay, back: Back) -> GuideWay:
+def _coming_key(way: GuideWay, back: Back) -> WayKey:
     """What _coming measures depends on: the routing hand's motion (its approach follows from
     the way; the insert's end sets R_cable, how far it slides) and where the other hand
     stands back to."""
-    return _with_back(replace(way, pivot_lean=cg.PIVOT_LEAN, approach="direct"), back)
+    return (*_hand_key(way), *back)
 
 
-def _routing_key(way: GuideWay) -> GuideWay:
+def _routing_key(way: GuideWay) -> WayKey:
     """What the routing hand's checks depend on: not the other hand's tip or stand-back."""
-    return _with_back(replace(way, pivot_lean=cg.PIVOT_LEAN), DEFAULT_BACK)
+    return (*_hand_key(way), way.approach)
+
+
+def _backless_key(way: GuideWay) -> WayKey:
+    """Every field of ``way`` but where the other hand stands back to."""
+    return (*_hand_key(way), way.approach, way.pivot_lean)
+
+
+def _hand_key(way: GuideWay) -> WayKey:
+    """The fields of the routing hand's motion but its approach."""
+    w = way
+    return (w.theta, w.side, w.lean, w.gap, w.gap_after, w.turn_first, w.towards_base, w.slide_turn)
 
 
 def _all_backs() -> tuple[Back, ...]:

@@ -1,7 +1,9 @@
 """Compiling a skill family's candidates (:mod:`cellengine.family`).
 
 The first candidate at every choice is taken and all their segments are compiled in one go
-(:func:`~cellengine.execute.search.add_all`: each transit looks ahead over the whole plan).
+(:func:`~cellengine.execute.search.add_all`: each transit looks ahead at the segments after
+it), each choice's candidate taken when a segment past those taken is asked for
+(:mod:`~cellengine.execute.growing`).
 When that fails, the choice that produced the failing segment is asked for its next candidate,
 then the choices before it; what is compiled before that choice is kept (the compiler is
 restored to where that choice's segments began) and compiling goes on with the new
@@ -27,13 +29,13 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from cellengine.errors import InputError
 from cellengine.execute.failure import Failure
+from cellengine.execute.growing import Choice, Growing, NoCandidate, Taken
 from cellengine.execute.search import add_all
 from cellengine.program import Segment
 
@@ -45,15 +47,6 @@ MAX_TRIES = 16  # candidates taken after the first ones, per compile: a failing 
 # refused within tens of seconds, not minutes (bench/bench_boards.py measures it)
 
 
-@dataclass
-class _Choice:
-    options: Iterator[Candidate]  # the ones not tried yet
-    taken: Candidate
-    # what the candidates taken here compiled up to the segment that failed (_prefix), when
-    # it may be skipped in others
-    failed: set[tuple[object, ...]] = field(default_factory=set)
-
-
 def compile_candidates(
     compiler: Compiler,
     first: Iterator[Candidate],
@@ -61,10 +54,10 @@ def compile_candidates(
 ) -> list[Candidate]:
     """Compile the candidates into ``compiler`` (see the module notes); the candidates taken,
     in order. The furthest error when no combination within ``MAX_TRIES`` gets through."""
-    chosen: list[_Choice] = []
+    tree = Taken([], first)
+    chosen = tree.chosen
     marks: dict[int, Mark] = {0: compiler.mark()}  # where each choice's segments begin
     start = 0  # the first choice whose segments are not compiled; the compiler is at its mark
-    pending: Iterator[Candidate] | None = first
     # the error of the attempt that got furthest (the first of those), and how far: (the
     # choice, the place in it) of the segment it stopped at
     reported: tuple[tuple[int, int], InputError] | None = None
@@ -75,10 +68,9 @@ def compile_candidates(
         # furthest segment compiled (where the error the compiler gives arose)
         current = [len(chosen) - 1, -1, -1]
         try:
-            _grow(chosen, pending)
-            _compile_from(compiler, chosen, start, marks, before_each, current)
+            _compile_from(compiler, tree, start, marks, before_each, current)
             return [c.taken for c in chosen]
-        except _Grown as e:  # the choice after the last one taken offered nothing
+        except NoCandidate as e:  # the choice after the last one taken offered nothing
             if e.error is not None and (reported is None or (len(chosen), -1) > reported[0]):
                 reported = (len(chosen), -1), e.error
                 ahead = tuple(s for c in chosen for s in c.taken.segments)
@@ -98,7 +90,7 @@ def compile_candidates(
                 for choice in chosen:
                     choice.failed.clear()
                 marks = {0: marks[0]}
-                start, pending = 0, None
+                start = 0
                 compiler.restore(marks[0])
                 continue
             ran = _prefix(chosen[failed].taken.segments, current[2])
@@ -116,7 +108,7 @@ def compile_candidates(
         start = max(marks)
         compiler.restore(marks[start])
         then = chosen[k].taken.then
-        pending = then() if then is not None else None
+        tree.pending = then() if then is not None else None
     if reported is None:  # a family that offered no candidate at all
         raise InputError.at("the skill family offered no way to do the plan", None)
     error = reported[1]
@@ -125,59 +117,30 @@ def compile_candidates(
     raise error
 
 
-class _Grown(Exception):
-    """Growing stopped at a choice with no candidate (``error``: the family's, if any)."""
-
-    def __init__(self, error: InputError | None) -> None:
-        self.error = error
-
-
-def _grow(chosen: list[_Choice], pending: Iterator[Candidate] | None) -> None:
-    """Take the first candidate of every choice from ``pending`` to the plan's end."""
-    while pending is not None:
-        try:
-            taken = next(pending)
-        except StopIteration:
-            raise _Grown(None) from None
-        except InputError as e:  # the family cannot do this choice
-            raise _Grown(e) from None
-        chosen.append(_Choice(pending, taken))
-        pending = taken.then() if taken.then is not None else None
-
-
 def _compile_from(
     compiler: Compiler,
-    chosen: list[_Choice],
+    tree: Taken,
     start: int,
     marks: dict[int, Mark],
     before_each: Callable[[Segment], None] | None,
     current: list[int],
 ) -> None:
-    """Compile the segments of choices ``start`` on, marking where each choice begins;
+    """Compile the segments of choices ``start`` on (the next choices' candidates taken as
+    their segments are asked for: growing.py), marking where each choice begins;
     ``current``: the choice whose segment is being compiled, then the choice of the furthest
     segment compiled and its place in that choice's segments (a failure blames that choice:
     the guides of one RouteCable are choices of one step)."""
-    segments: list[Segment] = []
-    begins: dict[int, int] = {}  # id of a choice's first segment -> the choice
-    owner: dict[int, tuple[int, int, int]] = {}  # id of a segment -> its place in all of
-    # them, its choice, its place in the choice
-    for k in range(start, len(chosen)):
-        if chosen[k].taken.segments:
-            begins[id(chosen[k].taken.segments[0])] = k
-        owner.update(
-            (id(s), (len(segments) + j, k, j)) for j, s in enumerate(chosen[k].taken.segments)
-        )
-        segments += chosen[k].taken.segments
+    segments = Growing(tree, start)
     furthest = -1
 
     def before(segment: Segment) -> None:
         nonlocal furthest
-        at, current[0], j = owner[id(segment)]
+        at, current[0], j = segments.owner[id(segment)]
         # add_all came back to this segment: the marks of the choices after it were taken on
         # an attempt it gave up (the compiler can only be restored to a mark behind it)
         for stale in [m for m in marks if m > current[0]]:
             del marks[stale]
-        k = begins.get(id(segment))
+        k = segments.begins.get(id(segment))
         if k is not None:
             marks[k] = compiler.mark()
         if at > furthest:
@@ -189,7 +152,7 @@ def _compile_from(
     add_all(compiler, segments, before)
 
 
-def _jump(chosen: list[_Choice], failed: int, blames: str) -> int | None:
+def _jump(chosen: list[Choice], failed: int, blames: str) -> int | None:
     """Take, at the latest choice up to ``failed`` that decided ``blames`` and has a next
     candidate that decides it otherwise, that candidate; the choices after it are dropped.
     The choice changed, or None (nothing decided it, or no candidate decides it otherwise:
@@ -214,10 +177,10 @@ def _jump(chosen: list[_Choice], failed: int, blames: str) -> int | None:
     return None
 
 
-def _next_candidate(chosen: list[_Choice], failed: int) -> int | None:
+def _next_candidate(chosen: list[Choice], failed: int) -> int | None:
     """Take the next candidate at choice ``failed`` or, when it has none, at the choices
     before it; the choices after it are dropped. A candidate whose segments begin as a failed
-    one's of its choice (``_Choice.failed``) is passed over: compiled from the same place,
+    one's of its choice (``Choice.failed``) is passed over: compiled from the same place,
     they fail the same way. The choice changed, or None."""
     k = min(failed, len(chosen) - 1)
     del chosen[k + 1 :]
@@ -237,7 +200,7 @@ def _next_candidate(chosen: list[_Choice], failed: int) -> int | None:
     return None
 
 
-def _failed_before(choice: _Choice, taken: Candidate) -> bool:
+def _failed_before(choice: Choice, taken: Candidate) -> bool:
     """Whether ``taken`` begins as a candidate that failed at ``choice`` did."""
     return any(_prefix(taken.segments, len(ran) - 1) == ran for ran in choice.failed)
 

@@ -21,6 +21,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
+from itertools import chain
 from typing import Any
 
 import numpy as np
@@ -184,7 +185,7 @@ class Compiler:
         if has_transit:
             ahead = {
                 p.arm: Lookahead(
-                    winding.ahead(following, p.arm), required([segment, *following], p.arm)
+                    winding.ahead(following, p.arm), required(chain((segment,), following), p.arm)
                 )
                 for p in segment.paths
             }

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Collection, Sequence
+from collections.abc import Collection, Iterable
 
 import numpy as np
 
@@ -54,7 +54,7 @@ def followable(
     return [ik.branch(sol) in branches for sol in sols]
 
 
-def required(segments: Sequence[Segment], arm: str) -> frozenset[int] | None:
+def required(segments: Iterable[Segment], arm: str) -> frozenset[int] | None:
     """The IK branches ``segments`` require of ``arm`` (Segment.branches), from the first
     (a transit of it) up to its next transit; None when they require none."""
     out: frozenset[int] | None = None

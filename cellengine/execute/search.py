@@ -43,7 +43,7 @@ def add_all(
     best: tuple[int, InputError] | None = None
     retries = 0
     i = 0
-    while i < len(segments):
+    while _within(segments, i):
         marks[i] = compiler.mark()
         if before_each is not None:
             before_each(segments[i])
@@ -65,6 +65,16 @@ def add_all(
         choices[back] += 1
         compiler.restore(marks[back])
         i = back
+
+
+def _within(segments: Sequence[Segment], i: int) -> bool:
+    """Whether there is an i-th segment, asked without len(): a sequence that takes its
+    candidates as they are asked for (execute.growing) takes no more than it must."""
+    try:
+        segments[i]
+    except IndexError:
+        return False
+    return True
 
 
 def _transit_before(segments: Sequence[Segment], i: int, *, include: bool) -> int | None:
