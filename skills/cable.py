@@ -381,7 +381,18 @@ class RouteCable(Skill):
         up = cg.platform_up(world, guide)
         screen = _Screen(tuple(cg.footprints(world, guide, up)), up)
         heads, theta0 = _way_heads(world, state, guide, r_arm, self._clear_from(ctx, state, k))
-        ways = _ranked(heads, theta0)
+        released: dict[Back, InputError | Release] = {}
+        releases: dict[Back, bytes] = {}
+        seen: set[InputError] = set()  # the ways' errors the loop has been given
+        # the loop below: the ways it would refuse from what the screens found so far
+        looking = False
+
+        def refused(h: _Head, c: Coordinates) -> int | None:
+            if not looking or (releases and all(r in dead for r in releases.values())):
+                return None  # the loop ends at the next way it is given
+            return _refused(screen, checked, released, seen, h, c)
+
+        ways = _ranked(heads, theta0, refused)
         first = next(ways)  # a head has ways
         self._check_any_length(ctx, state, k, heads, first, r_arm, o_arm)
         released = _letting_go(ctx, state, (r_arm, o_arm), screen.up, guide)
@@ -394,6 +405,7 @@ class RouteCable(Skill):
             raise why
         state = _still_on(state, r_arm, released)
         releases = {b: _stand_back(state, o_arm, up, b).tobytes() for b in released}
+        looking = True
         for way in itertools.chain((first,), ways):
             back = _back_of(way)
             release = released.get(back, ())
@@ -411,6 +423,7 @@ class RouteCable(Skill):
                 gp = replace(_with_back(gp, back), release=release)
                 gp = _coming(ctx, state, gp, way, (r_arm, o_arm), screen, (back,))
             if isinstance(gp, InputError):
+                seen.add(gp)
                 score = gp.distance if isinstance(gp, _Blocked) else -math.inf
                 if closest is None or score > closest[0]:
                     closest = (score, gp)
@@ -1928,39 +1941,50 @@ def _way_heads(
     return heads, theta0
 
 
-def _ranked(heads: Sequence[_Head], theta0: float) -> Iterator[GuideWay]:
+# A way's coordinates in _ranked, those that the screens' keys take first (the pivot's, then
+# the approach's, then the routing hand's, then the stand-back): a way refused by a screen
+# names the last one its key takes, and best_first leaves out the ways that agree with it up
+# to there. Ties keep the order of their first listing: lean, pivot, back, after, first, base,
+# share.
+BASE_, PIVOT_, LEAN_, AFTER_, FIRST_, SHARE_, BACK_ = range(7)
+TIES = (LEAN_, PIVOT_, BACK_, AFTER_, FIRST_, BASE_, SHARE_)
+Coordinates = tuple[Any, ...]
+
+
+def _ranked(
+    heads: Sequence[_Head],
+    theta0: float,
+    dead: Callable[[_Head, Coordinates], int | None] | None = None,
+) -> Iterator[GuideWay]:
     """Every way of ``heads`` (with the tips, stand-back, insert end, turning first,
     tipping towards the base and share of the turn in the slide), ranked by how much longer
-    the motion gets, lazily."""
+    the motion gets, lazily; ``dead``: which are known to fail (best_first's prune, on a
+    head and its way's coordinates)."""
     dims = [
-        (
-            cg.LEANS,
-            cg.PIVOT_LEANS,
-            _all_backs(),
-            h.afters,
-            h.firsts,
-            BASES,
-            cg.SLIDE_TURNS,
-        )
+        (BASES, cg.PIVOT_LEANS, cg.LEANS, h.afters, h.firsts, cg.SLIDE_TURNS, _all_backs())
         for h in heads
     ]
 
     # costs to COST_DIGITS: ways whose costs differ by rounding alone keep the order listed
-    def cost(i: int, c: tuple[Any, ...]) -> float:
-        return round(_way_cost(heads[i], theta0, *c), COST_DIGITS)
+    def cost(i: int, c: Coordinates) -> float:
+        base, pivot, lean, after, first, share, back = c
+        way_cost = _way_cost(heads[i], theta0, lean, pivot, back, after, first, base, share)
+        return round(way_cost, COST_DIGITS)
 
     def part(i: int, dim: int, v: Any) -> float:  # a dim's share in the cost, to order it
-        if dim == 3:
+        if dim == AFTER_:
             d = 0.0 if v is None else abs(v - heads[i].gap) + 0.5 * (v > heads[i].gap)
-        elif dim == 2:
+        elif dim == BACK_:
             d = _back_cost(v)
         else:
-            d = abs(float(v) - (cg.LEAN, cg.PIVOT_LEAN, 0.0, 0, 0.0, 1.0, 1.0)[dim])
+            best = {LEAN_: cg.LEAN, BASE_: 1.0, FIRST_: 0, SHARE_: 1.0, PIVOT_: cg.PIVOT_LEAN}
+            d = abs(float(v) - best[dim])
         return round(d, COST_DIGITS)
 
-    for i, (lean, pivot, back, after, first, base, share) in best_first(dims, cost, part):
+    prune = None if dead is None else (lambda i, c: dead(heads[i], c))
+    for i, c in best_first(dims, cost, part, prune, TIES):
         h = heads[i]
-        distance, lift, turn = back
+        base, pivot, lean, after, first, share, (distance, lift, turn) = c
         yield GuideWay(
             h.theta, h.side, lean, pivot, distance, h.gap, after, first, base, share,
             stand_lift=lift, stand_turn=turn,
@@ -2768,6 +2792,39 @@ def _pair_blocked(
             return None
         nearest = min(nearest, (d, pair))
     return f"the arms {_mm(nearest[0])} mm apart at best ({', '.join(nearest[1])})"
+
+
+def _refused(
+    screen: _Screen,
+    checked: Mapping[WayKey, GuidePlan | InputError],
+    released: Mapping[Back, InputError | Release],
+    seen: Set[InputError],
+    h: _Head,
+    c: Coordinates,
+) -> int | None:
+    """Whether guide_plans would refuse the way of ``h`` and coordinates ``c`` (_ranked's)
+    from what its screens found so far: None when not known, else the last coordinate the
+    refusal depends on (best_first then leaves out the ways that agree with it up to
+    there). The ways left out would each give guide_plans an error it has been given
+    (``seen``), so the closest it keeps is as without them: _checked returns the first of
+    the approach's, the routing hand's and the pivot's, and the first two are returned
+    when found."""
+    base, pivot, lean, after, first, share, back = c
+    hand = (h.theta, h.side, lean, h.gap, after, first, base, share)
+    known = checked.get((*hand, "direct", pivot))
+    if isinstance(known, InputError):
+        return SHARE_
+    why = [
+        (LEAN_, screen.approaches.get((h.gap, lean, base))),
+        (SHARE_, screen.routed.get((*hand, "direct"))),
+        (PIVOT_, screen.pivots.get((h.gap, pivot, base))),
+    ]
+    errors = [(at, e) for at, e in why if isinstance(e, InputError)]
+    if errors and errors[0][1] in seen:
+        return min(at for at, e in errors if e in seen)
+    if isinstance(released.get(back), InputError):
+        return BACK_
+    return None
 
 
 def _coming_key(way: GuideWay, back: Back) -> WayKey:
