@@ -15,6 +15,7 @@ Deterministic: the choices are tried in one fixed order.
 
 from __future__ import annotations
 
+from collections import defaultdict
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
@@ -38,7 +39,7 @@ def add_all(
     described above; InputError when no retry within the budget gets through.
     ``before_each`` is called with each segment before it is compiled (again when the search
     comes back to it): for a progress display."""
-    choices = [0] * len(segments)
+    choices: defaultdict[int, int] = defaultdict(int)  # per segment: its transit's goal
     marks = {}
     best: tuple[int, InputError] | None = None
     retries = 0
