@@ -326,3 +326,24 @@ def test_a_candidate_is_told_which_of_its_segments_failed() -> None:
     compile_candidates(compiler(), choice(start))
     assert told == [("fails", 1)]
     assert drawn == [("fails", 0), ("runs", 1)]
+
+
+def test_a_choice_is_taken_only_when_a_segment_past_it_is_asked_for() -> None:
+    """Choice 0's first candidate cannot run; its hop looks ahead only to the left arm's next
+    transit (choice 1's hop), so choice 2 is planned only after choice 0's second candidate,
+    once: not once per candidate of choice 0."""
+    c = compiler()
+    planned: list[str] = []
+
+    def third() -> Iterator[Candidate]:
+        planned.append("choice 2")
+        yield Candidate((hop(2, NEAR),))
+
+    def second() -> Iterator[Candidate]:
+        yield Candidate((hop(1, ALSO),), then=third)
+
+    compile_candidates(
+        c, choice(Candidate((hop(0, FAR),), then=second), Candidate((hop(0, NEAR),), then=second))
+    )
+    assert labels(c) == [f"to {NEAR}", f"to {ALSO}", f"to {NEAR}"]
+    assert planned == ["choice 2"]
