@@ -575,7 +575,8 @@ class RouteCable(Skill):
                 e.blames = "arms"  # the routing arm might reach: PickCable decides which
                 raise
             _check_hands(ctx, gp, r_arm, o_arm)
-            gp = replace(gp, branches=_check_pivot_free(ctx, gp, r_arm, o_arm, pivoting))
+            kept, grasp = _check_pivot_free(ctx, gp, r_arm, o_arm, pivoting)
+            gp = replace(gp, branches=kept, grasp=grasp)
         except InputError as e:
             return e
         return gp
@@ -1714,6 +1715,10 @@ class GuidePlan:
     # each arm's IK branches on which the other hand's release (the first segment) keeps the
     # arms the cell's clearance apart, the routing arm standing (_letting_go), once screened
     release: tuple[tuple[str, frozenset[int]], ...] = ()
+    # the other arm's IK branches in a pair with one of ``branches`` that keeps the cell's
+    # clearance from its descent to the pivot to the insert (_check_pair_along), once
+    # screened: its transit to the cable goes to one of them
+    grasp: frozenset[int] = ANY_BRANCH
 
     @property
     def radius(self) -> float:
@@ -2274,9 +2279,11 @@ def _leave_blocked(
     hitting itself; why not when none can. (Found only at the next guide, it sends the
     search back through every way of this one; and the arms' pair checks at this guide
     must not count on a branch the other arm cannot be on.)"""
-    from cellengine.execute.following import surviving  # the motion stack: planning only
+    from cellengine.execute.following import surviving, touching  # the motion stack
 
     can, nearest = surviving(ctx.cell, ctx.checker, o_arm, grasp, ctx.home)
+    hit = touching(ctx.cell, ctx.checker, o_arm, grasp, ctx.home, can)
+    can -= set(hit)
     if next_up is not None:
         down, can = can, set()
         for back in _all_backs():  # each branch that can come down, until one stand-back lets it
@@ -2289,10 +2296,12 @@ def _leave_blocked(
     if can:
         return frozenset(can)
     then = "" if next_up is None else ", then let go and stand back from it at the next guide,"
+    cell = " or the cell" if hit else ""
+    pair = nearest[1] if any(nearest[1]) or not hit else hit[min(hit)]
     return _error(
         f"{b.where}: the other arm ({o_arm}) has no IK branch on which it can come down to "
-        f"the pivot (stopping {_mm(b.gap)} mm before the guide){then} without hitting itself "
-        f"({', '.join(nearest[1]) or 'out of reach'})"
+        f"the pivot (stopping {_mm(b.gap)} mm before the guide){then} without hitting itself"
+        f"{cell} ({', '.join(pair) or 'out of reach'})"
     )
 
 
@@ -2468,6 +2477,7 @@ def _emit_guide(
         [_cartesian(o_arm, cg.line(gp.other_above, gp.pivot))],
         after=[GripperEvent(o_arm, GRASP, cable)],
         near=near,
+        branches=((o_arm, gp.grasp),) if gp.grasp != ANY_BRANCH else (),
     )
     # The distance between the hands grows by the pull here, by design: no keep_distance.
     b.add(
@@ -2969,12 +2979,12 @@ def _coming_rooms(
 
 def _check_pivot_free(
     ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str, o_on: frozenset[int]
-) -> frozenset[int]:
+) -> tuple[frozenset[int], frozenset[int]]:
     """While the routing hand holds still at the slide's end, the other arm comes down to the
     pivot (on a branch of ``o_on``: those on which it can, _pivot_blocked): some pair of the
     arms' solutions is free there and above it, and keeps the cell's clearance between the
     arms, and on to the insert (:func:`_check_pair_along`). The routing arm's branches (of
-    gp.branches) on which it is so."""
+    gp.branches) on which it is so, and the other arm's in a pair with them."""
     for what, T in (("above the pivot", gp.other_above), ("at the pivot", gp.pivot)):
         poses = {r_arm: gp.slide[-1], o_arm: T}
         why = _pair_blocked(ctx, poses, ctx.clearance, {r_arm: gp.branches, o_arm: o_on})
@@ -3006,21 +3016,23 @@ def _check_pivot_free(
 
 def _check_pair_along(
     ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str, o_on: frozenset[int]
-) -> frozenset[int]:
+) -> tuple[frozenset[int], frozenset[int]]:
     """From the other arm coming down to the pivot to the insert (both arms on Cartesian
     paths, so each keeps its IK branch), some pair of branches keeps the cell's clearance
     between the arms at poses along the way (every STRIDE-th): near the pivot the routing
     arm's wrist passes over the other arm's forearm on some boards and under it on others.
-    The routing arm's branches (of gp.branches) in such a pair; else the way is refused, by
-    how much it falls short."""
+    The routing arm's branches (of gp.branches) in such a pair and the other arm's (of
+    ``o_on``) in a pair with them; else the way is refused, by how much it falls short."""
     from cellengine.execute.following import STRIDE  # the motion stack: planning only
 
     down = cg.line(gp.other_above, gp.pivot)
     held = np.concatenate((gp.pull_path, gp.lift, gp.swing, gp.insert))
     poses = [(gp.slide[-1], T) for T in (*down[::STRIDE], down[-1])]
     poses += [(T, gp.pivot) for T in (*held[::STRIDE], held[-1])]
-    rooms = _pair_rooms(ctx, r_arm, o_arm, poses, ctx.clearance, gp.branches, o_on, measure=False)
-    room = max(rooms.values())
+    least = _pair_least(ctx, r_arm, o_arm, poses, ctx.clearance, gp.branches, o_on, measure=False)
+    if least is None:
+        return gp.branches, o_on  # no branches: the compiler finds out
+    room = float(least.max())
     if room < ctx.clearance:
         raise _arms_blocked(
             ctx,
@@ -3030,7 +3042,8 @@ def _check_pair_along(
             f"(sliding at theta = {math.degrees(gp.theta):.1f} deg, stopping {_mm(gp.a)} mm "
             "before the guide)",
         )
-    return frozenset(k for k, r in rooms.items() if k >= 0 and r >= ctx.clearance) or gp.branches
+    (_, kept), (_, grasp) = _kept_branches(least >= ctx.clearance, r_arm, o_arm)
+    return kept, grasp
 
 
 def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, coming: bool) -> None:

@@ -116,3 +116,34 @@ def surviving(
         if not alive:
             break
     return alive, nearest
+
+
+def touching(
+    cell: CellModel,
+    checker: CollisionChecker,
+    arm: str,
+    poses: Poses,
+    q: Vec,
+    branches: Collection[int],
+) -> dict[int, Pair]:
+    """Which of ``branches`` put ``arm`` (its links, its tool, what it holds) in contact with
+    the cell's environment at some of ``poses`` (every STRIDE-th and the last), the other
+    joints as in ``q``, each with the first pair in contact: a branch whose upper arm passes
+    through a fixture reaches the pose clear of itself all the same (:func:`surviving`)."""
+    ik = arm_ik(cell.arms[arm])
+    out: dict[int, Pair] = {}
+    if ik.closed_form is None:
+        return out
+    here = np.array(q, dtype=float)
+    for i in sorted({*range(0, len(poses), STRIDE), len(poses) - 1}):
+        row = ik.by_branch(poses[i])
+        if row is None:
+            break
+        for k in sorted(set(branches) - set(out)):
+            if np.isnan(row[k]).any():
+                continue  # out of reach there: surviving's to say
+            here[cell.slices[arm]] = row[k]
+            d, pair = checker.distance(here, between=(arm, None))
+            if d <= 0.0:
+                out[k] = pair
+    return out

@@ -47,6 +47,13 @@ PATH_SLACK = 1e-5  # m: check_path's margins over the motion bound, room for GJK
 # pairs of IK solutions again for each way sharing a path (about a third of their calls);
 # emptied when full
 ANSWERS = 16384
+# two owners of the objects measured between: arms, or None for the environment
+Between = tuple[str | None, str | None]
+
+
+def _owners(between: Between) -> tuple[str, ...]:
+    """``between`` in one order, as a key."""
+    return tuple(sorted("" if o is None else o for o in between))
 
 
 @dataclass(frozen=True)
@@ -157,19 +164,20 @@ class CollisionChecker:
                 h = 1
         return out
 
-    def distance(self, q: ArrayLike, between: tuple[str, str] | None = None) -> tuple[float, Pair]:
+    def distance(self, q: ArrayLike, between: Between | None = None) -> tuple[float, Pair]:
         """The minimum distance over the checked pairs at q and the pair at it; ``between``
-        two arms: over the pairs with one object of each (links, and objects they hold).
+        two arms: over the pairs with one object of each (links, and objects they hold; None:
+        the environment).
         Negative when convex shapes overlap (their penetration depth); a mesh element's
         distance is to its surface. Mesh elements are first measured as their convex hulls (a
         lower bound, cheap), and only pairs whose bound is below the best exact distance are
         measured exactly. (inf, ("", "")) when no pair qualifies."""
         qa = self._q(q)
-        key = (qa.tobytes(), None if between is None else tuple(sorted(between)))
+        key = (qa.tobytes(), None if between is None else _owners(between))
         out: tuple[float, Pair] = self._answer(key, lambda: self._distance(qa, between))
         return out
 
-    def _distance(self, qa: Vec, between: tuple[str, str] | None) -> tuple[float, Pair]:
+    def _distance(self, qa: Vec, between: Between | None) -> tuple[float, Pair]:
         scene = self._scene
         gdata, mask = self._selection(between)
         if not mask.any():
@@ -226,10 +234,10 @@ class CollisionChecker:
                 out[p] = d
         return out
 
-    def _selection(self, between: tuple[str, str] | None) -> tuple[Any, NDArray[np.bool_]]:
+    def _selection(self, between: Between | None) -> tuple[Any, NDArray[np.bool_]]:
         """A GeometryData on the bounds model with only the selected pairs active (pinocchio
         skips inactive pairs), and the selection as a mask; made once per selection."""
-        key = None if between is None else tuple(sorted(between))
+        key = None if between is None else _owners(between)
         if key not in self._selections:
             mask = np.ones(self._n_pairs, dtype=bool) if between is None else self._between(between)
             gdata = pin.GeometryData(self._scene.bounds)
@@ -238,10 +246,10 @@ class CollisionChecker:
             self._selections[key] = (gdata, mask)
         return self._selections[key]
 
-    def _between(self, arms: tuple[str, str]) -> NDArray[np.bool_]:
-        """Pairs with one object owned by each of two arms."""
+    def _between(self, arms: Between) -> NDArray[np.bool_]:
+        """Pairs with one object owned by each of two arms (None: the environment)."""
         for arm in arms:
-            if arm not in self._scene.cell.arms:
+            if arm is not None and arm not in self._scene.cell.arms:
                 known = ", ".join(self._scene.cell.arms)
                 raise ValueError(f"unknown arm '{arm}' (arms: {known})")
         owners = [o.owner for o in self._scene.objects]
