@@ -12,7 +12,7 @@ import numpy as np
 
 from cellengine import geometry as g
 from cellengine.execute import solve
-from cellengine.execute.following import followable, required
+from cellengine.execute.following import followable, required, surviving, touching
 from cellengine.execute.refused import Refused
 from cellengine.motion.ik import arm_ik
 from cellengine.program import ArmPath, Segment
@@ -94,3 +94,19 @@ def test_a_goal_on_a_branch_not_required_does_not_follow() -> None:
     assert followable(cell, checker, "left", sols, None, home(cell), frozenset({one})) == [
         ik.branch(s) == one for s in sols
     ]
+
+
+def test_branches_clear_of_themselves_may_still_pass_through_a_fixture() -> None:
+    """The right tool pointing down 60 mm above guide3's slot: every branch keeps clear of
+    itself, and two of them take the arm's upper links through the cable holder's comb."""
+    world, cell, checker = cable_cell()
+    q = home(cell)
+    slot = world.pose("routing.guide3.slot")[:3, 3]
+    poses = g.transform(g.rot_x(math.pi), slot + np.array([0.0, 0.0, 0.06]))[None]
+    alive, _ = surviving(cell, checker, "right", poses, q)
+    hit = touching(cell, checker, "right", poses, q, alive)
+    assert alive == set(range(8))
+    assert set(hit) == {0, 7}
+    for a, b in hit.values():
+        link = a if a.startswith("right/") else b
+        assert "holder.comb_b" in (a, b) and not link.startswith("right/tool")

@@ -183,6 +183,19 @@ def test_apart_agrees_with_the_distance_and_sees_only_the_two_arms(
     assert checker.apart(q, 0.01, ("left", "right"))
 
 
+def test_distance_between_an_arm_and_the_environment(
+    cell: CellModel, checker: CollisionChecker, world: World
+) -> None:
+    """None as an owner: the cell's fixtures; the left tool in a guide touches it, not the
+    other arm."""
+    T_cell_slot = world.pose("routing.guide2.slot")
+    q = both(cell, left=ik(cell, "left", g.transform(DOWN, T_cell_slot[:3, 3])))
+    d, pair = checker.distance(q, between=("left", None))
+    assert d <= 0.0 and pair[0].startswith("left/tool") and pair[1].startswith("routing.")
+    assert checker.distance(q, between=(None, "right"))[0] > 0.0
+    assert checker.distance(q, between=("left", "right"))[0] > 0.0
+
+
 def test_answers_asked_again_are_kept_until_the_held_objects_change(
     cell: CellModel, scene: CollisionScene, world: World
 ) -> None:
