@@ -1649,12 +1649,16 @@ def _hand_over(
             "connector hand taking the cable and the other hand out of its way"
             + (f" ({why})" if why else "")
         )
+    # the pairs that keep the clearance: the other arm lets go on one of its branches in
+    # them, and the connector arm's transit goes to one of its own
+    f_on, c_on = _handing_branches(ctx, (c_arm, T_above, T_take), (f_arm, T_away), alive)
     element = cg.element_of(geo.guide)
     b = _Builder(state)
     b.add(
         f"{label}: {f_arm} lets go",
         [_cartesian(f_arm, lets_go)],
         before=[GripperEvent(f_arm, OPEN)],
+        branches=f_on,
     )
     b.add(f"{label}: {c_arm} to the cable", [_transit(c_arm, T_above)])
     b.add(
@@ -1662,9 +1666,32 @@ def _hand_over(
         [_cartesian(c_arm, cg.line(T_above, T_take))],
         after=[GripperEvent(c_arm, GRASP, cable)],
         near=[(c_arm, element)],
+        branches=c_on,
     )
     after = b.state.hold(c_arm, cable, geo.s_other).transited(c_arm)
     return b.segments, replace(after, routing_arm=c_arm)
+
+
+def _handing_branches(
+    ctx: PlanningContext,
+    taking: tuple[str, Mat, Mat],
+    away: tuple[str, Mat],
+    alive: Collection[int],
+) -> tuple[Release, Release]:
+    """Segment.branches of the other arm out of the way (of ``alive``) and of the connector
+    arm above the cable and taking it (``taking``: the arm and both poses), in some pair
+    that keeps the cell's clearance at both; none when no pair does (the compiler finds
+    out)."""
+    c_arm, T_above, T_take = taking
+    f_arm, T_away = away
+    poses = [(T_above, T_away), (T_take, T_away)]
+    least = _pair_least(
+        ctx, c_arm, f_arm, poses, ctx.clearance, ANY_BRANCH, frozenset(alive), measure=False
+    )
+    if least is None or not (least >= ctx.clearance).any():
+        return (), ()
+    c_on, f_on = _kept_branches(least >= ctx.clearance, c_arm, f_arm)
+    return (f_on,), (c_on,)
 
 
 # =========================================================================== RouteCable
