@@ -805,41 +805,75 @@ def release_and_retract(
     ctx: PlanningContext, state: CableState
 ) -> tuple[list[Segment], CableState]:
     """Algorithm 1, line 35: every gripper that holds the cable opens and goes up
-    (_retract)."""
+    (_retracts' first way)."""
+    return next(release_ways(ctx, state))
+
+
+def release_ways(
+    ctx: PlanningContext, state: CableState
+) -> Iterator[tuple[list[Segment], CableState]]:
+    """release_and_retract's ways, best first (_retracts): which arm's branch the route
+    left it on decides which can run, and only the compiler knows it."""
     holding = [a for a in state.arms if a in state.held]
     if not holding:
-        return [], state
+        yield [], state
+        return
     label = f"{state.cable}: release and retract"
-    b = _Builder(state)
-    paths, on = _retracts(ctx, state, holding)
-    b.add(label, paths, before=[GripperEvent(a, OPEN) for a in holding], branches=on)
-    done = replace(
-        b.state, cable=None, connector_arm=None, routing_arm=None, place_guide=None, route=()
-    )
-    return b.segments, replace(done, guides=(), pull_distance=0.0, lean=cg.LEAN)
+    opened = [GripperEvent(a, OPEN) for a in holding]
+    for retract in _retracts(ctx, state, holding):
+        b = _Builder(state)
+        for k, (what, paths, on) in enumerate(retract):
+            b.add(label + what, paths, before=opened if k == 0 else [], branches=on)
+        done = replace(
+            b.state, cable=None, connector_arm=None, routing_arm=None, place_guide=None, route=()
+        )
+        yield b.segments, replace(done, guides=(), pull_distance=0.0, lean=cg.LEAN)
+
+
+Retract = tuple[str, list[ArmPath], Release]  # a segment's: its label's end, paths, branches
 
 
 def _retracts(
     ctx: PlanningContext, state: CableState, arms: Sequence[str]
-) -> tuple[list[ArmPath], tuple[tuple[str, frozenset[int]], ...]]:
-    """Each arm's retract (of _retract_ways, its best first); for two arms, the first pair of
-    ways on which some pair of the IK branches they may be on keeps the cell's clearance
-    between them (the hands retract at once, or one after the other), with the branches of
-    those pairs required (Segment.branches: the transits before look ahead at them), else
-    the best ways."""
+) -> Iterator[list[Retract]]:
+    """The retract's ways, each its segments: each arm's retract (of _retract_ways, its best
+    first); for two arms, the pairs of ways on which some pair of the IK branches they may
+    be on keeps the cell's clearance between them, the hands retracting at once (a strategy
+    may move one after the other: either order), then one after the other (either first),
+    with the branches of those pairs required (Segment.branches: the transits before look
+    ahead at them); when none does, the best ways at once."""
     ways = [_retract_ways(ctx, state, a) for a in arms]
-    if len(arms) == 2:
-        a, b = arms
-        on_a, on_b = state.branches_of(a), state.branches_of(b)
+    if len(arms) != 2:
+        yield [("", [w[0] for w in ways], ())]
+        return
+    a, b = arms
+    on_a, on_b = state.branches_of(a), state.branches_of(b)
+    found = False
+    for first in (None, a, b):
         for way_a, way_b in itertools.product(*ways):
-            pairs = _along(way_a.poses, way_b.poses)
+            if first is None:
+                pairs = _along(way_a.poses, way_b.poses)
+            elif first == a:
+                pairs = _along(way_a.poses, way_b.poses[:1]) + _along(way_a.poses[-1:], way_b.poses)
+            else:
+                pairs = _along(way_a.poses[:1], way_b.poses) + _along(way_a.poses, way_b.poses[-1:])
             least = _pair_least(ctx, a, b, pairs, ctx.clearance, on_a, on_b, measure=False)
-            if least is None:
-                return [way_a, way_b], ()
-            kept = least >= ctx.clearance
-            if kept.any():
-                return [way_a, way_b], _kept_branches(kept, a, b)
-    return [w[0] for w in ways], ()
+            if least is None:  # no branches: the compiler finds out
+                yield [("", [way_a, way_b], ())]
+                return
+            if not (least >= ctx.clearance).any():
+                continue
+            found = True
+            on = _kept_branches(least >= ctx.clearance, a, b)
+            if first is None:
+                yield [("", [way_a, way_b], on)]
+                continue
+            (one, one_way), (two, two_way) = (a, way_a), (b, way_b)
+            if first == b:
+                (one, one_way), (two, two_way) = (two, two_way), (one, one_way)
+            yield [(f": {one} first", [one_way], on), (f": then {two}", [two_way], on)]
+    if not found:
+        yield [("", [w[0] for w in ways], ())]
 
 
 def _retract_ways(ctx: PlanningContext, state: CableState, arm: str) -> list[ArmPath]:

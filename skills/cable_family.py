@@ -21,7 +21,7 @@ from cellengine.skills.cable import (
     PickCable,
     PlaceConnector,
     RouteCable,
-    release_and_retract,
+    release_ways,
     step_ways,
 )
 from cellengine.skills.cable_meaning import Finding
@@ -70,8 +70,8 @@ def _from(
     """The candidates for ``steps[i]`` from ``state`` (for a RouteCable, its first guide's);
     after the last step, the release."""
     if i == len(steps):
-        segments, _ = release_and_retract(ctx, state)
-        yield Candidate(tuple(segments))
+        for segments, _ in release_ways(ctx, state):
+            yield Candidate(tuple(segments))
         return
     step = steps[i]
     if isinstance(step, RouteCable):

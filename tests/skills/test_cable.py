@@ -1398,7 +1398,8 @@ def test_the_last_retracts_keep_the_arms_apart(monkeypatch: pytest.MonkeyPatch) 
     ctx, state, _, r_arm, o_arm = _after_guide1(world)
     arms = (r_arm, o_arm)
     best = [C._retract_ways(ctx, state, a)[0] for a in arms]
-    taken, on = C._retracts(ctx, state, arms)
+    ((what, taken, on),) = next(C._retracts(ctx, state, arms))
+    assert what == ""  # at once
     assert [p.poses.tobytes() for p in taken] == [p.poses.tobytes() for p in best]
     # the branches of the pairs that keep it are required of the arms there
     pairs = C._along(taken[0].poses, taken[1].poses)
@@ -1421,7 +1422,41 @@ def test_the_last_retracts_keep_the_arms_apart(monkeypatch: pytest.MonkeyPatch) 
         return np.minimum(least, ctx.clearance / 2.0) if len(calls) == 1 else least
 
     monkeypatch.setattr(C, "_pair_least", first_too_near)
-    taken, _ = C._retracts(ctx, state, arms)
+    ((_, taken, _),) = next(C._retracts(ctx, state, arms))
     second = list(itertools.product(*(C._retract_ways(ctx, state, a) for a in arms)))[1]
     assert len(calls) == 2
     assert [p.poses.tobytes() for p in taken] == [p.poses.tobytes() for p in second]
+
+
+def test_the_hands_retract_one_after_the_other_when_no_ways_at_once_keep_apart(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """When no pair of ways keeps the clearance with the hands retracting at once (here made
+    so: each arm's moving with the other at both ends of its path is measured too), one
+    retracts first, the other standing where it let go, then the other: two segments, the
+    second without the gripper events, each requiring the branches of the pairs that keep it."""
+    world, _ = _world()
+    ctx, state, _, r_arm, o_arm = _after_guide1(world)
+    arms = (r_arm, o_arm)
+    n_combos = len(list(itertools.product(*(C._retract_ways(ctx, state, a) for a in arms))))
+    measured = C._pair_least
+    calls: list[int] = []
+
+    def at_once_too_near(*args: object, **kwargs: object) -> object:
+        least = measured(*args, **kwargs)  # type: ignore[arg-type]
+        calls.append(1)
+        return np.minimum(least, ctx.clearance / 2.0) if len(calls) <= n_combos else least
+
+    monkeypatch.setattr(C, "_pair_least", at_once_too_near)
+    first, then = next(C._retracts(ctx, state, arms))
+    assert len(calls) == n_combos + 1
+    assert first[0] == f": {r_arm} first" and then[0] == f": then {o_arm}"
+    assert [p.arm for p in first[1]] == [r_arm] and [p.arm for p in then[1]] == [o_arm]
+    assert first[2] == then[2] and all(on for _, on in first[2])
+    calls.clear()
+    segments, _ = C.release_and_retract(ctx, state)
+    assert [s.label for s in segments] == [
+        f"{state.cable}: release and retract: {r_arm} first",
+        f"{state.cable}: release and retract: then {o_arm}",
+    ]
+    assert len(segments[0].before) == 2 and segments[1].before == ()
