@@ -113,6 +113,10 @@ class Segment:
     # closed-form IK branches only (ArmIK.by_branch rows); a transit before it chooses a
     # goal on one of them where it can, and an arm on another is refused here
     branches: tuple[tuple[str, frozenset[int]], ...] = ()
+    # (arm, other arm, pairs of their IK branches): the skill checked the two arms against
+    # each other on those pairs only (``branches`` says which of each arm's it looked at,
+    # not which go together); two arms on another pair are refused here
+    paired: tuple[tuple[str, str, frozenset[tuple[int, int]]], ...] = ()
 
     def arms(self) -> tuple[str, ...]:
         return tuple(p.arm for p in self.paths)

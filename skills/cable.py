@@ -575,8 +575,8 @@ class RouteCable(Skill):
                 e.blames = "arms"  # the routing arm might reach: PickCable decides which
                 raise
             _check_hands(ctx, gp, r_arm, o_arm)
-            kept, grasp = _check_pivot_free(ctx, gp, r_arm, o_arm, pivoting)
-            gp = replace(gp, branches=kept, grasp=grasp)
+            kept, grasp, pairs = _check_pivot_free(ctx, gp, r_arm, o_arm, pivoting)
+            gp = replace(gp, branches=kept, grasp=grasp, grasp_pairs=pairs)
         except InputError as e:
             return e
         return gp
@@ -822,15 +822,16 @@ def release_ways(
     opened = [GripperEvent(a, OPEN) for a in holding]
     for retract in _retracts(ctx, state, holding):
         b = _Builder(state)
-        for k, (what, paths, on) in enumerate(retract):
-            b.add(label + what, paths, before=opened if k == 0 else [], branches=on)
+        for k, (what, paths, on, paired) in enumerate(retract):
+            b.add(label + what, paths, before=opened if k == 0 else [], branches=on, paired=paired)
         done = replace(
             b.state, cable=None, connector_arm=None, routing_arm=None, place_guide=None, route=()
         )
         yield b.segments, replace(done, guides=(), pull_distance=0.0, lean=cg.LEAN)
 
 
-Retract = tuple[str, list[ArmPath], Release]  # a segment's: its label's end, paths, branches
+# a segment's: its label's end, paths, branches, pairs of branches
+Retract = tuple[str, list[ArmPath], Release, "Paired"]
 
 
 def _retracts(
@@ -844,7 +845,7 @@ def _retracts(
     ahead at them); when none does, the best ways at once."""
     ways = [_retract_ways(ctx, state, a) for a in arms]
     if len(arms) != 2:
-        yield [("", [w[0] for w in ways], ())]
+        yield [("", [w[0] for w in ways], (), ())]
         return
     a, b = arms
     on_a, on_b = state.branches_of(a), state.branches_of(b)
@@ -859,21 +860,25 @@ def _retracts(
                 pairs = _along(way_a.poses[:1], way_b.poses) + _along(way_a.poses, way_b.poses[-1:])
             least = _pair_least(ctx, a, b, pairs, ctx.clearance, on_a, on_b, measure=False)
             if least is None:  # no branches: the compiler finds out
-                yield [("", [way_a, way_b], ())]
+                yield [("", [way_a, way_b], (), ())]
                 return
             if not (least >= ctx.clearance).any():
                 continue
             found = True
-            on = _kept_branches(least >= ctx.clearance, a, b)
+            kept = least >= ctx.clearance
+            on, paired = _kept_branches(kept, a, b), _kept_pairs(kept, a, b)
             if first is None:
-                yield [("", [way_a, way_b], on)]
+                yield [("", [way_a, way_b], on, paired)]
                 continue
             (one, one_way), (two, two_way) = (a, way_a), (b, way_b)
             if first == b:
                 (one, one_way), (two, two_way) = (two, two_way), (one, one_way)
-            yield [(f": {one} first", [one_way], on), (f": then {two}", [two_way], on)]
+            yield [
+                (f": {one} first", [one_way], on, paired),
+                (f": then {two}", [two_way], on, paired),
+            ]
     if not found:
-        yield [("", [w[0] for w in ways], ())]
+        yield [("", [w[0] for w in ways], (), ())]
 
 
 def _retract_ways(ctx: PlanningContext, state: CableState, arm: str) -> list[ArmPath]:
@@ -917,6 +922,7 @@ class _Builder:
         facts: Mapping[str, Any] | None = None,
         annotations: Iterable[Annotation] = (),
         branches: tuple[tuple[str, frozenset[int]], ...] = (),
+        paired: Paired = (),
     ) -> None:
         seg = Segment(
             step=self.state.step,
@@ -930,6 +936,7 @@ class _Builder:
             facts=MappingProxyType(dict(facts or {})),
             annotations=tuple(annotations),
             branches=branches,
+            paired=paired,
         )
         state = self.state
         for event in seg.before:
@@ -1604,8 +1611,8 @@ def _place_apart(
         return list(segments)
     kept = least >= ctx.clearance
     if kept.any():
-        on = _kept_branches(kept, a, b)
-        return [replace(s, branches=on) for s in segments]
+        on, paired = _kept_branches(kept, a, b), _kept_pairs(kept, a, b)
+        return [replace(s, branches=on, paired=paired) for s in segments]
     best = float(least.max())
     how = f"{_mm(best)} mm at best" if best > -math.inf else "they collide"
     error = _error(
@@ -1685,7 +1692,7 @@ def _hand_over(
         )
     # the pairs that keep the clearance: the other arm lets go on one of its branches in
     # them, and the connector arm's transit goes to one of its own
-    f_on, c_on = _handing_branches(ctx, (c_arm, T_above, T_take), (f_arm, T_away), alive)
+    f_on, c_on, paired = _handing_branches(ctx, (c_arm, T_above, T_take), (f_arm, T_away), alive)
     element = cg.element_of(geo.guide)
     b = _Builder(state)
     b.add(
@@ -1701,6 +1708,7 @@ def _hand_over(
         after=[GripperEvent(c_arm, GRASP, cable)],
         near=[(c_arm, element)],
         branches=c_on,
+        paired=paired,
     )
     after = b.state.hold(c_arm, cable, geo.s_other).transited(c_arm)
     return b.segments, replace(after, routing_arm=c_arm)
@@ -1711,21 +1719,22 @@ def _handing_branches(
     taking: tuple[str, Mat, Mat],
     away: tuple[str, Mat],
     alive: Collection[int],
-) -> tuple[Release, Release]:
+) -> tuple[Release, Release, Paired]:
     """Segment.branches of the other arm out of the way (of ``alive``) and of the connector
     arm above the cable and taking it (``taking``: the arm and both poses), in some pair
-    that keeps the cell's clearance at both; none when no pair does (the compiler finds
-    out)."""
+    that keeps the cell's clearance at both, and those pairs; none when no pair does (the
+    compiler finds out)."""
     c_arm, T_above, T_take = taking
     f_arm, T_away = away
     poses = [(T_above, T_away), (T_take, T_away)]
     least = _pair_least(
         ctx, c_arm, f_arm, poses, ctx.clearance, ANY_BRANCH, frozenset(alive), measure=False
     )
-    if least is None or not (least >= ctx.clearance).any():
-        return (), ()
-    c_on, f_on = _kept_branches(least >= ctx.clearance, c_arm, f_arm)
-    return (f_on,), (c_on,)
+    kept = None if least is None else least >= ctx.clearance
+    if kept is None or not kept.any():
+        return (), (), ()
+    c_on, f_on = _kept_branches(kept, c_arm, f_arm)
+    return (f_on,), (c_on,), _kept_pairs(kept, c_arm, f_arm)
 
 
 # =========================================================================== RouteCable
@@ -1780,6 +1789,7 @@ class GuidePlan:
     # clearance from its descent to the pivot to the insert (_check_pair_along), once
     # screened: its transit to the cable goes to one of them
     grasp: frozenset[int] = ANY_BRANCH
+    grasp_pairs: Paired = ()  # (routing arm, other arm) pairs of those, as Segment.paired
 
     @property
     def radius(self) -> float:
@@ -2539,6 +2549,7 @@ def _emit_guide(
         after=[GripperEvent(o_arm, GRASP, cable)],
         near=near,
         branches=((o_arm, gp.grasp),) if gp.grasp != ANY_BRANCH else (),
+        paired=gp.grasp_pairs,
     )
     # The distance between the hands grows by the pull here, by design: no keep_distance.
     b.add(
@@ -2817,6 +2828,16 @@ def _kept_branches(
     )
 
 
+Paired = tuple[tuple[str, str, frozenset[tuple[int, int]]], ...]  # Segment.paired
+
+
+def _kept_pairs(kept: NDArray[np.bool_], a: str, b: str) -> Paired:
+    """The pairs of ``a``'s and ``b``'s IK branches in ``kept`` (8 x 8: _pair_least compared
+    with a clearance), as Segment.paired: each arm's branches in some pair (_kept_branches)
+    do not say which go together."""
+    return ((a, b, frozenset((int(i), int(j)) for i, j in np.argwhere(kept))),)
+
+
 def _solutions(ctx: PlanningContext, arm: str, T: Mat, on: frozenset[int] | None) -> Vec:
     """``arm``'s inverse kinematics solutions at ``T``: those of the branches ``on`` when
     given (an arm solved numerically has none: all)."""
@@ -3040,12 +3061,12 @@ def _coming_rooms(
 
 def _check_pivot_free(
     ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str, o_on: frozenset[int]
-) -> tuple[frozenset[int], frozenset[int]]:
+) -> tuple[frozenset[int], frozenset[int], Paired]:
     """While the routing hand holds still at the slide's end, the other arm comes down to the
     pivot (on a branch of ``o_on``: those on which it can, _pivot_blocked): some pair of the
     arms' solutions is free there and above it, and keeps the cell's clearance between the
     arms, and on to the insert (:func:`_check_pair_along`). The routing arm's branches (of
-    gp.branches) on which it is so, and the other arm's in a pair with them."""
+    gp.branches) on which it is so, the other arm's in a pair with them, and those pairs."""
     for what, T in (("above the pivot", gp.other_above), ("at the pivot", gp.pivot)):
         poses = {r_arm: gp.slide[-1], o_arm: T}
         why = _pair_blocked(ctx, poses, ctx.clearance, {r_arm: gp.branches, o_arm: o_on})
@@ -3077,13 +3098,14 @@ def _check_pivot_free(
 
 def _check_pair_along(
     ctx: PlanningContext, gp: GuidePlan, r_arm: str, o_arm: str, o_on: frozenset[int]
-) -> tuple[frozenset[int], frozenset[int]]:
+) -> tuple[frozenset[int], frozenset[int], Paired]:
     """From the other arm coming down to the pivot to the insert (both arms on Cartesian
     paths, so each keeps its IK branch), some pair of branches keeps the cell's clearance
     between the arms at poses along the way (every STRIDE-th): near the pivot the routing
     arm's wrist passes over the other arm's forearm on some boards and under it on others.
-    The routing arm's branches (of gp.branches) in such a pair and the other arm's (of
-    ``o_on``) in a pair with them; else the way is refused, by how much it falls short."""
+    The routing arm's branches (of gp.branches) in such a pair, the other arm's (of ``o_on``)
+    in a pair with them, and those pairs; else the way is refused, by how much it falls
+    short."""
     from cellengine.execute.following import STRIDE  # the motion stack: planning only
 
     down = cg.line(gp.other_above, gp.pivot)
@@ -3092,7 +3114,7 @@ def _check_pair_along(
     poses += [(T, gp.pivot) for T in (*held[::STRIDE], held[-1])]
     least = _pair_least(ctx, r_arm, o_arm, poses, ctx.clearance, gp.branches, o_on, measure=False)
     if least is None:
-        return gp.branches, o_on  # no branches: the compiler finds out
+        return gp.branches, o_on, ()  # no branches: the compiler finds out
     room = float(least.max())
     if room < ctx.clearance:
         raise _arms_blocked(
@@ -3103,8 +3125,9 @@ def _check_pair_along(
             f"(sliding at theta = {math.degrees(gp.theta):.1f} deg, stopping {_mm(gp.a)} mm "
             "before the guide)",
         )
-    (_, kept), (_, grasp) = _kept_branches(least >= ctx.clearance, r_arm, o_arm)
-    return kept, grasp
+    pairs = least >= ctx.clearance
+    (_, kept), (_, grasp) = _kept_branches(pairs, r_arm, o_arm)
+    return kept, grasp, _kept_pairs(pairs, r_arm, o_arm)
 
 
 def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, coming: bool) -> None:

@@ -225,6 +225,7 @@ def _prefix(segments: tuple[Segment, ...], last: int) -> tuple[object, ...] | No
             s.contacts,
             s.near,
             s.branches,
+            s.paired,
         )
         for s in head
     )

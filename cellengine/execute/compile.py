@@ -274,8 +274,9 @@ class Compiler:
 
     def _check_branches(self, segment: Segment) -> None:
         """Refuse an arm (following a Cartesian path or standing) on an IK branch the segment
-        does not require of it (Segment.branches): the skill's checks of its poses did not
-        look at that branch, and the transit that chose it did not look ahead at them."""
+        does not require of it (Segment.branches), and two arms on a pair of branches it does
+        not pair (Segment.paired): the skill's checks of its poses did not look at them, and
+        the transit that chose them did not look ahead at them."""
         moved = {p.arm for p in segment.paths if p.kind == "transit"}
         for arm, on in segment.branches:  # an arm that stands too: the skill looked at it
             ik = arm_ik(self.cell.arms[arm])
@@ -286,6 +287,19 @@ class Compiler:
                 raise Refused(
                     f"the {arm} arm is on IK branch {branch}; the skill checked this "
                     f"segment's poses on branches {sorted(on)} only",
+                    configuration=True,
+                )
+        for a, b, pairs in segment.paired:
+            iks = [arm_ik(self.cell.arms[arm]) for arm in (a, b)]
+            if a in moved or b in moved or any(ik.closed_form is None for ik in iks):
+                continue
+            i, j = (
+                ik.branch(self.q[self.cell.slices[x]]) for ik, x in zip(iks, (a, b), strict=True)
+            )
+            if (i, j) not in pairs:
+                raise Refused(
+                    f"the {a} and {b} arms are on IK branches {i} and {j}; the skill "
+                    f"checked this segment's poses with them on {sorted(pairs)} only",
                     configuration=True,
                 )
 

@@ -303,3 +303,28 @@ def test_a_transit_reaches_its_goal_on_a_branch_the_segments_after_it_require() 
         f"step 2 (lift): the left arm is on IK branch {on}; the skill checked this "
         f"segment's poses on branches [{other}] only"
     )
+
+
+def test_two_arms_on_a_pair_of_branches_the_segment_does_not_pair_are_refused() -> None:
+    """Segment.paired: each arm's branch may be among those it checked (Segment.branches)
+    while the two together are not a pair it checked: refused, blaming the configuration;
+    on a pair it names, the segment runs."""
+    world, cell, checker = cable_cell()
+    up = (LEFT_READY[0], LEFT_READY[1], LEFT_READY[2] + 0.05)
+    lift = Segment(1, "lift", (ArmPath("left", "cartesian", line(LEFT_READY, up)),))
+    c = Compiler(world, cell, checker, home(cell))
+    c.add(ready())
+    left, right = (
+        arm_ik(cell.arms[arm]).branch(c.q[cell.slices[arm]]) for arm in ("left", "right")
+    )
+    other = next(k for k in range(8) if k not in (left, right))
+    pairs = frozenset({(left, other), (other, right)})
+    with pytest.raises(InputError) as e:
+        c.add(replace(lift, paired=(("left", "right", pairs),)))
+    assert e.value.blames == "configuration"
+    assert str(e.value) == (
+        f"step 2 (lift): the left and right arms are on IK branches {left} and {right}; the "
+        f"skill checked this segment's poses with them on {sorted(pairs)} only"
+    )
+    c.add(replace(lift, paired=(("left", "right", pairs | {(left, right)}),)))
+    assert c.program().segments[-1].segment.label == "lift"
