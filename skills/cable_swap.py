@@ -107,7 +107,7 @@ def _swaps(
     for away in aways:
         try:
             b = c._Builder(released.state)
-            path, r_on = _away(ctx, arms, b.state, away, up, where)
+            path, r_on = _away(ctx, arms, b.state, (away, up), beside, where)
             # the other hand, when it lets go after, stands at its pivot by the last guides
             standing = {*map(cg.element_of, state.guides[-2:]), *beside}
             holding = sorted(standing) if o_arm in b.state.held else []
@@ -227,22 +227,35 @@ def _away(
     ctx: PlanningContext,
     arms: tuple[str, str],
     state: CableState,
-    away: np.ndarray,
-    up: np.ndarray,
+    way: tuple[np.ndarray, np.ndarray],
+    beside: Sequence[str],
     where: str,
 ) -> tuple[np.ndarray, frozenset[int]]:
-    """The routing hand's path up RETRACT_HEIGHT and by ``away`` (m, horizontal) out of the
-    other's way, and the IK branches the routing arm can be on there (it moves in lines, on
-    one it may be on in ``state``), when some pair of the arms' IK solutions on branches
-    they can be on keeps the cell's clearance there, the other hand where ``state`` has
-    it."""
+    """The routing hand's path up RETRACT_HEIGHT and by ``away`` (m, horizontal; ``way``:
+    it and the platform's up) out of the other's way, and the IK branches the routing arm
+    can be on there (it moves in lines, on one it may be on in ``state``), when its open
+    fingers keep clear of the elements it let go ``beside`` (they close on the cable by the
+    slot: opened, they may meet its walls) and the cell's clearance from the rest, and some
+    pair of the arms' IK solutions on branches they can be on keeps the cell's clearance
+    there, the other hand where ``state`` has it."""
     from cellengine.execute.following import surviving  # the motion stack: planning only
+    from cellengine.motion.collision import DEFAULT_CLEARANCE
 
     r_arm, o_arm = arms
+    away, up = way
     T_r, T_o = state.tcp[r_arm], state.tcp[o_arm]
     T_up = cg.lifted(T_r, up, cg.RETRACT_HEIGHT)
     T_away = cg.at(T_up, T_up[:3, 3] + away)
     path = ip.concatenate([cg.line(T_r, T_up), cg.line(T_up, T_away)])
+    found = c._env_near(ctx, r_arm, path, c.OPEN, beside, DEFAULT_CLEARANCE)
+    if found is not None:
+        near, limit, own = found
+        raise c._Blocked.of(
+            near.distance - limit,
+            f"{where}: handing the cable over to the other arm ({o_arm}), "
+            f"{near.tool} {c._passes(near, limit)} as the routing hand opens and moves out of "
+            "the way; " + c._env_fix(ctx, near, own, limit),
+        )
     alive, _ = surviving(ctx.cell, ctx.checker, r_arm, path, ctx.home, state.branches_of(r_arm))
     on = {r_arm: frozenset(alive), o_arm: state.branches_of(o_arm)}
     whys = (c._pair_blocked(ctx, {o_arm: T_o, r_arm: T}, ctx.clearance, on) for T in (T_up, T_away))

@@ -1460,3 +1460,27 @@ def test_the_hands_retract_one_after_the_other_when_no_ways_at_once_keep_apart(
         f"{state.cable}: release and retract: then {o_arm}",
     ]
     assert len(segments[0].before) == 2 and segments[1].before == ()
+
+
+def test_the_routing_hand_opening_to_hand_the_cable_over_is_screened() -> None:
+    """The routing hand lets go where it inserted (cable_swap._away): its opened fingers are
+    screened against the elements it works beside (kept clear of them, not at the cell's
+    clearance) and everything else (the cell's clearance). Where it inserted, past the
+    guide, they are clear; opened by the guide's slot, 20 mm along the board's x from it,
+    one of them runs into the guide."""
+    world, _ = _world()
+    ctx, state, route, r_arm, o_arm = _after_guide1(world)
+    last = state.guides[-1]
+    up = cg.platform_up(ctx.world, last)
+    away = (cable_swap.AWAYS[0] * np.array([0.0, 1.0, 0.0]), up)
+    beside = C._beside(state, route.guides[1])
+    path, on = cable_swap._away(ctx, (r_arm, o_arm), state, away, beside, "here")
+    assert len(path) > 1 and on
+    T = state.tcp[r_arm].copy()
+    T[:3, 3] = ctx.world.pose(f"{last}.slot")[:3, 3] + np.array([0.02, 0.0, 0.0])
+    in_slot = replace(state, tcp={**state.tcp, r_arm: T})
+    with pytest.raises(InputError) as e:
+        cable_swap._away(ctx, (r_arm, o_arm), in_slot, away, beside, "here")
+    message = str(e.value)
+    assert message.startswith(f"here: handing the cable over to the other arm ({o_arm}), ")
+    assert f"finger_right would run 1.1 mm into {last} as the routing hand opens" in message
