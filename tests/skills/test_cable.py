@@ -1398,7 +1398,7 @@ def test_the_last_retracts_keep_the_arms_apart(monkeypatch: pytest.MonkeyPatch) 
     ctx, state, _, r_arm, o_arm = _after_guide1(world)
     arms = (r_arm, o_arm)
     best = [C._retract_ways(ctx, state, a)[0] for a in arms]
-    ((what, taken, on),) = next(C._retracts(ctx, state, arms))
+    ((what, taken, on, paired),) = next(C._retracts(ctx, state, arms))
     assert what == ""  # at once
     assert [p.poses.tobytes() for p in taken] == [p.poses.tobytes() for p in best]
     # the branches of the pairs that keep it are required of the arms there
@@ -1413,6 +1413,8 @@ def test_the_last_retracts_keep_the_arms_apart(monkeypatch: pytest.MonkeyPatch) 
         o_arm: frozenset(int(k) for k in np.flatnonzero(kept.any(axis=0))),
     }
     assert all(on_arm for _, on_arm in on)
+    # and which of them go together
+    assert paired == ((r_arm, o_arm, frozenset(map(tuple, np.argwhere(kept).tolist()))),)
     measured = C._pair_least
     calls: list[int] = []
 
@@ -1422,7 +1424,7 @@ def test_the_last_retracts_keep_the_arms_apart(monkeypatch: pytest.MonkeyPatch) 
         return np.minimum(least, ctx.clearance / 2.0) if len(calls) == 1 else least
 
     monkeypatch.setattr(C, "_pair_least", first_too_near)
-    ((_, taken, _),) = next(C._retracts(ctx, state, arms))
+    ((_, taken, _, _),) = next(C._retracts(ctx, state, arms))
     second = list(itertools.product(*(C._retract_ways(ctx, state, a) for a in arms)))[1]
     assert len(calls) == 2
     assert [p.poses.tobytes() for p in taken] == [p.poses.tobytes() for p in second]
@@ -1453,6 +1455,7 @@ def test_the_hands_retract_one_after_the_other_when_no_ways_at_once_keep_apart(
     assert first[0] == f": {r_arm} first" and then[0] == f": then {o_arm}"
     assert [p.arm for p in first[1]] == [r_arm] and [p.arm for p in then[1]] == [o_arm]
     assert first[2] == then[2] and all(on for _, on in first[2])
+    assert first[3] == then[3] and first[3][0][:2] == (r_arm, o_arm) and first[3][0][2]
     calls.clear()
     segments, _ = C.release_and_retract(ctx, state)
     assert [s.label for s in segments] == [
