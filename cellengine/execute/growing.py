@@ -69,7 +69,29 @@ class Taken:
             pass
 
 
-class Growing(Sequence[Segment]):
+class _Lazy(Sequence[Segment]):
+    """A sequence whose slices are windows on it, as lazy as it is (forward slices only, as
+    the compiler takes them)."""
+
+    def _at(self, i: int) -> Segment:  # IndexError past the end
+        raise NotImplementedError
+
+    @overload
+    def __getitem__(self, i: int) -> Segment: ...
+    @overload
+    def __getitem__(self, i: slice) -> Sequence[Segment]: ...
+    def __getitem__(self, i: int | slice) -> Segment | Sequence[Segment]:
+        if isinstance(i, slice):
+            start, stop = i.start or 0, i.stop
+            if i.step not in (None, 1) or start < 0 or (stop is not None and stop < 0):
+                raise ValueError(f"unsupported slice {i}")
+            return _Window(self, start, stop)
+        if i < 0:
+            raise IndexError(i)
+        return self._at(i)
+
+
+class Growing(_Lazy):
     """The segments of the choices from ``start`` on, in order; asking for one past those
     taken takes the next choices' candidates (:class:`Taken`). ``owner`` of a segment (by
     id): its place here, its choice, its place in that choice's; ``begins``: the choice
@@ -103,14 +125,8 @@ class Growing(Sequence[Segment]):
             self._list()
         return True
 
-    @overload
-    def __getitem__(self, i: int) -> Segment: ...
-    @overload
-    def __getitem__(self, i: slice) -> Sequence[Segment]: ...
-    def __getitem__(self, i: int | slice) -> Segment | Sequence[Segment]:
-        if isinstance(i, slice):
-            return _Window(self, *_bounds(i))
-        if i < 0 or not self.has(i):
+    def _at(self, i: int) -> Segment:
+        if not self.has(i):
             raise IndexError(i)
         return self.segments[i]
 
@@ -120,35 +136,17 @@ class Growing(Sequence[Segment]):
         return len(self.segments)
 
 
-class _Window(Sequence[Segment]):
-    """``source[start:stop]``, as lazy as its source."""
+class _Window(_Lazy):
+    """``source[start:stop]``."""
 
     def __init__(self, source: Sequence[Segment], start: int, stop: int | None) -> None:
         self.source, self.start, self.stop = source, start, stop
 
-    @overload
-    def __getitem__(self, i: int) -> Segment: ...
-    @overload
-    def __getitem__(self, i: slice) -> Sequence[Segment]: ...
-    def __getitem__(self, i: int | slice) -> Segment | Sequence[Segment]:
-        if isinstance(i, slice):
-            start, stop = _bounds(i)
-            end = self.start + stop if stop is not None else self.stop
-            if self.stop is not None and end is not None:
-                end = min(end, self.stop)
-            return _Window(self.source, self.start + start, end)
-        if i < 0 or (self.stop is not None and self.start + i >= self.stop):
+    def _at(self, i: int) -> Segment:
+        if self.stop is not None and self.start + i >= self.stop:
             raise IndexError(i)
         return self.source[self.start + i]
 
     def __len__(self) -> int:
         n = max(0, len(self.source) - self.start)
         return n if self.stop is None else min(n, self.stop - self.start)
-
-
-def _bounds(s: slice) -> tuple[int, int | None]:
-    """A slice's start and stop, for the forward slices the compiler takes."""
-    start, stop = s.start or 0, s.stop
-    if s.step not in (None, 1) or start < 0 or (stop is not None and stop < 0):
-        raise ValueError(f"unsupported slice {s}")
-    return start, stop

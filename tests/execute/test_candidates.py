@@ -13,6 +13,7 @@ from cellengine import geometry as g
 from cellengine.errors import InputError, Problem, StepError
 from cellengine.execute import Compiler
 from cellengine.execute.candidates import compile_candidates
+from cellengine.execute.growing import Growing, Taken
 from cellengine.family import Candidate
 from cellengine.program import ArmPath, Segment
 from tests.execute.scenes import cable_cell, home, line, pose
@@ -347,3 +348,20 @@ def test_a_choice_is_taken_only_when_a_segment_past_it_is_asked_for() -> None:
     )
     assert labels(c) == [f"to {NEAR}", f"to {ALSO}", f"to {NEAR}"]
     assert planned == ["choice 2"]
+
+
+def test_a_window_on_the_segments_takes_only_what_it_is_asked_for() -> None:
+    """growing.Growing sliced as the compiler slices it (after a segment, then the first few
+    of those): iterating the window takes the choices up to its end, no further."""
+    planned: list[int] = []
+
+    def chain(k: int) -> Iterator[Candidate]:
+        planned.append(k)
+        then = (lambda: chain(k + 1)) if k < 5 else None
+        yield Candidate((hop(k, NEAR), hop(k, ALSO)), then=then)
+
+    segments = Growing(Taken([], chain(0)), 0)
+    window = segments[1:][:4]  # segments 1-4: choices 0, 1 and 2
+    assert [s.step for s in window] == [0, 1, 1, 2]
+    assert planned == [0, 1, 2]
+    assert len(segments) == 12 and planned == list(range(6))
