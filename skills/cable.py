@@ -353,22 +353,34 @@ class RouteCable(Skill):
         return r_arm, o_arm
 
     def ways(
-        self, ctx: PlanningContext, state: CableState, k: int, dead: Set[bytes] = frozenset()
+        self,
+        ctx: PlanningContext,
+        state: CableState,
+        k: int,
+        dead: Set[bytes] = frozenset(),
+        shared: Shared | None = None,
     ) -> Iterator[tuple[list[Segment], CableState]]:
         """The ways to route guide ``k`` from ``state``, best first, with the state after
-        (``dead``: see guide_plans)."""
+        (``dead``, ``shared``: see guide_plans)."""
         r_arm, o_arm = self.arms(ctx, state)
-        for gp in self.guide_plans(ctx, state, k, dead):
+        for gp in self.guide_plans(ctx, state, k, dead, shared):
             yield _emit_guide(state, gp, r_arm, o_arm, self.cable)
 
     def guide_plans(
-        self, ctx: PlanningContext, state: CableState, k: int, dead: Set[bytes] = frozenset()
+        self,
+        ctx: PlanningContext,
+        state: CableState,
+        k: int,
+        dead: Set[bytes] = frozenset(),
+        shared: Shared | None = None,
     ) -> Iterator[GuidePlan]:
         """Guide ``k``'s plans that pass the checks (reach, cable length, a slide clear of
         the other elements), best first (:func:`guide_ways`); the first way's error when
         none does. ``dead``: the other hand's releases (their poses' bytes) the compiler
         could not run from ``state``; the ways that begin with one are left out, looked at
-        as they come (the set may grow while the ways are drawn)."""
+        as they come (the set may grow while the ways are drawn). ``shared``: the routing
+        hand's screens of calls before whose states differ only in the other arm (the hand
+        swaps before a guide: cable_swap), by _routing_state."""
         world, guide = ctx.world, self.guides[k]
         r_arm, o_arm = self.arms(ctx, state)
         # the error to give when no way passes: the way that came closest to keeping the
@@ -404,6 +416,9 @@ class RouteCable(Skill):
             why.blames = "arms"
             raise why
         state = _still_on(state, r_arm, released)
+        if shared is not None:  # the routing hand's screens of the same routing hand
+            own = shared.setdefault(_routing_state(state, k, r_arm), screen)
+            screen = replace(own, pivots={}, coming={})
         releases = {b: _stand_back(state, o_arm, up, b).tobytes() for b in released}
         looking = True
         for way in itertools.chain((first,), ways):
@@ -610,6 +625,27 @@ class _Screen:
 
 
 Release = tuple[tuple[str, frozenset[int]], ...]  # Segment.branches of a release
+Shared = dict[bytes, _Screen]  # RouteCable.guide_plans's
+
+
+def _routing_state(state: CableState, k: int, r_arm: str) -> bytes:
+    """What the routing hand's screens of guide ``k`` depend on in ``state`` (_Screen's
+    approaches, hows, routed and came): where the routing hand is and may be, and the
+    cable laid so far."""
+    what = (
+        k,
+        r_arm,
+        state.step,
+        sorted(state.branches_of(r_arm)),
+        state.route,
+        state.guides,
+        state.pull_distance,
+        state.lean,
+        state.wound.get(r_arm),
+        state.mode.get(r_arm),
+        state.held.get(r_arm),
+    )
+    return repr(what).encode() + np.asarray(state.tcp[r_arm]).tobytes()
 
 
 def _letting_go(
@@ -1110,7 +1146,9 @@ def _pick_geometry(
         if away is not None
         else cg.turn_in_place(T_f_up, cg.tcp_frame(T_f_up[:3, 3], chord, up, chord, lean))
     )
-    met, chord = _meet({c_arm: faced_c[-1], f_arm: faced_f[-1]}, c_arm, chord, up, lean, meet)
+    bases = {a: world.cell.robots[a].base.matrix()[:3, 3] for a in (c_arm, f_arm)}
+    hands = {c_arm: faced_c[-1], f_arm: faced_f[-1]}
+    met, chord = _meet(hands, c_arm, chord, up, lean, meet, bases)
     T_c_last = met[c_arm][-1] if c_arm in met else faced_c[-1]
     T_f_last = met[f_arm][-1] if f_arm in met else faced_f[-1]
     # Down on a circle about the connector hand, turning with it (the hand leans away from
@@ -1171,12 +1209,14 @@ def _meet(
     up: Vec,
     lean: float,
     meet: tuple[float, float],
+    bases: Mapping[str, Vec],
 ) -> tuple[dict[str, Poses], Vec]:
     """The paths of the hands that move to where they meet, by arm, and the chord after:
     the connector hand (``c_arm``'s) carries its end ``meet[0]`` of the level span towards
     the far hand, and the far hand comes round to the rest of the span from it, the chord
-    turned by ``meet[1]`` (rad) about ``up``. The hands never move apart: the cable only
-    slackens."""
+    turned by ``meet[1]`` (rad) about ``up``; or, ``meet[1]`` cg.ACROSS, the hands as far
+    apart about the bisector of the arms' ``bases`` (cg.PICK_MEETS). The hands never end
+    farther apart than they start: the cable only slackens."""
     fraction, swing = meet
     if fraction == 0.0 and swing == 0.0:
         return {}, chord
@@ -1184,7 +1224,13 @@ def _meet(
     T_c, T_f = hands[c_arm], hands[f_arm]
     span = float((T_f[:3, 3] - T_c[:3, 3]) @ chord)
     centre = T_c[:3, 3] + fraction * span * chord
-    turned = g.axis_angle_to_matrix(up, swing) @ chord
+    if swing == cg.ACROSS:
+        turned = cg.horizontal(bases[f_arm] - bases[c_arm], up)
+        mid = (T_c[:3, 3] + T_f[:3, 3]) / 2.0
+        mid -= float((mid - (bases[c_arm] + bases[f_arm]) / 2.0) @ turned) * turned
+        centre = mid - (1.0 - fraction) * span / 2.0 * turned
+    else:
+        turned = g.axis_angle_to_matrix(up, swing) @ chord
     T_c1 = cg.tcp_frame(centre, turned, up, -turned, lean)
     T_f1 = cg.tcp_frame(centre + (1.0 - fraction) * span * turned, turned, up, turned, lean)
     paths = {c_arm: cg.line(T_c, T_c1)}  # turning its connector with it

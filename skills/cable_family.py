@@ -21,6 +21,7 @@ from cellengine.skills.cable import (
     PickCable,
     PlaceConnector,
     RouteCable,
+    Shared,
     release_ways,
     step_ways,
 )
@@ -185,14 +186,19 @@ def _ways(
 
 
 def _routed(
-    ctx: PlanningContext, step: RouteCable, state: CableState, k: int, dead: Set[bytes]
+    ctx: PlanningContext,
+    step: RouteCable,
+    state: CableState,
+    k: int,
+    dead: Set[bytes],
+    shared: Shared | None = None,
 ) -> Iterator[tuple[list[Segment], CableState]]:
-    """The published slide and pivot's ways (RouteCable.ways), then laying the cable over
-    the guide's top and pushing it in (cable_top, for a guide too close to the one before);
-    the first's error when neither has a way."""
+    """The published slide and pivot's ways (RouteCable.ways, ``shared`` its), then laying
+    the cable over the guide's top and pushing it in (cable_top, for a guide too close to
+    the one before); the first's error when neither has a way."""
     first: InputError | None = None
     try:
-        yield from step.ways(ctx, state, k, dead)
+        yield from step.ways(ctx, state, k, dead, shared)
     except InputError as e:
         first = e
     try:
@@ -212,9 +218,10 @@ def _swapped(
     out of the way changes few of their checks."""
     if k == 0:
         return
+    shared: Shared = {}  # the swaps differ in where the hand letting go went
     for swap, swapped in cable_swap.hand_swaps(ctx, step, state, k, dead):
         which = cable_swap.key(swap)
-        for segments, after in _routed(ctx, step, swapped, k, dead):
+        for segments, after in _routed(ctx, step, swapped, k, dead, shared):
             if which in dead:
                 break
             yield [*swap, *segments], after

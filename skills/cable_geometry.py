@@ -117,8 +117,14 @@ LEANS = (LEAN, math.radians(25.0), math.radians(5.0))
 # far hand then comes round it, turning the chord about the vertical); (0, 0): where the
 # connector was picked, as published. Combs far apart leave the sliding arm reaching across
 # the other's; meeting between them, the pair across the robots' line of sight, does not.
+# ACROSS: the hands meet the same distance apart, centred where the combs' midpoint is
+# between the two bases, each on its own arm's side, the chord from the connector arm's base
+# to the far arm's (combs on one arm's side or near the bases leave that arm's forearm over
+# the other hand wherever along the combs they meet).
+ACROSS = math.inf
 PICK_MEETS = tuple(
-    (fraction, math.radians(swing)) for fraction, swing in ((0, 0), (0.5, 0), (0.5, 90), (0.5, -90))
+    (fraction, math.radians(swing))
+    for fraction, swing in ((0, 0), (0.5, 0), (0.5, 90), (0.5, -90), (0.5, ACROSS))
 )
 # between guides a short span apart, a leaning pivot hand's closed fingers reach back over
 # the guide before: upright ones stay between the two

@@ -915,6 +915,27 @@ def test_pick_cable_meeting_ways_carry_the_connector_half_way() -> None:
     ]
 
 
+def test_pick_cable_meeting_across_centres_the_hands_between_the_bases() -> None:
+    """The across meet: combs both on the far arm's side of the bases' bisector (the
+    REMODEL sample turned 180 deg) leave the connector hand there; meeting across, each hand
+    is on its own arm's side, as far from the bisector as the other, the chord from the
+    connector arm's base to the far arm's, the hands half the span apart."""
+    up = np.array([0.0, 0.0, 1.0])
+    bases = {"left": np.array([0.0, 0.35, 0.0]), "right": np.array([0.0, -0.35, 0.0])}
+    chord = np.array([1.0, 0.0, 0.0])
+    T_c = cg.tcp_frame(np.array([0.15, -0.08, 0.2]), chord, up, -chord, cg.LEAN)
+    T_f = cg.tcp_frame(np.array([0.60, -0.08, 0.2]), chord, up, chord, cg.LEAN)
+    hands = {"left": T_c, "right": T_f}
+    met, turned = C._meet(hands, "left", chord, up, cg.LEAN, (0.5, cg.ACROSS), bases)
+    assert np.allclose(turned, [0.0, -1.0, 0.0], atol=1e-9)
+    c_end, f_end = met["left"][-1][:3, 3], met["right"][-1][:3, 3]
+    assert c_end[1] == pytest.approx(0.1125, abs=1e-9)  # a quarter of the 450 mm span
+    assert f_end[1] == pytest.approx(-0.1125, abs=1e-9)
+    assert c_end[0] == pytest.approx(0.375, abs=1e-9) and f_end[0] == pytest.approx(0.375, abs=1e-9)
+    assert c_end[2] == pytest.approx(0.2, abs=1e-9)
+    assert float(np.linalg.norm(c_end - f_end)) == pytest.approx(0.225, abs=1e-9)
+
+
 def test_route_cable_first_way_is_the_published_one() -> None:
     """The first way of a guide: theta_min + THETA_MARGIN, the default tips, stand-back and
     approach gap; later ways never at a smaller angle for the same approach gap."""
