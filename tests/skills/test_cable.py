@@ -1330,6 +1330,38 @@ def test_the_ways_beginning_with_a_release_the_compiler_could_not_run_are_left_o
     assert list(route.guide_plans(ctx, state, 1, every)) == []
 
 
+def test_guide_plans_share_the_routing_hands_screens_across_other_arm_states(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """RouteCable.guide_plans' ``shared``: a second call whose state differs only in where
+    the other arm is (a hand swap's) screens no routing-hand way again, and offers the same
+    first way; a routing hand elsewhere is screened anew."""
+    world, _ = _world()
+    ctx, state, route, r_arm, o_arm = _after_guide1(world)
+    calls: list[int] = []
+    screened = C._routing_hand_blocked
+
+    def counting(*args: object, **kwargs: object) -> object:
+        calls.append(1)
+        return screened(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(C, "_routing_hand_blocked", counting)
+    shared: C.Shared = {}
+    first = next(route.guide_plans(ctx, state, 1, shared=shared))
+    assert calls and len(shared) == 1
+    T = np.array(state.tcp[o_arm])
+    T[:3, 3] += [0.0, 0.0, 0.020]  # the other hand 20 mm higher
+    moved = replace(state, tcp={**state.tcp, o_arm: T})
+    n = len(calls)
+    again = next(route.guide_plans(ctx, moved, 1, shared=shared))
+    assert len(calls) == n and len(shared) == 1
+    assert again.slide.tolist() == first.slide.tolist()
+    T = np.array(state.tcp[r_arm])
+    T[:3, 3] += [0.0, 0.0, 0.020]
+    next(route.guide_plans(ctx, replace(state, tcp={**state.tcp, r_arm: T}), 1, shared=shared))
+    assert len(calls) > n and len(shared) == 2
+
+
 def test_the_other_hand_takes_the_cable_over_between_guides() -> None:
     """After guide1 the hands may swap before guide2: the other hand lets go of guide1 and
     stands back; the routing hand lets go and moves up and out of the way (first to the side
