@@ -1215,8 +1215,8 @@ def _meet(
     the connector hand (``c_arm``'s) carries its end ``meet[0]`` of the level span towards
     the far hand, and the far hand comes round to the rest of the span from it, the chord
     turned by ``meet[1]`` (rad) about ``up``; or, ``meet[1]`` cg.ACROSS, the hands as far
-    apart about the bisector of the arms' ``bases`` (cg.PICK_MEETS). The hands never end
-    farther apart than they start: the cable only slackens."""
+    apart, centred on the bisector of the arms' ``bases`` (cg.PICK_MEETS). The hands never
+    end farther apart than they start: the cable only slackens."""
     fraction, swing = meet
     if fraction == 0.0 and swing == 0.0:
         return {}, chord

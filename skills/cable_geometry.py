@@ -117,10 +117,11 @@ LEANS = (LEAN, math.radians(25.0), math.radians(5.0))
 # far hand then comes round it, turning the chord about the vertical); (0, 0): where the
 # connector was picked, as published. Combs far apart leave the sliding arm reaching across
 # the other's; meeting between them, the pair across the robots' line of sight, does not.
-# ACROSS: the hands meet the same distance apart, centred where the combs' midpoint is
-# between the two bases, each on its own arm's side, the chord from the connector arm's base
-# to the far arm's (combs on one arm's side or near the bases leave that arm's forearm over
-# the other hand wherever along the combs they meet).
+# A swing of ACROSS: the hands end as far apart ((1 - fraction) of the span), centred on
+# the bisector of the two bases where the combs' midpoint projects onto it, each on its own
+# arm's side, the chord from the connector arm's base to the far arm's (combs on one arm's
+# side or near the bases leave that arm's forearm over the other hand wherever along the
+# combs they meet). Not an angle: no turn of the chord puts the hands there.
 ACROSS = math.inf
 PICK_MEETS = tuple(
     (fraction, math.radians(swing))
