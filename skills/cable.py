@@ -1312,6 +1312,7 @@ def _pick_on(
     for arm in (c, f):
         poses = [p.poses for s in segments for p in s.paths if p.arm == arm]
         follow[arm], _ = surviving(ctx.cell, ctx.checker, arm, np.concatenate(poses), ctx.home)
+        follow[arm] = _clear_of_cell(ctx, arm, segments, follow[arm], where)
     least = _pair_least(
         ctx,
         c,
@@ -1341,6 +1342,34 @@ def _pick_on(
         out.append(replace(seg, branches=tuple((a, on[a]) for a in (c, f) if a in started)))
         started |= {p.arm for p in seg.paths if p.kind == "transit"}
     return out
+
+
+def _clear_of_cell(
+    ctx: PlanningContext, arm: str, segments: list[Segment], on: set[int], where: str
+) -> set[int]:
+    """Those of ``arm``'s IK branches ``on`` that keep the cell's clearance from the cell
+    along its Cartesian paths away from what it works near (the combs it grasps in, declared
+    ``near``): a forearm swung over a fixture while the hands meet is refused here, with the
+    way, not by the compiler after the transit to it. An error when none does."""
+    from cellengine.execute.following import touching  # the motion stack: planning only
+
+    paths = [
+        p.poses
+        for s in segments
+        if not s.near
+        for p in s.paths
+        if p.arm == arm and p.kind == "cartesian"
+    ]
+    if not paths or not on:
+        return on
+    hit = touching(ctx.cell, ctx.checker, arm, np.concatenate(paths), ctx.home, on, ctx.clearance)
+    if len(hit) < len(on):
+        return on - set(hit)
+    a, b = next(iter(hit.values()))
+    raise _error(
+        f"{where}: on every inverse kinematics branch that follows this pick the {arm} arm "
+        f"comes within the cell's clearance ({_mm(ctx.clearance)} mm) of the cell ({a}, {b})"
+    )
 
 
 def _emit_grasp(b: _Builder, step: PickCable, geo: _PickGeometry, arms: tuple[str, ...]) -> None:

@@ -125,11 +125,13 @@ def touching(
     poses: Poses,
     q: Vec,
     branches: Collection[int],
+    keep: float = 0.0,
 ) -> dict[int, Pair]:
     """Which of ``branches`` put ``arm`` (its links, its tool, what it holds) in contact with
-    the cell's environment at some of ``poses`` (every STRIDE-th and the last), the other
-    joints as in ``q``, each with the first pair in contact: a branch whose upper arm passes
-    through a fixture reaches the pose clear of itself all the same (:func:`surviving`)."""
+    the cell's environment (or within ``keep`` m of it) at some of ``poses`` (every STRIDE-th
+    and the last), the other joints as in ``q``, each with the first such pair: a branch
+    whose upper arm passes through a fixture reaches the pose clear of itself all the same
+    (:func:`surviving`)."""
     ik = arm_ik(cell.arms[arm])
     out: dict[int, Pair] = {}
     if ik.closed_form is None:
@@ -144,6 +146,6 @@ def touching(
                 continue  # out of reach there: surviving's to say
             here[cell.slices[arm]] = row[k]
             d, pair = checker.distance(here, between=(arm, None))
-            if d <= 0.0:
+            if d <= 0.0 or d < keep:
                 out[k] = pair
     return out

@@ -110,3 +110,26 @@ def test_branches_clear_of_themselves_may_still_pass_through_a_fixture() -> None
     for a, b in hit.values():
         link = a if a.startswith("right/") else b
         assert "holder.comb_b" in (a, b) and not link.startswith("right/tool")
+
+
+def test_touching_within_a_clearance_adds_the_branches_that_pass_near_a_fixture() -> None:
+    """The right tool 150 mm above guide3's slot: no branch touches the cell; held to 20 mm,
+    the two whose upper links pass over the cable holder's comb (about 11 mm) do, each
+    measured there nearer than that, and the others stay farther."""
+    world, cell, checker = cable_cell()
+    q = home(cell)
+    slot = world.pose("routing.guide3.slot")[:3, 3]
+    poses = g.transform(g.rot_x(math.pi), slot + np.array([0.0, 0.0, 0.15]))[None]
+    row = arm_ik(cell.arms["right"]).by_branch(poses[0])
+    assert row is not None
+    reached = {k for k in range(8) if not np.isnan(row[k]).any()}
+    assert touching(cell, checker, "right", poses, q, reached) == {}
+    near = touching(cell, checker, "right", poses, q, reached, keep=0.02)
+    assert set(near) == {0, 7}
+    for k in reached:
+        here = q.copy()
+        here[cell.slices["right"]] = row[k]
+        d, pair = checker.distance(here, between=("right", None))
+        assert (d < 0.02) == (k in near)
+        if k in near:
+            assert near[k] == pair and "holder.comb_b" in pair

@@ -936,6 +936,29 @@ def test_pick_cable_meeting_across_centres_the_hands_between_the_bases() -> None
     assert float(np.linalg.norm(c_end - f_end)) == pytest.approx(0.225, abs=1e-9)
 
 
+def test_pick_keeps_the_branches_clear_of_the_cell_away_from_the_combs() -> None:
+    """The right tool 100 mm above guide3's slot, pointing down: two of its IK branches take
+    the upper links through the cable holder's comb. A pick's Cartesian path there keeps the
+    others; with only those two, it is refused naming the arm and the pair; a segment that
+    works near the comb on purpose (``near``) is not held to the clearance."""
+    plan = planned("plan_straight")
+    ctx = context(plan.world)
+    slot = plan.world.pose("routing.guide3.slot")[:3, 3]
+    T = g.transform(g.rot_x(math.pi), slot + np.array([0.0, 0.0, 0.10]))
+    lifted = g.transform(g.rot_x(math.pi), slot + np.array([0.0, 0.0, 0.11]))
+    path = C._cartesian("right", np.array([lifted, T]))
+    segments = [Segment(0, "meet", (path,))]
+    assert C._clear_of_cell(ctx, "right", segments, set(range(8)), "here") == set(range(1, 7))
+    with pytest.raises(InputError) as e:
+        C._clear_of_cell(ctx, "right", segments, {0, 7}, "here")
+    assert str(e.value) == (
+        "here: on every inverse kinematics branch that follows this pick the right arm comes "
+        "within the cell's clearance (10.0 mm) of the cell (holder.comb_b, right/forearm_link#2)"
+    )
+    beside = [Segment(0, "grasp", (path,), near=(("right", "holder.comb_b"),))]
+    assert C._clear_of_cell(ctx, "right", beside, {0, 7}, "here") == {0, 7}
+
+
 def test_route_cable_first_way_is_the_published_one() -> None:
     """The first way of a guide: theta_min + THETA_MARGIN, the default tips, stand-back and
     approach gap; later ways never at a smaller angle for the same approach gap."""
