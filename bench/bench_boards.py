@@ -1,10 +1,12 @@
 """Success rate of the cable skills on generated boards nobody tuned for (issue #13, point 5).
 
 Run: .venv/bin/python bench/bench_boards.py --boards 50 --seed 1 [--strategies split,sync,async]
-     [--remodel] [--out DIR] [--jobs 2] [--timeout 900]
+     [--remodel [--remodel-arms auto|file]] [--out DIR] [--jobs 2] [--timeout 900]
 
 Board k is drawn from seed S + k by bench/boards.py (its docstring says what a board is and
-what is rejected); with --remodel the REMODEL sample is added at 8 placements. Each board
+what is rejected); with --remodel the REMODEL sample is added at 8 placements, imported with
+``--arms auto`` (the engine chooses the placing arm; the sequence's L and R were written for
+REMODEL's own cell) unless --remodel-arms file. Each board
 is compiled with each strategy by ``cellengine.pipeline.compile_plan`` and each compiled
 program checked by bench/board_check.py (independent of the skills). Printed and written to
 DIR/results.json: the success rate per strategy, a histogram of the failure reasons
@@ -163,7 +165,7 @@ def run_one(plan: str, board: str, strategy: str, timeout: float = 0.0) -> Outco
     return Outcome(board, strategy, False, reason, first.message, dt, d)
 
 
-def make_boards(n: int, seed: int, remodel: bool, out: Path) -> dict[str, Path]:
+def make_boards(n: int, seed: int, remodel: bool, out: Path, arms: str = "auto") -> dict[str, Path]:
     """Each board's plan file, written under out/boards/."""
     plans: dict[str, Path] = {}
     for k in range(n):
@@ -171,21 +173,21 @@ def make_boards(n: int, seed: int, remodel: bool, out: Path) -> dict[str, Path]:
         make_board(seed + k, out / "boards" / name)
         plans[name] = out / "boards" / name / "plan.yaml"
     if remodel:
-        plans.update(_remodel_boards(out))
+        plans.update(_remodel_boards(out, arms))
     return plans
 
 
-def _remodel_boards(out: Path) -> dict[str, Path]:
+def _remodel_boards(out: Path, arms: str) -> dict[str, Path]:
     from tests.conftest import REMODEL
 
     # imported 20 m away: its keypoints' poses, and a cell whose arms meet only themselves
     probe = out / "boards" / "remodel_probe"
-    _import_remodel(REMODEL, probe, f"{PROBE_AWAY * 1000} 0 0 0 0 0")
+    _import_remodel(REMODEL, probe, f"{PROBE_AWAY * 1000} 0 0 0 0 0", arms)
     keypoints, reaches = _probe_reach(probe / "cell.yaml")
     shutil.rmtree(probe)
     plans = {}
     for name, pose in remodel_placements(keypoints, reaches):
-        _import_remodel(REMODEL, out / "boards" / name, pose)
+        _import_remodel(REMODEL, out / "boards" / name, pose, arms)
         plans[name] = out / "boards" / name / "plan.yaml"
     return plans
 
@@ -241,10 +243,10 @@ def _probe_reach(cell_yaml: Path) -> tuple[list[Mat], Callable[[Mat], bool]]:
     return keypoints, reaches
 
 
-def _import_remodel(src: Path, dest: Path, pose: str) -> None:
+def _import_remodel(src: Path, dest: Path, pose: str, arms: str) -> None:
     dest.parent.mkdir(parents=True, exist_ok=True)  # with --boards 0 nothing made it yet
     cmd = [sys.executable, "-m", "cellengine", "import", "remodel", str(src), str(dest)]
-    subprocess.run([*cmd, f"--pose={pose}"], check=True, capture_output=True)
+    subprocess.run([*cmd, f"--pose={pose}", f"--arms={arms}"], check=True, capture_output=True)
 
 
 # ----------------------------------------------------------------------------- summary
@@ -309,13 +311,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--strategies", default=",".join(STRATEGIES))
     ap.add_argument("--remodel", action="store_true")
+    ap.add_argument("--remodel-arms", choices=("auto", "file"), default="auto")
     ap.add_argument("--out", type=Path, default=Path("bench_boards_out"))
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--timeout", type=float, default=900.0, help="s per compile; 0: none")
     args = ap.parse_args(argv)
     strategies = tuple(args.strategies.split(","))
     shutil.rmtree(args.out / "boards", ignore_errors=True)
-    plans = make_boards(args.boards, args.seed, args.remodel, args.out)
+    plans = make_boards(args.boards, args.seed, args.remodel, args.out, args.remodel_arms)
     tasks = [(str(p), b, s) for b, p in plans.items() for s in strategies]
     t0 = time.perf_counter()
     outcomes = _run_all(tasks, args.jobs, args.out / "outcomes.jsonl", args.timeout)

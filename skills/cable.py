@@ -833,8 +833,45 @@ def step_ways(
         state = _look_ahead(ctx.world, replace(state, step=i), step, steps[i + 1 :])
         either = _placed_by_either(steps[i + 1 :], step.cable)
         then = _works_at(steps[i + 1 :], step.cable)
-        for more, after in step.ways(ctx, state, either, then):
-            yield segments + more, after
+        try:
+            for more, after in step.ways(ctx, state, either, then):
+                yield segments + more, after
+        except InputError as e:
+            if either:
+                raise
+            raise _named_arm_hint(ctx, state, step, steps, e) from None
+
+
+def _named_arm_hint(
+    ctx: PlanningContext,
+    state: CableState,
+    pick: PickCable,
+    steps: Sequence[Skill],
+    error: InputError,
+) -> InputError:
+    """``error`` (no way to pick ``pick``'s cable with the connector end in the arm its
+    PlaceConnector names) saying so when the other arm could pick it: a plan written for
+    another cell (a REMODEL sequence's L and R, its platforms turned) names the arm on the
+    far side."""
+    named = state.connector_arm
+    if named is None or len(error.problems) != 1:
+        return error
+    other = _other(_two_arms(ctx.world, ""), named)
+    try:
+        next(pick.ways(ctx, replace(state, connector_arm=other)))
+    except InputError:
+        return error
+    k = next(
+        k for k, s in enumerate(steps)
+        if k > state.step and isinstance(s, PlaceConnector) and s.cable == pick.cable
+    )  # fmt: skip
+    hint = (
+        f"; the {other} arm can pick it, but steps[{k}] PlaceConnector names the {named} "
+        f"arm to place the connector (arm: auto lets the engine choose)"
+    )
+    out = InputError(replace(error.problems[0], message=error.problems[0].message + hint))
+    out.blames, out.failure = error.blames, error.failure
+    return out
 
 
 def release_and_retract(

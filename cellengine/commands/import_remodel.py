@@ -99,8 +99,9 @@ Turn a REMODEL cable-routing folder into a native cell in DEST:
   objects.yaml  the cables of Components_definition.csv, each with its connector
                 (the CSV's x, y, z are the connector's width, height and length)
   plan.yaml     Assembly_sequence.csv: EC -> PickCable, PC -> PlaceConnector (the
-                spot's L/R picks robot left/right), RC -> RouteCable. A spot such as
-                C2.1 is guide 1 of element C2 of whichever platform has C2.
+                spot's L/R picks robot left/right; with --arms auto, the engine),
+                RC -> RouteCable. A spot such as C2.1 is guide 1 of element C2 of
+                whichever platform has C2.
 
 The Label column names a connector; each step acts on that connector's cable, from
 WH_configuration.xml, or the only cable there is.
@@ -148,6 +149,14 @@ def add_parser(sub: Any, name: str) -> None:
         "cell.yaml (those of --robots; by default mm and deg), rpy as in URDF. "
         "With NAME= for one platform, else for all; repeatable; default zero. "
         'Write --pose="-100 0 0 0 0 0" when the first number is negative.',
+    )
+    r.add_argument(
+        "--arms",
+        choices=("file", "auto"),
+        default="file",
+        help="which arm places each connector: the one its PC spot's L or R names, as in "
+        "REMODEL (file, the default), or the engine's choice (auto: arm: auto, for "
+        "platforms placed where the sides the files were written for no longer fit)",
     )
     r.add_argument("--name", type=name_arg, help="the cell's name (default: DEST's folder name)")
     r.add_argument("--force", action="store_true", help="overwrite files that exist in DEST")
@@ -411,9 +420,10 @@ class Inputs:
     operations: tuple[Operation, ...]
     harness: tuple[HarnessCable, ...] | None
     elements: Mapping[str, str]  # element label -> platform
+    arms: str = "file"  # --arms: "auto" leaves each PC's arm to the engine
 
 
-def read_inputs(source: Source, setup: Setup) -> Inputs:
+def read_inputs(source: Source, setup: Setup, arms: str = "file") -> Inputs:
     """Read every process file; report the problems of all of them, not only the first's."""
     problems: list[Problem] = []
 
@@ -431,7 +441,7 @@ def read_inputs(source: Source, setup: Setup) -> Inputs:
     elements = attempt(lambda: element_platforms(source))
     if problems or components is None or operations is None or elements is None:
         raise InputError(problems)
-    return Inputs(source, setup, components, operations, harness, elements)
+    return Inputs(source, setup, components, operations, harness, elements, arms)
 
 
 def build_steps(inputs: Inputs) -> tuple[list[Step], dict[str, str]]:
@@ -463,11 +473,13 @@ def _step(op: Operation, link: CableLink, inputs: Inputs) -> Step:
         arm = op.spots[0].arm
         if arm is not None:
             _check_arm(op, arm, inputs)
-            data["arm"] = arm
+            data["arm"] = "auto" if inputs.arms == "auto" else arm
     else:
         data["guides"] = refs
     kind = "keypoint" if op.kind == "EC" else "guide"
     comment = f"row {op.row}: {op.kind} {op.label} {op.spot}; {link.why}"
+    if op.kind == "PC" and inputs.arms == "auto" and op.spots[0].arm is not None:
+        comment += f"; the engine chooses the arm, not the spot's {op.spots[0].arm} (--arms auto)"
     return Step(op.row, comment, data, tuple((kind, r) for r in refs))
 
 
@@ -750,6 +762,7 @@ def reach_warnings(
     out = []
     for step in steps:
         arm = step.data.get("arm")
+        arm = None if arm == "auto" else arm
         for _, ref in step.refs:
             if ref not in reach:
                 continue
@@ -803,7 +816,7 @@ def run(args: argparse.Namespace) -> int:
     check_free(dest, [*texts_names, *copies], args.force)
 
     contents = read_copies(source)  # before anything is written
-    inputs = read_inputs(source, setup)
+    inputs = read_inputs(source, setup, args.arms)
     steps, connectors = build_steps(inputs)
     texts = dict(
         zip(

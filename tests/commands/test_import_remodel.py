@@ -203,6 +203,20 @@ def test_a_step_s_arm_that_does_not_reach_its_spot(
     ]
 
 
+def test_arms_auto_leaves_the_placing_arm_to_the_engine(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The same placement with --arms auto: J8.1's step says arm: auto and why, and the
+    right arm reaching it is enough (no warning)."""
+    dest = tmp_path / "cell"
+    assert run(src, dest, "--pose=platform=0 -700 0 0 0 0", "--arms", "auto") == 0
+    assert errors(capsys) == []
+    (place,) = [s for s in read(dest / "plan.yaml")["steps"] if s["skill"] == "PlaceConnector"]
+    assert place["arm"] == "auto"
+    text = (dest / "plan.yaml").read_text()
+    assert "; the engine chooses the arm, not the spot's left (--arms auto)\n" in text
+
+
 # --- --robots, --pose, --name ------------------------------------------------------------
 
 

@@ -25,6 +25,7 @@ from cellengine.context import PlanningContext, build_context
 from cellengine.errors import InputError
 from cellengine.info.load import load_plan
 from cellengine.motion import interpolate as ip
+from cellengine.pipeline import compile_plan
 from cellengine.program import Segment
 from cellengine.skills import cable as C
 from cellengine.skills import cable_family, cable_swap
@@ -839,6 +840,28 @@ def test_the_remodel_sample_plans_end_to_end(tmp_path: Path) -> None:
     (down,) = p.segments[labels(p).index("PickCable CA1: down")].paths
     assert (down.poses[0][2, 3] - down.poses[-1][2, 3]) == pytest.approx(60.0 * MM, abs=1e-9)
     assert np.allclose(p.end[i]["left"][:3, 3], p.world.pose("platform.J8.1")[:3, 3])
+
+
+def test_a_pick_the_named_arm_cannot_do_says_the_other_arm_can(tmp_path: Path) -> None:
+    """The REMODEL sample turned 180 deg and far out (bench_boards' placement): both combs
+    lie in front of the right arm, and the left arm the sequence's 'J8.1.L' names cannot
+    take the connector end there while the right takes the other; the error says the right
+    arm can, and what to change. Imported with --arms auto, the plan compiles."""
+    pose = "--pose=196.5 -152.5 0 0 0 180"
+    dest = tmp_path / "cell"
+    assert main(["import", "remodel", str(REMODEL), str(dest), pose]) == 0
+    with pytest.raises(InputError) as e:
+        compile_plan(dest / "plan.yaml")
+    assert str(e.value).endswith(
+        "; the right arm can pick it, but steps[1] PlaceConnector names the left arm to "
+        "place the connector (arm: auto lets the engine choose)"
+    )
+    auto = tmp_path / "auto"
+    assert main(["import", "remodel", str(REMODEL), str(auto), pose, "--arms", "auto"]) == 0
+    compiled = compile_plan(auto / "plan.yaml")
+    segments = [c.segment for c in compiled.program.segments]
+    placed = [s for s in segments if s.label.endswith("J8.1: insert")]
+    assert placed and placed[0].facts["connector_arm"] == "right"
 
 
 def test_pick_cable_ways_vary_the_tip_then_the_arm() -> None:
