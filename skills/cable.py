@@ -1382,12 +1382,18 @@ def _pick_on(
 
 
 def _clear_of_cell(
-    ctx: PlanningContext, arm: str, segments: list[Segment], on: set[int], where: str
+    ctx: PlanningContext,
+    arm: str,
+    segments: Sequence[Segment],
+    on: set[int],
+    where: str,
+    what: str = "pick",
 ) -> set[int]:
     """Those of ``arm``'s IK branches ``on`` that keep the cell's clearance from the cell
-    along its Cartesian paths away from what it works near (the combs it grasps in, declared
-    ``near``): a forearm swung over a fixture while the hands meet is refused here, with the
-    way, not by the compiler after the transit to it. An error when none does."""
+    along its Cartesian paths away from what it works near (the combs it grasps in, the
+    guide it inserts into: declared ``near``): a forearm swung over a fixture is refused
+    here, with the way, not by the compiler after the transit to it. An error when none
+    does, naming the step's ``what`` ("pick", "placing")."""
     from cellengine.execute.following import touching  # the motion stack: planning only
 
     paths = [
@@ -1404,7 +1410,7 @@ def _clear_of_cell(
         return on - set(hit)
     a, b = next(iter(hit.values()))
     raise _error(
-        f"{where}: on every inverse kinematics branch that follows this pick the {arm} arm "
+        f"{where}: on every inverse kinematics branch that follows this {what} the {arm} arm "
         f"comes within the cell's clearance ({_mm(ctx.clearance)} mm) of the cell ({a}, {b})"
     )
 
@@ -1692,7 +1698,8 @@ def _place_apart(
     where: str,
 ) -> list[Segment]:
     """The placing's segments requiring of each arm (Segment.branches) the IK branches it may
-    be on that follow the placing's Cartesian paths and, paired with one of the other arm's,
+    be on that follow the placing's Cartesian paths clear of the cell (_clear_of_cell) and,
+    paired with one of the other arm's,
     keep the cell's clearance between them at poses along it (_along; the pair carried as
     one rigid piece moves together; an arm moving alone, as the connector hand retracting,
     with the other where it stands); an error (blaming the arms: PickCable decides which
@@ -1708,6 +1715,11 @@ def _place_apart(
         )
         if not alive:
             return list(segments)
+        try:  # kept clear of the cell too (the carry swings the arms over the combs)
+            alive = _clear_of_cell(ctx, arm, segments, alive, where, "placing")
+        except InputError as e:
+            e.blames = "arms"  # the other arm might place it
+            raise
         follow[arm] = frozenset(alive)
     a, b = arms
     pairs: list[tuple[Mat, Mat]] = []
