@@ -864,6 +864,35 @@ def test_a_pick_the_named_arm_cannot_do_says_the_other_arm_can(tmp_path: Path) -
     assert placed and placed[0].facts["connector_arm"] == "right"
 
 
+def test_the_placing_keeps_the_arms_clear_of_the_combs_on_every_branch_it_allows(
+    tmp_path: Path,
+) -> None:
+    """The REMODEL sample far out in front (bench_boards' yaw 0 far placement): carrying the
+    connector to J8.1 swings the left upper arm over the combs on some of its IK branches.
+    The placing requires the others, so the asynchronous program (whose transits may end on
+    any allowed branch) compiles, and every branch it allows keeps the clearance from the
+    cell along the carry."""
+    from cellengine.execute.following import touching
+
+    dest = tmp_path / "cell"
+    pose = "--pose=743.5 52.5 0 0 0 0"
+    assert main(["import", "remodel", str(REMODEL), str(dest), pose, "--arms=auto"]) == 0
+    compiled = compile_plan(dest / "plan.yaml", "async")
+    ctx = context(load_plan(dest / "plan.yaml").world)
+    screened = 0
+    for c in compiled.program.segments:
+        s = c.segment
+        if not s.label.startswith("PlaceConnector") or s.near:
+            continue
+        for p in s.paths:
+            on = s.branches_of(p.arm)
+            assert on is not None and p.kind == "cartesian"
+            hit = touching(ctx.cell, ctx.checker, p.arm, p.poses, ctx.home, range(8), 0.01)
+            assert not set(hit) & on
+            screened += bool(hit)
+    assert screened  # some branches do pass within the clearance of the cell
+
+
 def test_pick_cable_ways_vary_the_tip_then_the_arm() -> None:
     """PickCable's ways, in order: the default tip first, then the other tips; the far hand
     sliding to where placing needs it first, then farther; with either arm allowed, then the
