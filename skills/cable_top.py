@@ -295,7 +295,7 @@ def _check(
             for part, arm, what, mode, poses, beside in (
                 ("pusher", o_arm, "coming over the cable", GRASP, tp.push[:1], ()),  # transit end
                 ("pusher", o_arm, "pushing the cable down", GRASP, tp.push, tp.beside),
-                ("routing", r_arm, "laying the cable over the top", SLIDE, tp.lay, tp.beside),
+                ("routing", r_arm, "laying the cable", SLIDE, tp.lay, tp.beside),
                 ("routing", r_arm, "inserting", GRASP, tp.insert, tp.beside),
             )
         ),
