@@ -621,7 +621,9 @@ class _Screen:
     came: dict[WayKey, InputError | frozenset[int]] = field(default_factory=dict)
     # the room between the arms per routing branch while the routing hand comes and slides
     # (and why not, when no branch has it)
-    coming: dict[WayKey, tuple[dict[int, float], _Blocked | None]] = field(default_factory=dict)
+    coming: dict[WayKey, tuple[NDArray[np.float64] | None, _Blocked | None]] = field(
+        default_factory=dict
+    )
 
 
 Release = tuple[tuple[str, frozenset[int]], ...]  # Segment.branches of a release
@@ -1914,6 +1916,10 @@ class GuidePlan:
     # screened: its transit to the cable goes to one of them
     grasp: frozenset[int] = ANY_BRANCH
     grasp_pairs: Paired = ()  # (routing arm, other arm) pairs of those, as Segment.paired
+    # the (routing arm, other arm) pairs of branches that keep the cell's clearance while the
+    # other hand stands back and the routing hand comes and slides (_coming), once screened
+    # for this way's stand-back: the compiler holds the arms to them there
+    coming_pairs: Paired = ()
 
     @property
     def radius(self) -> float:
@@ -2631,6 +2637,7 @@ def _emit_guide(
             [_cartesian(r_arm, gp.reorient)],
             before=b.mode_event(r_arm, SLIDE, cable),
             near=near,
+            paired=gp.coming_pairs,
         )
     b.add(
         f"{label}: approach sliding",
@@ -2638,12 +2645,14 @@ def _emit_guide(
         before=b.mode_event(r_arm, SLIDE, cable),
         near=near,
         facts={"approach": gp.approached},
+        paired=gp.coming_pairs,
     )
     b.add(
         f"{label}: slide R_cable",
         [_cartesian(r_arm, gp.slide)],
         after=[GripperEvent(r_arm, GRASP, cable)],
         near=near,
+        paired=gp.coming_pairs,
         facts={
             "guide": gp.guide,
             "R_lift": gp.r_lift,
@@ -3107,23 +3116,31 @@ def _coming(
     # the routing arm's branches that come and slide clear of itself (gp's are among them)
     came = screen.came.get(_coming_key(way, DEFAULT_BACK))
     on = came if isinstance(came, frozenset) and -1 not in came else ANY_BRANCH
+    pairs = np.zeros((8, 8), dtype=bool)
     for back in backs:
         key = _coming_key(way, back)
         if key not in screen.coming:
-            rooms = _coming_rooms(ctx, state, _with_back(gp, back), arms, on)
-            room = max(rooms.values())
-            why = _coming_error(ctx, state, gp, arms, room) if room < ctx.clearance else None
-            screen.coming[key] = (rooms, why)
-        rooms, _ = screen.coming[key]
-        if -1 in rooms:
+            least = _coming_least(ctx, state, _with_back(gp, back), arms, on)
+            room = -math.inf if least is None else float(least.max())
+            blocked = least is not None and room < ctx.clearance
+            screen.coming[key] = (
+                least,
+                _coming_error(ctx, state, gp, arms, room) if blocked else None,
+            )
+        least, _ = screen.coming[key]
+        if least is None:
             return gp  # no branches: the compiler finds out
-        kept |= {k for k in gp.branches if rooms[k] >= ctx.clearance}
-        best = max(best, *(rooms[k] for k in gp.branches))
+        rows = np.isin(np.arange(8), sorted(gp.branches))[:, None]
+        pairs |= rows & (least >= ctx.clearance)
+        kept |= {k for k in gp.branches if least[k].max() >= ctx.clearance}
+        best = max(best, *(float(least[k].max()) for k in gp.branches))
         if kept == gp.branches:
             break  # the other stand-backs could keep no more branches
-    if kept:
-        return replace(gp, branches=frozenset(kept))
-    return _coming_error(ctx, state, gp, arms, best)
+    if not kept:
+        return _coming_error(ctx, state, gp, arms, best)
+    # the pairs are the stand-back's: only for a way's own (one stand-back)
+    paired = _kept_pairs(pairs, *arms) if len(backs) == 1 else ()
+    return replace(gp, branches=frozenset(kept), coming_pairs=paired)
 
 
 def _coming_blocked(screen: _Screen, way: GuideWay, backs: Sequence[Back]) -> InputError | None:
@@ -3159,15 +3176,15 @@ def _arms_blocked(ctx: PlanningContext, gp: GuidePlan, room: float, what: str) -
     )
 
 
-def _coming_rooms(
+def _coming_least(
     ctx: PlanningContext,
     state: CableState,
     gp: GuidePlan,
     arms: tuple[str, str],
     on: frozenset[int],
-) -> dict[int, float]:
-    """_pair_rooms of the routing arm's branches ``on`` over _coming's motions (every
-    STRIDE-th pose), keeping the cell's clearance."""
+) -> NDArray[np.float64] | None:
+    """_pair_least of the routing arm's branches ``on`` and the other arm's over _coming's
+    motions (every STRIDE-th pose), keeping the cell's clearance."""
     from cellengine.execute.following import STRIDE  # the motion stack: planning only
 
     r_arm, o_arm = arms
@@ -3180,7 +3197,7 @@ def _coming_rooms(
     coming = np.concatenate([p for p in (gp.reorient, gp.approach, gp.slide) if p is not None])
     poses += [(T, T_o) for T in (*coming[::STRIDE], coming[-1])]
     b_on = state.branches_of(o_arm)
-    return _pair_rooms(ctx, r_arm, o_arm, poses, ctx.clearance, on, b_on, measure=False)
+    return _pair_least(ctx, r_arm, o_arm, poses, ctx.clearance, on, b_on, measure=False)
 
 
 def _check_pivot_free(

@@ -1230,12 +1230,24 @@ def _straight_guide1() -> tuple[PlanningContext, CableState, C.GuidePlan]:
 def test_the_arms_are_screened_while_the_routing_hand_comes_and_slides() -> None:
     """plan_straight's guide1, its first way: the routing arm is kept only on branches on
     which some branch of the other arm, standing still, stays the cell's clearance away while
-    the routing hand approaches and slides (branch 4 comes within it). Asked to keep half a
-    metre, the way is refused, saying how near every pair comes."""
+    the routing hand approaches and slides (branch 4 comes within it), and the way holds the
+    arms to the pairs that do (coming_pairs; the approach and the slide carry them). Asked to
+    keep half a metre, the way is refused, saying how near every pair comes."""
     ctx, state, gp = _straight_guide1()
-    rooms = C._coming_rooms(ctx, state, gp, ("left", "right"), C.ANY_BRANCH)
+    least = C._coming_least(ctx, state, gp, ("left", "right"), C.ANY_BRANCH)
+    assert least is not None
+    rooms = least.max(axis=1)
     assert gp.branches and all(rooms[k] >= ctx.clearance for k in gp.branches)
     assert any(rooms[k] < ctx.clearance for k in C.ANY_BRANCH - gp.branches)
+    ((a, b, pairs),) = gp.coming_pairs
+    assert (a, b) == ("left", "right") and pairs
+    assert pairs == {
+        (int(i), int(j)) for i, j in np.argwhere(least >= ctx.clearance) if i in gp.branches
+    }
+    segments, _ = C._emit_guide(state, gp, "left", "right", "cable1")
+    for label in ("approach sliding", "slide R_cable"):
+        (seg,) = [x for x in segments if x.label.endswith(label)]
+        assert seg.paired == gp.coming_pairs
     way = C.GuideWay(gp.theta, gp.side, gap=gp.a)
     far = replace(ctx, clearance=0.5)
     blocked = C._coming(
