@@ -619,8 +619,9 @@ class _Screen:
     )
     # why the routing hand cannot come to the guide and slide, or its branches that can
     came: dict[WayKey, InputError | frozenset[int]] = field(default_factory=dict)
-    # the room between the arms per routing branch while the routing hand comes and slides
-    # (and why not, when no branch has it)
+    # how far apart the arms stay per pair of branches (8 x 8, _pair_least; None: solved
+    # numerically) while the routing hand comes and slides, and why not when no pair keeps
+    # the clearance
     coming: dict[WayKey, tuple[NDArray[np.float64] | None, _Blocked | None]] = field(
         default_factory=dict
     )
@@ -1701,12 +1702,12 @@ def _place_apart(
 ) -> list[Segment]:
     """The placing's segments requiring of each arm (Segment.branches) the IK branches it may
     be on that follow the placing's Cartesian paths clear of the cell (_clear_of_cell) and,
-    paired with one of the other arm's,
-    keep the cell's clearance between them at poses along it (_along; the pair carried as
-    one rigid piece moves together; an arm moving alone, as the connector hand retracting,
-    with the other where it stands); an error (blaming the arms: PickCable decides which
-    holds the connector) when no pair does: the hands' places cross the arms. Numerical IK,
-    or an arm that follows on no branch (the family says so): not screened."""
+    paired with one of the other arm's, keep the cell's clearance between them at poses
+    along it (_along; the pair carried as one rigid piece moves together; an arm moving
+    alone, as the connector hand retracting, with the other where it stands); an error
+    (blaming the arms: PickCable decides which holds the connector) when no pair does: the
+    hands' places cross the arms. Numerical IK, or an arm that follows on no branch (the
+    family says so): not screened."""
     from cellengine.execute.following import surviving  # the motion stack: planning only
 
     follow: dict[str, frozenset[int]] = {}
