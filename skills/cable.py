@@ -3169,7 +3169,8 @@ def _coming_error(
 def _arms_blocked(ctx: PlanningContext, gp: GuidePlan, room: float, what: str) -> _Blocked:
     """A way refused because no pair of the arms' branches keeps the cell's clearance while
     ``what`` happens; ``room``: how near every pair comes (_pair_rooms)."""
-    at_best = "collide" if room == -math.inf else f"come within {_mm(room)} mm of each other"
+    d = _mm(room) if _mm(room) != _mm(ctx.clearance) else f"{room * 1e3:.2f}"  # not "10.0"
+    at_best = "collide" if room == -math.inf else f"come within {d} mm of each other"
     return _Blocked.of(
         room - ctx.clearance,
         f"{gp.where}: however the two arms are posed, they {at_best} while {what}; the cell's "

@@ -1264,6 +1264,18 @@ def test_the_arms_are_screened_while_the_routing_hand_comes_and_slides() -> None
     )
 
 
+def test_arms_just_under_the_clearance_are_not_said_to_keep_it() -> None:
+    """A pair of arms 9.96 mm apart where the cell keeps 10 mm: the message gives 9.96 mm,
+    not a "10.0 mm" that reads as the clearance itself; 9.3 mm stays at 0.1 mm."""
+    ctx, _, gp = _straight_guide1()
+    for room, said in ((0.00996, "9.96"), (0.0093, "9.3")):
+        blocked = C._arms_blocked(ctx, gp, room, "it slides")
+        assert blocked.problems[0].message == (
+            f"{gp.where}: however the two arms are posed, they come within {said} mm of each "
+            "other while it slides; the cell's clearance is 10.0 mm"
+        )
+
+
 def test_a_hold_turned_about_the_cable_still_closes_across_it() -> None:
     """Held 30 deg about the cable and 40 mm farther along it, the other hand's fingertips are
     51 + 40 mm from the connector hand's on the guide's axis, its jaw still across the cable,
