@@ -16,6 +16,7 @@ from typing import Any
 
 import coal
 import numpy as np
+from numpy.typing import NDArray
 
 from cellengine import geometry as g
 from cellengine.arrays import Mat, Vec
@@ -31,6 +32,11 @@ class _Solid:
     shape: Any
     centre: Vec  # of its bounding sphere, in its own frame
     radius: float
+    half: Vec  # its bounding box's half-extents about centre, along its own axes
+    # its bounding capsule, in its own frame: the segment centre +- axis (the box's longest
+    # half-extent) and the radius girth about it (a finger 90 mm long is not a 90 mm ball)
+    axis: Vec
+    girth: float
     placed: Any  # T as coal's transform (built once: a probe measures a static many times)
 
 
@@ -123,14 +129,11 @@ class ToolProbe:
         ]
         if not statics or not tool or len(poses) == 0:
             return None
-        # every (pose, static, tool solid)'s bound from the bounding spheres, then coal on the
-        # pairs in the order of their bounds, until no bound is below the nearest found
+        # every (pose, static, tool solid)'s bound from the statics' bounding spheres and the
+        # tool solids' spheres and capsules, then coal on the pairs in the order of their
+        # bounds, until no bound is below the nearest found
         P = np.asarray(poses, dtype=float).reshape(-1, 4, 4)
-        c_tcp = np.array([t.T[:3, :3] @ t.centre + t.T[:3, 3] for t in tool])
-        c_t = np.einsum("nij,mj->nmi", P[:, :3, :3], c_tcp) + P[:, None, :3, 3]
-        c_s = np.array([s.T[:3, :3] @ s.centre + s.T[:3, 3] for s in statics])
-        r = np.array([s.radius for s in statics])[None, :, None] + [t.radius for t in tool]
-        bound = np.linalg.norm(c_t[:, None, :, :] - c_s[None, :, None, :], axis=-1) - r
+        bound = _bounds(P, tool, statics)
         near = np.argwhere(bound < within)  # (pose, static, solid), in the loops' order
         best: Nearest | None = None
         limit, earliest = within, (len(P), 0, 0)
@@ -222,12 +225,43 @@ def _tool_solids(arm: Arm, opening: float | None) -> list[_Solid]:
     return out
 
 
+def _bounds(P: NDArray[np.float64], tool: Sequence[_Solid], statics: Sequence[_Solid]) -> Any:
+    """(pose, static, tool solid): a lower bound on their distance with the tool at each of
+    the TCP poses ``P`` (n, 4, 4): the distance between the static's bounding sphere and the
+    tool solid's bounding sphere or capsule, whichever is farther."""
+    R_t = np.array([t.T[:3, :3] for t in tool])
+    c_tcp = np.einsum("mij,mj->mi", R_t, [t.centre for t in tool]) + [t.T[:3, 3] for t in tool]
+    u_tcp = np.einsum("mij,mj->mi", R_t, [t.axis for t in tool])
+    c_t = np.einsum("nij,mj->nmi", P[:, :3, :3], c_tcp) + P[:, None, :3, 3]  # (n, m, 3)
+    u_t = np.einsum("nij,mj->nmi", P[:, :3, :3], u_tcp)
+    c_s = np.array([s.T[:3, :3] @ s.centre + s.T[:3, 3] for s in statics])  # (k, 3)
+    r_s = np.array([s.radius for s in statics])[None, :, None]
+    d = c_s[None, :, None, :] - c_t[:, None, :, :]  # (n, k, m, 3)
+    spheres = np.linalg.norm(d, axis=-1) - r_s - [t.radius for t in tool]
+    u = u_t[:, None, :, :]
+    uu = np.maximum(np.einsum("nkmi,nkmi->nkm", u, u), 1e-18)  # a cube's axis may be 0
+    along = np.clip(np.einsum("nkmi,nkmi->nkm", d, u) / uu, -1.0, 1.0)
+    off = np.linalg.norm(d - along[..., None] * u, axis=-1)
+    capsules = off - r_s - [t.girth for t in tool]
+    # the tool solid's sphere against the static's box (a board's sphere is as wide as it is)
+    R_s = np.array([s.T[:3, :3] for s in statics])
+    local = np.einsum("kji,nkmj->nkmi", R_s, -d)  # from the box's centre, in its frame
+    half = np.array([s.half for s in statics])[None, :, None, :]
+    box = np.linalg.norm(local - np.clip(local, -half, half), axis=-1) - [t.radius for t in tool]
+    return np.maximum(np.maximum(spheres, capsules), box)
+
+
 def _solid(name: str, T: Mat, shape: Any) -> _Solid:
     shape.computeLocalAABB()
     box = shape.aabb_local
     lo, hi = np.asarray(box.min_), np.asarray(box.max_)
     radius = float(np.linalg.norm(hi - lo)) / 2.0
-    return _Solid(name, T, shape, (lo + hi) / 2.0, radius, _transform(T))
+    half = (hi - lo) / 2.0
+    longest = int(np.argmax(half))
+    axis = np.zeros(3)
+    axis[longest] = half[longest]
+    girth = float(np.linalg.norm(np.delete(half, longest)))
+    return _Solid(name, T, shape, (lo + hi) / 2.0, radius, half, axis, girth, _transform(T))
 
 
 def _transform(T: Mat) -> Any:

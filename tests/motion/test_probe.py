@@ -100,3 +100,36 @@ def test_under_names_what_lies_wholly_below_a_level(ctx) -> None:  # type: ignor
     assert probe.under(0.005, up) == {"table"}
     assert probe.under(0.065, up) == {"table", "routing.plate", "holder.plate"}
     assert {"routing.guide1", "holder.comb_a", "table"} <= probe.under(0.2, up)
+
+
+def test_the_bounds_never_exceed_the_distance_coal_measures(ctx) -> None:  # type: ignore[no-untyped-def]
+    """The bounds that decide which pairs coal measures (spheres, the tool's capsules, the
+    statics' boxes) are lower bounds: at 200 seeded tool poses over the routing board, turned
+    every way, no (pose, static, tool solid) bound is above that pair's distance (none above
+    zero where they overlap: coal's penetration depth is an estimate, not a distance)."""
+    import coal
+
+    from cellengine import geometry as g
+    from cellengine.motion import probe as P
+
+    rng = np.random.default_rng(7)
+    tool = ctx.probe._tool("left", "grasp")
+    statics = ctx.probe.statics
+    centre = ctx.world.pose("routing.guide2")[:3, 3]
+    poses = []
+    for _ in range(200):
+        R = g.axis_angle_to_matrix(g.unit(rng.normal(size=3)), rng.uniform(0.0, np.pi))
+        poses.append(g.transform(R, centre + rng.uniform(-0.15, 0.15, size=3)))
+    P_ = np.array(poses)
+    bound = P._bounds(P_, tool, statics)
+    request, result = coal.DistanceRequest(), coal.DistanceResult()
+    tight = 0
+    for i, T in enumerate(poses):
+        for m, t in enumerate(tool):
+            placed = P._transform(T @ t.T)
+            for k, s in enumerate(statics):
+                result.clear()
+                d = coal.distance(t.shape, placed, s.shape, s.placed, request, result)
+                assert bound[i, k, m] <= max(d, 0.0) + 1e-9
+                tight += bound[i, k, m] > d - 0.05
+    assert tight  # some bounds are within 50 mm of the distance: they do prune
