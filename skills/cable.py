@@ -2632,12 +2632,16 @@ def _emit_guide(
         poses = _stand_back(b.state, o_arm, gp.up, _back_of(gp))
         _add_release(b, label, (r_arm, o_arm), poses, gp.beside, gp.release)
     near = [(r_arm, e) for e in gp.beside]  # the hands work between these (GuidePlan)
+    # the other arm, standing while the routing hand comes, on a branch of the coming pairs:
+    # so the transit that chose its branch (at the guide before) looked for one of them
+    standing = tuple((o, frozenset(j for _, j in pairs)) for _, o, pairs in gp.coming_pairs)
     if gp.reorient is not None:  # turning in place where it inserted, by that guide
         b.add(
             f"{label}: face the guide",
             [_cartesian(r_arm, gp.reorient)],
             before=b.mode_event(r_arm, SLIDE, cable),
             near=near,
+            branches=standing,
             paired=gp.coming_pairs,
         )
     b.add(
@@ -2646,6 +2650,7 @@ def _emit_guide(
         before=b.mode_event(r_arm, SLIDE, cable),
         near=near,
         facts={"approach": gp.approached},
+        branches=standing,
         paired=gp.coming_pairs,
     )
     b.add(
@@ -2653,6 +2658,7 @@ def _emit_guide(
         [_cartesian(r_arm, gp.slide)],
         after=[GripperEvent(r_arm, GRASP, cable)],
         near=near,
+        branches=standing,
         paired=gp.coming_pairs,
         facts={
             "guide": gp.guide,
@@ -3118,11 +3124,15 @@ def _coming(
     came = screen.came.get(_coming_key(way, DEFAULT_BACK))
     on = came if isinstance(came, frozenset) and -1 not in came else ANY_BRANCH
     pairs = np.zeros((8, 8), dtype=bool)
+    # the other arm's branches the state allows: the routing arm's are kept for a pair with
+    # one of them; the pairs are measured with all 8 (the compiler may have put the other
+    # arm on any that its segments allowed, and the pairs tell it which work here)
+    may = np.isin(np.arange(8), sorted(state.branches_of(arms[1])))
     for back in backs:
         key = _coming_key(way, back)
         if key not in screen.coming:
             least = _coming_least(ctx, state, _with_back(gp, back), arms, on)
-            room = -math.inf if least is None else float(least.max())
+            room = -math.inf if least is None else float(least[:, may].max())
             blocked = least is not None and room < ctx.clearance
             screen.coming[key] = (
                 least,
@@ -3133,8 +3143,8 @@ def _coming(
             return gp  # no branches: the compiler finds out
         rows = np.isin(np.arange(8), sorted(gp.branches))[:, None]
         pairs |= rows & (least >= ctx.clearance)
-        kept |= {k for k in gp.branches if least[k].max() >= ctx.clearance}
-        best = max(best, *(float(least[k].max()) for k in gp.branches))
+        kept |= {k for k in gp.branches if least[k, may].max() >= ctx.clearance}
+        best = max(best, *(float(least[k, may].max()) for k in gp.branches))
         if kept == gp.branches:
             break  # the other stand-backs could keep no more branches
     if not kept:
@@ -3185,8 +3195,8 @@ def _coming_least(
     arms: tuple[str, str],
     on: frozenset[int],
 ) -> NDArray[np.float64] | None:
-    """_pair_least of the routing arm's branches ``on`` and the other arm's over _coming's
-    motions (every STRIDE-th pose), keeping the cell's clearance."""
+    """_pair_least of the routing arm's branches ``on`` and each of the other arm's over
+    _coming's motions (every STRIDE-th pose), keeping the cell's clearance."""
     from cellengine.execute.following import STRIDE  # the motion stack: planning only
 
     r_arm, o_arm = arms
@@ -3198,8 +3208,7 @@ def _coming_least(
         T_o = back[-1]
     coming = np.concatenate([p for p in (gp.reorient, gp.approach, gp.slide) if p is not None])
     poses += [(T, T_o) for T in (*coming[::STRIDE], coming[-1])]
-    b_on = state.branches_of(o_arm)
-    return _pair_least(ctx, r_arm, o_arm, poses, ctx.clearance, on, b_on, measure=False)
+    return _pair_least(ctx, r_arm, o_arm, poses, ctx.clearance, on, ANY_BRANCH, measure=False)
 
 
 def _check_pivot_free(

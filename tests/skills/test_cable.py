@@ -1231,7 +1231,8 @@ def test_the_arms_are_screened_while_the_routing_hand_comes_and_slides() -> None
     """plan_straight's guide1, its first way: the routing arm is kept only on branches on
     which some branch of the other arm, standing still, stays the cell's clearance away while
     the routing hand approaches and slides (branch 4 comes within it), and the way holds the
-    arms to the pairs that do (coming_pairs; the approach and the slide carry them). Asked to
+    arms to the pairs that do (coming_pairs; the approach and the slide carry them, and the
+    other arm's branches in them). Asked to
     keep half a metre, the way is refused, saying how near every pair comes."""
     ctx, state, gp = _straight_guide1()
     least = C._coming_least(ctx, state, gp, ("left", "right"), C.ANY_BRANCH)
@@ -1248,6 +1249,8 @@ def test_the_arms_are_screened_while_the_routing_hand_comes_and_slides() -> None
     for label in ("approach sliding", "slide R_cable"):
         (seg,) = [x for x in segments if x.label.endswith(label)]
         assert seg.paired == gp.coming_pairs
+        # the other arm, standing, on a branch of those pairs (what its transit looks for)
+        assert seg.branches_of("right") == frozenset(j for _, j in pairs)
     way = C.GuideWay(gp.theta, gp.side, gap=gp.a)
     far = replace(ctx, clearance=0.5)
     blocked = C._coming(
