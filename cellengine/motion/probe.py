@@ -129,9 +129,8 @@ class ToolProbe:
         ]
         if not statics or not tool or len(poses) == 0:
             return None
-        # every (pose, static, tool solid)'s bound from the statics' bounding spheres and the
-        # tool solids' spheres and capsules, then coal on the pairs in the order of their
-        # bounds, until no bound is below the nearest found
+        # every (pose, static, tool solid)'s bound (_bounds), then coal on the pairs in the
+        # order of their bounds, until no bound is below the nearest found
         P = np.asarray(poses, dtype=float).reshape(-1, 4, 4)
         bound = _bounds(P, tool, statics)
         near = np.argwhere(bound < within)  # (pose, static, solid), in the loops' order
@@ -225,10 +224,12 @@ def _tool_solids(arm: Arm, opening: float | None) -> list[_Solid]:
     return out
 
 
-def _bounds(P: NDArray[np.float64], tool: Sequence[_Solid], statics: Sequence[_Solid]) -> Any:
+def _bounds(
+    P: NDArray[np.float64], tool: Sequence[_Solid], statics: Sequence[_Solid]
+) -> NDArray[np.float64]:
     """(pose, static, tool solid): a lower bound on their distance with the tool at each of
-    the TCP poses ``P`` (n, 4, 4): the distance between the static's bounding sphere and the
-    tool solid's bounding sphere or capsule, whichever is farther."""
+    the TCP poses ``P`` (n, 4, 4), the largest of three: the two bounding spheres; the tool
+    solid's capsule and the static's sphere; the tool solid's sphere and the static's box."""
     R_t = np.array([t.T[:3, :3] for t in tool])
     c_tcp = np.einsum("mij,mj->mi", R_t, [t.centre for t in tool]) + [t.T[:3, 3] for t in tool]
     u_tcp = np.einsum("mij,mj->mi", R_t, [t.axis for t in tool])
@@ -248,7 +249,8 @@ def _bounds(P: NDArray[np.float64], tool: Sequence[_Solid], statics: Sequence[_S
     local = np.einsum("kji,nkmj->nkmi", R_s, -d)  # from the box's centre, in its frame
     half = np.array([s.half for s in statics])[None, :, None, :]
     box = np.linalg.norm(local - np.clip(local, -half, half), axis=-1) - [t.radius for t in tool]
-    return np.maximum(np.maximum(spheres, capsules), box)
+    out: NDArray[np.float64] = np.maximum(np.maximum(spheres, capsules), box)
+    return out
 
 
 def _solid(name: str, T: Mat, shape: Any) -> _Solid:
