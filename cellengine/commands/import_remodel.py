@@ -471,9 +471,11 @@ def _step(op: Operation, link: CableLink, inputs: Inputs) -> Step:
     elif op.kind == "PC":
         data["guide"] = refs[0]
         arm = op.spots[0].arm
-        if arm is not None:
+        if arm is not None and inputs.arms == "auto":
+            data["arm"] = "auto"  # the letter need not name one of --robots' arms then
+        elif arm is not None:
             _check_arm(op, arm, inputs)
-            data["arm"] = "auto" if inputs.arms == "auto" else arm
+            data["arm"] = arm
     else:
         data["guides"] = refs
     kind = "keypoint" if op.kind == "EC" else "guide"

@@ -294,6 +294,10 @@ def test_arm_letter_needs_a_robot_of_that_name(
         "src/Assembly_sequence.csv:3: Spot 'J8.1.L' names robot 'left', which robots.yaml "
         "does not have; known: a, b"
     ]
+    # with --arms auto the letter names no robot: the engine chooses among a and b
+    assert run(src, tmp_path / "cell", "--robots", robots, "--arms", "auto") == 0
+    place = [s for s in read(tmp_path / "cell" / "plan.yaml")["steps"] if "guide" in s]
+    assert [s["arm"] for s in place] == ["auto"]
 
 
 # --- labels and cables -------------------------------------------------------------------
