@@ -2743,6 +2743,12 @@ def _mm(x: float) -> str:
     return f"{x * 1000.0:.1f}"
 
 
+def _mm_under(x: float, limit: float) -> str:
+    """``x`` (m, under ``limit``) in mm: to 0.01 mm where it rounds to the limit itself (a
+    9.96 mm that prints as the 10.0 mm clearance would not say why it is refused)."""
+    return _mm(x) if _mm(x) != _mm(limit) else f"{x * 1e3:.2f}"
+
+
 def _short(x: float) -> str:
     """A shortfall in mm: to 0.01 mm where it rounds to 0.0, and "less than 0.01" where that
     does too (it is not nothing)."""
@@ -3149,7 +3155,9 @@ def _coming(
             break  # the other stand-backs could keep no more branches
     if not kept:
         return _coming_error(ctx, state, gp, arms, best)
-    # the pairs are the stand-back's: only for a way's own (one stand-back)
+    # the pairs are the stand-back's: only for a way's own (one stand-back), of the routing
+    # arm's branches kept
+    pairs &= np.isin(np.arange(8), sorted(kept))[:, None]
     paired = _kept_pairs(pairs, *arms) if len(backs) == 1 else ()
     return replace(gp, branches=frozenset(kept), coming_pairs=paired)
 
@@ -3179,7 +3187,7 @@ def _coming_error(
 def _arms_blocked(ctx: PlanningContext, gp: GuidePlan, room: float, what: str) -> _Blocked:
     """A way refused because no pair of the arms' branches keeps the cell's clearance while
     ``what`` happens; ``room``: how near every pair comes (_pair_rooms)."""
-    d = _mm(room) if _mm(room) != _mm(ctx.clearance) else f"{room * 1e3:.2f}"  # not "10.0"
+    d = _mm_under(room, ctx.clearance)
     at_best = "collide" if room == -math.inf else f"come within {d} mm of each other"
     return _Blocked.of(
         room - ctx.clearance,
@@ -3420,7 +3428,7 @@ def _passes(near: Nearest, limit: float) -> str:
     under), or 'would run D mm into OTHER' where they overlap."""
     if near.distance < 0.0:
         return f"would run {_short(-near.distance)} mm into {near.other}"
-    d = _mm(near.distance) if _mm(near.distance) != _mm(limit) else f"{near.distance * 1e3:.2f}"
+    d = _mm_under(near.distance, limit)
     return f"would pass {d} mm from {near.other}"
 
 
