@@ -180,7 +180,7 @@ class Compiler:
         self._events(segment.before, t0, self.q)
         self.holding.touch(segment.contacts)
         has_transit = any(p.kind == "transit" for p in segment.paths)
-        accept = preview(self.cell, self.checker, following) if has_transit else None
+        accept = preview(self.cell, self.holding, following) if has_transit else None
         ahead = None
         if has_transit:
             ahead = {

@@ -6,8 +6,9 @@ elbow where the other arm's next move passes. Before a transit commits to a goal
 segments after it, up to the next transit (which chooses afresh) and at most
 ``PREVIEW_SEGMENTS`` of them, are solved from that goal as the published method solves them
 (each arm's Cartesian path with the other arms standing where they are; a closed chain as
-one), without timing and without changing what the grippers hold. A goal from which one of
-them fails goes to the back of the transit's queue.
+one), without timing, each with what the grippers hold and the contacts it expects then
+(its events applied to the compiler's holding, which is put back after). A goal from which
+one of them fails goes to the back of the transit's queue.
 
 This is a cheap first filter (a few Cartesian paths per goal looked at); what it cannot see
 (a failure further on, a timing or a gate failure) the compiler's search handles by coming
@@ -22,6 +23,7 @@ import numpy as np
 
 from cellengine.arrays import Vec
 from cellengine.execute import solve
+from cellengine.execute.held import Holding
 from cellengine.execute.refused import Refused
 from cellengine.execute.solve import Accept
 from cellengine.motion.collision import CollisionChecker
@@ -41,21 +43,34 @@ def upcoming(following: Sequence[Segment]) -> list[Segment]:
     return out
 
 
-def preview(cell: CellModel, checker: CollisionChecker, following: Sequence[Segment]) -> Accept:
+def preview(cell: CellModel, holding: Holding, following: Sequence[Segment]) -> Accept:
     """Whether ``upcoming(following)`` can be solved one after the other from a cell
-    configuration."""
+    configuration, each with the grippers' jaws, held objects and contacts as the compiler
+    will have them (a closed hand's fingers are elsewhere than an open one's)."""
     segments = upcoming(following)
 
     def accept(q: Vec) -> bool:
         here = np.array(q)
+        now = holding.state
         try:
             for seg in segments:
-                here = _solved(cell, checker, seg, here)
-        except Refused:
+                _hold(cell, holding, seg, here)
+                here = _solved(cell, holding.checker, seg, here)
+        except (Refused, ValueError, KeyError):  # held objects that cannot ride: as compiling
             return False
+        finally:
+            holding.restore(now)
         return True
 
     return accept
+
+
+def _hold(cell: CellModel, holding: Holding, seg: Segment, q: Vec) -> None:
+    """``holding`` as the compiler sets it when ``seg`` begins at ``q``."""
+    for e in seg.before:
+        T_cell_tcp = cell.arms[e.arm].fk(cell.split(q)[e.arm])
+        holding.set(e.arm, e.holds, T_cell_tcp, e.mode)
+    holding.touch(seg.contacts)
 
 
 def _solved(cell: CellModel, checker: CollisionChecker, seg: Segment, q: Vec) -> Vec:

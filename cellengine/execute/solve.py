@@ -109,7 +109,11 @@ def transit(
     ahead = {arm: (ahead or {}).get(arm, Lookahead(None)) for arm in arms}
     per_arm = [
         rewound(
-            cell, arm, _ik_goals(cell, arm, goals[arm], q), ahead[arm].poses, q[cell.slices[arm]]
+            cell,
+            arm,
+            _required_only(cell, arm, _ik_goals(cell, arm, goals[arm], q), ahead[arm].on),
+            ahead[arm].poses,
+            q[cell.slices[arm]],
         )
         for arm in arms
     ]
@@ -255,6 +259,24 @@ def _looking_ahead(tiers: list[list[Vec]], accept: Accept | None) -> Iterator[li
             yield good
     if deferred:
         yield deferred
+
+
+def _required_only(cell: CellModel, arm: str, sols: Vec, on: frozenset[int] | None) -> Vec:
+    """The solutions on the IK branches the segments ahead require (``on``): from a goal
+    on another the compiler refuses the first of them (Segment.branches), so it is no
+    choice; Refused when there is none."""
+    ik = arm_ik(cell.arms[arm])
+    if on is None or ik.closed_form is None:
+        return sols
+    keep = np.array([ik.branch(sol) in on for sol in sols], dtype=bool)
+    if not keep.any():
+        found = sorted({ik.branch(sol) for sol in sols})
+        raise Refused(
+            f"the {arm} arm reaches its transit goal on IK branches {found} only; the "
+            f"segments after it were checked on branches {sorted(on)}"
+        )
+    out: Vec = sols[keep]
+    return out
 
 
 def _ik_goals(cell: CellModel, arm: str, T_cell_tcp: Poses, q: Vec) -> Vec:

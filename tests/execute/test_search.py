@@ -9,12 +9,16 @@ import numpy as np
 import pytest
 
 from cellengine.errors import InputError
+from cellengine.execute import preview as preview_module
 from cellengine.execute import solve
+from cellengine.execute.held import Holding
 from cellengine.execute.preview import PREVIEW_SEGMENTS, preview, upcoming
-from cellengine.execute.refused import ChoicesExhausted, NoMoreChoices
+from cellengine.execute.refused import ChoicesExhausted, NoMoreChoices, Refused
 from cellengine.execute.search import BUDGET, add_all
+from cellengine.execute.solve import Lookahead
 from cellengine.motion.ik import arm_ik
-from cellengine.program import ArmPath, Segment
+from cellengine.motion.robot import CellModel
+from cellengine.program import ArmPath, GripperEvent, Segment
 from tests.execute.scenes import LEFT_READY, cable_cell, home, line, pose
 
 TRANSIT = ArmPath("left", "transit", np.eye(4)[None])
@@ -127,7 +131,8 @@ def test_choices_go_through_the_goals_then_run_out() -> None:
 
 
 def test_preview_solves_what_follows_from_a_configuration() -> None:
-    _, cell, checker = cable_cell()
+    world, cell, checker = cable_cell()
+    holding = Holding(world, checker.scene)
     q = home(cell)
     ready = solve.transit(cell, checker, {"left": pose(LEFT_READY)}, q)[-1]
     lx, ly, lz = LEFT_READY
@@ -135,6 +140,85 @@ def test_preview_solves_what_follows_from_a_configuration() -> None:
         1, "line", (ArmPath("left", "cartesian", line(LEFT_READY, (lx + 0.1, ly, lz))),)
     )
     too_far = Segment(1, "far", (ArmPath("left", "cartesian", line(LEFT_READY, (1.2, ly, lz))),))
-    assert preview(cell, checker, [reachable])(ready)
-    assert not preview(cell, checker, [reachable, too_far])(ready)
-    assert preview(cell, checker, [reachable, Segment(1, "t", (TRANSIT,)), too_far])(ready)
+    assert preview(cell, holding, [reachable])(ready)
+    assert not preview(cell, holding, [reachable, too_far])(ready)
+    assert preview(cell, holding, [reachable, Segment(1, "t", (TRANSIT,)), too_far])(ready)
+
+
+def test_preview_solves_each_segment_with_the_jaw_and_contacts_it_has(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A closed hand's fingers are elsewhere than an open one's: each segment is solved with
+    its events applied (as the compiler applies them), and the holding is put back after."""
+    world, cell, checker = cable_cell()
+    holding = Holding(world, checker.scene)
+    q = home(cell)
+    ready = solve.transit(cell, checker, {"left": pose(LEFT_READY)}, q)[-1]
+    lx, ly, lz = LEFT_READY
+    out = ArmPath("left", "cartesian", line(LEFT_READY, (lx + 0.05, ly, lz)))
+    back = ArmPath("left", "cartesian", out.poses[::-1])
+    close = GripperEvent("left", "grasp")
+    grasped = Segment(1, "closing", (back,), before=(close,), contacts=(("left", "cable1"),))
+    seen = []
+    solved = preview_module._solved
+
+    def spy(cell_: object, checker_: object, seg: Segment, at: np.ndarray) -> np.ndarray:
+        assert checker_ is holding.checker
+        seen.append((seg.label, dict(holding.state.jaw), holding.state.contacts))
+        return solved(cell_, checker_, seg, at)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(preview_module, "_solved", spy)
+    before = holding.state
+    assert preview(cell, holding, [Segment(1, "open", (out,)), grasped])(ready)
+    grasp = cell.arms["left"].fingers.opening("grasp")  # type: ignore[union-attr]
+    assert seen == [
+        ("open", {}, frozenset()),
+        ("closing", {"left": grasp}, frozenset({("left", "cable1")})),
+    ]
+    assert holding.state == before
+
+
+def test_a_transit_offers_only_the_branches_the_segments_ahead_require() -> None:
+    """A goal on a branch the next segments were not checked on is refused by the compiler
+    at the first of them: it is no choice, and choosing it would spend the search's retries."""
+    _, cell, checker = cable_cell()
+    q = home(cell)
+    goal = {"left": pose(LEFT_READY)}
+    ik = arm_ik(cell.arms["left"])
+    now = ik.branch(q[cell.slices["left"]])
+    sols = ik.solve_all(goal["left"], seed=q[cell.slices["left"]])
+    free = [s for s in sols if not checker.in_collision(put(cell, q, "left", s))]
+    other = next(b for b in (ik.branch(s) for s in free) if b != now)
+    ends = []
+    for choice in range(8):
+        try:
+            rows = solve.transit(
+                cell,
+                checker,
+                goal,
+                q,
+                None,
+                choice,
+                ahead={"left": Lookahead(None, frozenset({other}))},
+            )
+        except NoMoreChoices:
+            break
+        ends.append(ik.branch(rows[-1][cell.slices["left"]]))
+    assert ends and set(ends) == {other}
+    # farther out, the elbow reaches the goal one way only: half the branches are missing
+    lx, ly, lz = LEFT_READY
+    far = {"left": pose((lx + 0.4, ly, lz))}
+    found = sorted({ik.branch(s) for s in ik.solve_all(far["left"], seed=q[cell.slices["left"]])})
+    missing = next(b for b in range(8) if b not in found)
+    with pytest.raises(Refused) as e:
+        solve.transit(cell, checker, far, q, ahead={"left": Lookahead(None, frozenset({missing}))})
+    assert str(e.value) == (
+        f"the left arm reaches its transit goal on IK branches {found} only; the segments "
+        f"after it were checked on branches [{missing}]"
+    )
+
+
+def put(cell: CellModel, q: np.ndarray, arm: str, joints: np.ndarray) -> np.ndarray:
+    out = q.copy()
+    out[cell.slices[arm]] = joints
+    return out
