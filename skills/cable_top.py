@@ -29,7 +29,7 @@ import itertools
 import math
 from collections.abc import Callable, Iterator, Set
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -103,9 +103,11 @@ def top_ways(
         return  # the compiler could not run it
     # the branches the routing arm may be on, still while the other hand lets go
     may = state.branches_of(r_arm) & dict(released or ()).get(r_arm, ANY_BRANCH)
+    o_may = state.branches_of(o_arm) & dict(released or ()).get(o_arm, ANY_BRANCH)
     closest: tuple[float, InputError] | None = None
     found = False
     memo: Memo = {}
+    apart_memo: dict[tuple[object, ...], Apart | InputError] = {}
     # why the pusher cannot stand where a way puts it, or the routing hand end where it does:
     # the ways that share it are not built
     blocked: dict[tuple[object, ...], InputError] = {}
@@ -124,9 +126,12 @@ def top_ways(
             else:
                 failed = _check(ctx, step.cable, tp, (r_arm, o_arm), memo, may)
                 if failed is None:
-                    found = True
-                    yield _emit(state, tp, r_arm, o_arm, step.cable)
-                    continue
+                    apart = _arms_apart(ctx, state, tp, (r_arm, o_arm), (may, o_may), apart_memo)
+                    if not isinstance(apart, InputError):
+                        found = True
+                        yield _emit(state, tp, r_arm, o_arm, step.cable, apart)
+                        continue
+                    failed = "hands", apart
                 part, why = failed
                 if part in parts:
                     blocked[(part, parts[part])] = why
@@ -377,8 +382,79 @@ def _hands(
     )
 
 
+class Apart(NamedTuple):
+    """The arms' IK branches on which they keep the cell's clearance from each other: the
+    routing arm laying the cable with the other standing (``lay``: pairs), then the pusher
+    pushing and the routing hand inserting (``push``: pairs)."""
+
+    lay: c.Paired
+    push: c.Paired
+
+
+def _arms_apart(
+    ctx: PlanningContext,
+    state: CableState,
+    tp: TopPlan,
+    arms: tuple[str, str],
+    may: tuple[frozenset[int], frozenset[int]],
+    memo: dict[tuple[object, ...], Apart | InputError],
+) -> Apart | InputError:
+    """The arms, not only the hands, keep the cell's clearance from each other (a wrist
+    passes over the other arm's upper arm on some boards): laying the cable, the other arm
+    where it stands back to, on the branches ``may`` (routing arm's, other arm's); pushing
+    and inserting, the pusher on any branch its transit over the cable can take, the routing
+    arm on one it laid the cable on. Every STRIDE-th pose (the compiler checks them all)."""
+    from cellengine.execute.following import STRIDE  # the motion stack: planning only
+
+    (r_arm, o_arm), (r_may, o_may) = arms, may
+    T_o = state.tcp[o_arm]
+    if o_arm in state.held:
+        T_o = c._stand_back(state, o_arm, tp.up, c.DEFAULT_BACK)[-1]
+    lay = [(T, T_o) for T in (*tp.lay[::STRIDE], tp.lay[-1])]
+    push = [(tp.lay[-1], T) for T in (*tp.push[::STRIDE], tp.push[-1])]
+    push += [(T, tp.push[-1]) for T in (*tp.insert[::STRIDE], tp.insert[-1])]
+    key = ("apart", T_o.tobytes(), tp.lay.tobytes(), tp.push.tobytes(), tp.insert.tobytes())
+    if key not in memo:
+        memo[key] = _apart(ctx, tp, (r_arm, o_arm), (r_may, o_may), lay, push)
+    return memo[key]
+
+
+def _apart(
+    ctx: PlanningContext,
+    tp: TopPlan,
+    arms: tuple[str, str],
+    may: tuple[frozenset[int], frozenset[int]],
+    lay: list[tuple[Mat, Mat]],
+    push: list[tuple[Mat, Mat]],
+) -> Apart | InputError:
+    (r_arm, o_arm), keep = arms, ctx.clearance
+    least = c._pair_least(ctx, r_arm, o_arm, lay, keep, *may, measure=False)
+    if least is None:  # an arm solved numerically: the compiler finds out
+        return Apart((), ())
+    laid = least >= keep
+    if laid.any():
+        on = frozenset(int(k) for k in np.flatnonzero(laid.any(axis=1)))
+        least = c._pair_least(ctx, r_arm, o_arm, push, keep, on, ANY_BRANCH, measure=False)
+        if least is not None and (least >= keep).any():
+            pushed = least >= keep
+            # the routing arm's branches that push and insert too; pushing it is the same
+            laid &= np.isin(np.arange(8), np.flatnonzero(pushed.any(axis=1)))[:, None]
+            return Apart(c._kept_pairs(laid, r_arm, o_arm), c._kept_pairs(pushed, r_arm, o_arm))
+        what, poses, on_ = "pushing the cable down and inserting", push, (on, ANY_BRANCH)
+    else:
+        what, poses, on_ = "laying the cable over the top", lay, may
+    measured = c._pair_least(ctx, r_arm, o_arm, poses, keep, *on_)
+    room = -math.inf if measured is None else float(measured.max())
+    return c._Blocked.of(
+        room - keep,
+        f"{tp.where}: however the two arms are posed, they come within "
+        f"{c._mm(max(room, 0.0))} mm of each other {what}; the cell's clearance is "
+        f"{c._mm(keep)} mm",
+    )
+
+
 def _emit(
-    state: CableState, tp: TopPlan, r_arm: str, o_arm: str, cable: str
+    state: CableState, tp: TopPlan, r_arm: str, o_arm: str, cable: str, apart: Apart
 ) -> tuple[list[Segment], CableState]:
     label = f"RouteCable {tp.guide}"
     b = c._Builder(state)
@@ -393,6 +469,8 @@ def _emit(
         before=b.mode_event(r_arm, SLIDE, cable),
         after=[GripperEvent(r_arm, GRASP, cable)],  # held taut, above the slot
         near=near_r,
+        branches=_branches(apart.lay),
+        paired=apart.lay,
         facts={"way": LABEL, "guide": tp.guide, "elevation": tp.elevation},
     )
     # the fingers closed without the cable between them: a pusher (REMODEL's closed push)
@@ -409,6 +487,8 @@ def _emit(
         # from here the cable runs under the pusher's fingertips, fixed there as by a grasp
         after=[GripperEvent(o_arm, GRASP, cable)],
         near=near,  # the fingertips touch the cable beside the guide's slot
+        branches=_branches(apart.push),
+        paired=apart.push,
         facts={"way": LABEL, "push_point": c._vec(tp.push_point)},
     )
     b.add(
@@ -416,6 +496,8 @@ def _emit(
         [c._cartesian(r_arm, tp.insert)],
         keep_distance=pair,
         near=near,
+        branches=_branches(apart.push),
+        paired=apart.push,
         annotations=[Anchor(cable, c._point(tp.slot), tp.guide)],
         facts={
             "way": LABEL,
@@ -428,6 +510,15 @@ def _emit(
         },
     )
     return b.segments, _after(b.state, tp, r_arm, o_arm, cable)
+
+
+def _branches(paired: c.Paired) -> tuple[tuple[str, frozenset[int]], ...]:
+    """Each arm's branches in some pair of ``paired`` (Segment.branches)."""
+    return tuple(
+        (arm, frozenset(p[k] for p in pairs))
+        for a, b, pairs in paired
+        for k, arm in enumerate((a, b))
+    )
 
 
 def _after(state: CableState, tp: TopPlan, r_arm: str, o_arm: str, cable: str) -> CableState:

@@ -121,3 +121,46 @@ def test_the_routing_arm_laying_over_the_top_is_screened_for_its_own_links(
             "guide's paths on the IK branches it may be on without hitting itself"
         )
     )
+
+
+def test_the_arms_laying_pushing_and_inserting_are_screened_against_each_other(
+    tmp_path: Path,
+) -> None:
+    """Not only the hands: the arms keep the cell's clearance from each other on the IK
+    branch pairs the way hands the compiler (a wrist passes over the other arm's upper arm
+    on some boards); where no pair does, the way is refused saying how close they come."""
+    loaded = load_plan(close_board(tmp_path))
+    ctx, steps = build_context(loaded.world), loaded.plan.steps
+    state = CableState.at_home(ctx)
+    for i in range(2):
+        _, state = next(C.step_ways(ctx, steps, i, state))
+    route = steps[2]
+    assert isinstance(route, C.RouteCable)
+    state = replace(state, step=2)
+    arms = r_arm, o_arm = route.arms(ctx, state)
+    state = next(route.guide_plans(ctx, state, 0)).after(state, r_arm, o_arm, route.cable)
+    tp = next(
+        tp
+        for way in cable_top._ways(ctx, state, route, 1, r_arm, o_arm)
+        if (tp := cable_top._plan(ctx, state, route, 1, r_arm, o_arm, way)) is not None
+        and cable_top._check(ctx, route.cable, tp, arms, {}, ANY_BRANCH) is None
+    )
+    apart = cable_top._arms_apart(ctx, state, tp, arms, (ANY_BRANCH, ANY_BRANCH), {})
+    assert isinstance(apart, cable_top.Apart)
+    ((a, b, pairs),) = apart.push
+    assert (a, b) == arms and pairs
+    for i, j in pairs:  # pushing down, the routing hand over the guide: apart on that pair
+        q = ctx.home.copy()
+        q[ctx.cell.slices[r_arm]] = ctx.iks[r_arm].by_branch(tp.lay[-1])[i]
+        q[ctx.cell.slices[o_arm]] = ctx.iks[o_arm].by_branch(tp.push[-1])[j]
+        assert ctx.checker.distance(q, between=arms)[0] >= ctx.clearance
+    far = replace(ctx, clearance=0.5)
+    refused = cable_top._arms_apart(far, state, tp, arms, (ANY_BRANCH, ANY_BRANCH), {})
+    assert isinstance(refused, InputError)
+    message = refused.problems[0].message
+    head, tail = message.split(" mm of each other ")
+    assert head.startswith(
+        "steps[2] RouteCable routing.guide2: however the two arms are posed, they come within "
+    )
+    assert 0.0 < float(head.rsplit(" ", 1)[1]) < 500.0
+    assert tail == "laying the cable over the top; the cell's clearance is 500.0 mm"
