@@ -266,11 +266,17 @@ def _place_carries(
     might place it)."""
     kept: list[tuple[int, float, int, tuple[float, float], str]] = []
     clear = False  # some way keeps the other hand's tool clear of the cell
+    closest: Nearest | None = None  # else the way whose tool came least near, and to what
     for k, (hold, order) in enumerate(itertools.product(cg.PLACE_HOLDS, PLACE_ORDERS)):
         geo = _place_geometry(ctx.world, state, step, c_arm, f_arm, where, order, hold=hold)
         poses = [pair for _, paths in geo.carry for pair in _samples(paths)]
         poses += _samples(geo.insert)
-        if ctx.probe.comes_within(f_arm, [T_f for _, T_f in poses], GRASP, (), ctx.clearance):
+        T_fs = [T_f for _, T_f in poses]
+        if ctx.probe.comes_within(f_arm, T_fs, GRASP, (), ctx.clearance):
+            if not clear:
+                near = ctx.probe.nearest(f_arm, T_fs, GRASP, (), ctx.clearance)
+                if near is not None and (closest is None or near.distance > closest.distance):
+                    closest = near
             continue
         clear = True
         room = max(_pair_rooms(ctx, c_arm, f_arm, poses, ctx.clearance).values())
@@ -278,11 +284,9 @@ def _place_carries(
             published = hold == cg.PLACE_HOLDS[0]
             kept.append((0, 0.0, k, hold, order) if published else (1, -room, k, hold, order))
     if not kept:
-        what = (
-            "the arms cannot keep the cell's clearance from each other"
-            if clear
-            else "its tool comes within the cell's clearance of the cell"
-        )
+        what = "the arms cannot keep the cell's clearance from each other"
+        if not clear and closest is not None:
+            what = f"{closest.tool} {_passes(closest, ctx.clearance)}"
         error = _error(
             f"{where}: however the other arm ({f_arm}) holds the cable, {what} carrying the "
             f"connector to the guide (the cell's clearance is {_mm(ctx.clearance)} mm)"
