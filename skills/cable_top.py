@@ -509,7 +509,7 @@ def _emit(
             "radius": tp.radius,
         },
     )
-    return b.segments, _after(b.state, tp, r_arm, o_arm, cable)
+    return b.segments, _after(b.state, tp, r_arm, o_arm, cable, apart)
 
 
 def _branches(paired: c.Paired) -> tuple[tuple[str, frozenset[int]], ...]:
@@ -521,16 +521,22 @@ def _branches(paired: c.Paired) -> tuple[tuple[str, frozenset[int]], ...]:
     )
 
 
-def _after(state: CableState, tp: TopPlan, r_arm: str, o_arm: str, cable: str) -> CableState:
+def _after(
+    state: CableState, tp: TopPlan, r_arm: str, o_arm: str, cable: str, apart: Apart
+) -> CableState:
     """Both hands on the cable, as after a published insert: the pusher where a pivot stands,
-    the routing hand past the guide."""
+    the routing hand past the guide, on a branch it laid and inserted on."""
     level = float((tp.push_point - tp.slot) @ tp.up) * tp.up
+    branches = {a: br for a, br in state.branches.items() if a != o_arm}
+    laid = dict(_branches(apart.push)).get(r_arm)
+    if laid is not None:
+        branches[r_arm] = state.branches_of(r_arm) & laid
     s = replace(
         state,
         guides=(*state.guides, tp.guide),
         route=(*state.route, c._point(tp.push_point - level), c._point(tp.slot)),
         pull_distance=float(np.linalg.norm(tp.insert[-1][:3, 3] - level - tp.slot)),
-        branches={a: br for a, br in state.branches.items() if a != o_arm},
+        branches=branches,
     )
     s = s.hold(o_arm, cable, tp.laid)
     return s.hold(r_arm, cable, tp.laid + tp.radius)
