@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from bench.board_check import check_compiled
-from cellengine.context import build_context
+from cellengine.context import PlanningContext, build_context
 from cellengine.errors import InputError
 from cellengine.execute.following import surviving
 from cellengine.info.load import load_plan
@@ -89,16 +89,8 @@ def test_the_routing_arm_laying_over_the_top_is_screened_for_its_own_links(
     """The routing arm lays the cable over guide2 and inserts in lines, on the IK branch it
     was on: a way passes the checks only if the arm follows them clear of itself on a branch
     it may be on (before, the family dropped each such way after building it)."""
-    loaded = load_plan(close_board(tmp_path))
-    ctx, steps = build_context(loaded.world), loaded.plan.steps
-    state = CableState.at_home(ctx)
-    for i in range(2):
-        _, state = next(C.step_ways(ctx, steps, i, state))
-    route = steps[2]
-    assert isinstance(route, C.RouteCable)
-    state = replace(state, step=2)
+    ctx, route, state = at_guide2(tmp_path)
     arms = r_arm, o_arm = route.arms(ctx, state)
-    state = next(route.guide_plans(ctx, state, 0)).after(state, r_arm, o_arm, route.cable)
     for way in cable_top._ways(ctx, state, route, 1, r_arm, o_arm):
         try:
             tp = cable_top._plan(ctx, state, route, 1, r_arm, o_arm, way)
@@ -129,16 +121,8 @@ def test_the_arms_laying_pushing_and_inserting_are_screened_against_each_other(
     """Not only the hands: the arms keep the cell's clearance from each other on the IK
     branch pairs the way hands the compiler (a wrist passes over the other arm's upper arm
     on some boards); where no pair does, the way is refused saying how close they come."""
-    loaded = load_plan(close_board(tmp_path))
-    ctx, steps = build_context(loaded.world), loaded.plan.steps
-    state = CableState.at_home(ctx)
-    for i in range(2):
-        _, state = next(C.step_ways(ctx, steps, i, state))
-    route = steps[2]
-    assert isinstance(route, C.RouteCable)
-    state = replace(state, step=2)
+    ctx, route, state = at_guide2(tmp_path)
     arms = r_arm, o_arm = route.arms(ctx, state)
-    state = next(route.guide_plans(ctx, state, 0)).after(state, r_arm, o_arm, route.cable)
     tp = next(
         tp
         for way in cable_top._ways(ctx, state, route, 1, r_arm, o_arm)
@@ -149,10 +133,12 @@ def test_the_arms_laying_pushing_and_inserting_are_screened_against_each_other(
     assert isinstance(apart, cable_top.Apart)
     ((a, b, pairs),) = apart.push
     assert (a, b) == arms and pairs
+    rows_r, rows_o = ctx.iks[r_arm].by_branch(tp.lay[-1]), ctx.iks[o_arm].by_branch(tp.push[-1])
+    assert rows_r is not None and rows_o is not None  # UR arms: closed form
     for i, j in pairs:  # pushing down, the routing hand over the guide: apart on that pair
         q = ctx.home.copy()
-        q[ctx.cell.slices[r_arm]] = ctx.iks[r_arm].by_branch(tp.lay[-1])[i]
-        q[ctx.cell.slices[o_arm]] = ctx.iks[o_arm].by_branch(tp.push[-1])[j]
+        q[ctx.cell.slices[r_arm]] = rows_r[i]
+        q[ctx.cell.slices[o_arm]] = rows_o[j]
         assert ctx.checker.distance(q, between=arms)[0] >= ctx.clearance
     far = replace(ctx, clearance=0.5)
     refused = cable_top._arms_apart(far, state, tp, arms, (ANY_BRANCH, ANY_BRANCH), {})
@@ -164,3 +150,19 @@ def test_the_arms_laying_pushing_and_inserting_are_screened_against_each_other(
     )
     assert 0.0 < float(head.rsplit(" ", 1)[1]) < 500.0
     assert tail == "laying the cable over the top; the cell's clearance is 500.0 mm"
+
+
+def at_guide2(tmp_path: Path) -> tuple[PlanningContext, C.RouteCable, CableState]:
+    """The close board's context, its RouteCable and the state after guide1 (its first
+    way), where guide2 is routed over the top."""
+    loaded = load_plan(close_board(tmp_path))
+    ctx, steps = build_context(loaded.world), loaded.plan.steps
+    state = CableState.at_home(ctx)
+    for i in range(2):
+        _, state = next(C.step_ways(ctx, steps, i, state))
+    route = steps[2]
+    assert isinstance(route, C.RouteCable)
+    state = replace(state, step=2)
+    r_arm, o_arm = route.arms(ctx, state)
+    state = next(route.guide_plans(ctx, state, 0)).after(state, r_arm, o_arm, route.cable)
+    return ctx, route, state
