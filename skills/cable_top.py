@@ -312,6 +312,14 @@ def _check(
         *(
             (
                 "hands",
+                ("free", what, T_o.tobytes(), tp.lay[-1].tobytes()),
+                functools.partial(_free, ctx, tp, arms, what, T_o, may),
+            )
+            for what, T_o in (("over the cable", tp.above), ("pushing it down", tp.push[-1]))
+        ),
+        *(
+            (
+                "hands",
                 (arm, what, path.tobytes(), T_other.tobytes()),
                 functools.partial(_hands, ctx, tp, (arm, other), what, path, T_other),
             )
@@ -327,6 +335,28 @@ def _check(
         if (why := memo[key]) is not None:
             return part, why
     return None
+
+
+def _free(
+    ctx: PlanningContext,
+    tp: TopPlan,
+    arms: tuple[str, str],
+    what: str,
+    T_o: Mat,
+    may: frozenset[int],
+) -> InputError | None:
+    """Some pair of the arms' configurations is free of collisions with the cell and each
+    other, the pusher at ``T_o`` and the routing hand over the top (on a branch of ``may``):
+    the hands' checks see the tools only, and an upper arm can meet a guide or the holder
+    where the hand is clear (the compiler would refuse the pusher's transit goal)."""
+    r_arm, o_arm = arms
+    why = c._pair_blocked(ctx, {r_arm: tp.lay[-1], o_arm: T_o}, on={r_arm: may})
+    if why is None:
+        return None
+    return c._error(
+        f"{tp.where}: every inverse kinematics solution of the pusher ({o_arm}) {what}, the "
+        f"routing hand over the top, is in collision" + (f" ({why})" if why else "")
+    )
 
 
 def _reach(ctx: PlanningContext, arm: str, what: str, T: Mat, where: str) -> InputError | None:

@@ -152,6 +152,38 @@ def test_the_arms_laying_pushing_and_inserting_are_screened_against_each_other(
     assert tail == "laying the cable over the top; the cell's clearance is 500.0 mm"
 
 
+def test_the_pusher_arm_is_screened_against_the_cell_not_only_its_fingers(
+    tmp_path: Path,
+) -> None:
+    """The hands' checks see the tools only; an upper arm can meet a guide or the holder
+    where the pusher's fingers are clear, and the compiler then refuses the pusher's transit
+    goal. A way is handed over only if some pair of the arms' configurations is free of
+    collisions with the pusher over the cable and pushing it down; else it is refused
+    saying which."""
+    ctx, route, state = at_guide2(tmp_path)
+    arms = r_arm, o_arm = route.arms(ctx, state)
+    tp = next(
+        tp
+        for way in cable_top._ways(ctx, state, route, 1, r_arm, o_arm)
+        if (tp := cable_top._plan(ctx, state, route, 1, r_arm, o_arm, way)) is not None
+        and cable_top._check(ctx, route.cable, tp, arms, {}, ANY_BRANCH) is None
+    )
+    assert cable_top._free(ctx, tp, arms, "over the cable", tp.above, ANY_BRANCH) is None
+    sunk = tp.push[-1].copy()
+    sunk[:3, 3] -= 0.15 * tp.up  # the pusher's wrist down in the board
+    refused = cable_top._free(ctx, tp, arms, "pushing it down", sunk, ANY_BRANCH)
+    assert isinstance(refused, InputError)
+    assert refused.problems[0].message.startswith(
+        f"steps[2] RouteCable routing.guide2: every inverse kinematics solution of the pusher "
+        f"({o_arm}) pushing it down, the routing hand over the top, is in collision ("
+    )
+    for q_o in ctx.iks[o_arm].solve_all(sunk):  # as the compiler would find
+        for q_r in ctx.iks[r_arm].solve_all(tp.lay[-1]):
+            q = ctx.home.copy()
+            q[ctx.cell.slices[o_arm]], q[ctx.cell.slices[r_arm]] = q_o, q_r
+            assert ctx.checker.in_collision(q)
+
+
 def at_guide2(tmp_path: Path) -> tuple[PlanningContext, C.RouteCable, CableState]:
     """The close board's context, its RouteCable and the state after guide1 (its first
     way), where guide2 is routed over the top."""
