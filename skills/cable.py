@@ -411,7 +411,8 @@ class RouteCable(Skill):
         ways = _ranked(heads, theta0, refused)
         first = next(ways)  # a head has ways
         self._check_any_length(ctx, state, k, heads, first, r_arm, o_arm)
-        released = _letting_go(ctx, state, (r_arm, o_arm), screen.up, guide)
+        nxt = self.guides[k + 1] if k + 1 < len(self.guides) else None
+        released = _letting_go(ctx, state, (r_arm, o_arm), screen.up, guide, nxt)
         whys = [e for e in released.values() if isinstance(e, InputError)]
         if released and len(whys) == len(released):
             # no way's other hand lets go of the last guide: in the other roles the arms
@@ -656,7 +657,12 @@ def _routing_state(state: CableState, k: int, r_arm: str) -> bytes:
 
 
 def _letting_go(
-    ctx: PlanningContext, state: CableState, arms: tuple[str, str], up: Vec, guide: str
+    ctx: PlanningContext,
+    state: CableState,
+    arms: tuple[str, str],
+    up: Vec,
+    guide: str,
+    after: str | None = None,
 ) -> dict[Back, InputError | Release]:
     """Per stand-back (when the other hand holds the cable at the last guide), why the other
     arm cannot let go and stand back, the routing hand holding still, on the IK branches the
@@ -664,7 +670,9 @@ def _letting_go(
     routing arm; else each arm's branches in a pair of them that can. It depends on the state
     alone: every way of the guide with that stand-back would be refused for it (_coming, or
     the compiler), and its release requires those branches (so a transit before it that
-    chose others is compiled again looking ahead at them)."""
+    chose others is compiled again looking ahead at them). Its open hand keeps the cell's
+    clearance from all but the elements it may pass near (_standing_near; ``after``: the
+    guide after ``guide``), as the compiler holds it."""
     from cellengine.execute.following import STRIDE, surviving  # the motion stack
 
     r_arm, o_arm = arms
@@ -673,6 +681,7 @@ def _letting_go(
     out: dict[Back, InputError | Release] = {}
     where = f"steps[{state.step}] RouteCable {guide}"
     what = f"the other arm ({o_arm}) lets go of {state.guides[-1]} and stands back"
+    near = _standing_near(ctx, state, up, guide, after)
     for back in _stand_backs(state, o_arm):
         poses = _stand_back(state, o_arm, up, back)
         may = state.branches_of(o_arm)
@@ -682,6 +691,15 @@ def _letting_go(
             out[back] = _error(
                 f"{where}: {what} {how} on no IK branch it may be on without "
                 f"hitting itself ({', '.join(nearest[1]) or 'out of reach'})"
+            )
+            continue
+        found = _env_near(ctx, o_arm, poses, OPEN, near, _checker_clearance(), stride=1)
+        if found is not None:
+            tool, limit, own = found
+            out[back] = _Blocked.of(
+                tool.distance - limit,
+                f"{where}: {tool.tool} {_passes(tool, limit)} while {what} {how}; "
+                + _env_fix(ctx, tool, own, limit),
             )
             continue
         T_r = state.tcp[r_arm]
@@ -706,6 +724,33 @@ def _letting_go(
             if -1 not in found  # an arm solved numerically has no branches
         )
     return out
+
+
+def _standing_near(
+    ctx: PlanningContext, state: CableState, up: Vec, guide: str, after: str | None
+) -> tuple[str, ...]:
+    """What the other hand standing back from the last guide may pass near (the compiler
+    holds it to the cell's clearance from all else): the last two guides' elements (the
+    release's near), those the hands work between at ``guide`` and the one ``after`` it, and
+    what lies under the cable at the last guide and at ``guide``."""
+    slot = cg.position(ctx.world, guide)
+    return tuple(
+        sorted(
+            {
+                *map(cg.element_of, state.guides[-2:]),
+                *_beside(state, guide),
+                *((cg.element_of(after),) if after is not None else ()),
+                *_under(ctx, np.asarray(state.route[-1], dtype=float), up),
+                *_under(ctx, slot, up),
+            }
+        )
+    )
+
+
+def _checker_clearance() -> float:
+    from cellengine.motion.collision import DEFAULT_CLEARANCE  # the motion stack: planning only
+
+    return DEFAULT_CLEARANCE
 
 
 def _still_on(

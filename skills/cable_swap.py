@@ -93,6 +93,7 @@ def _swaps(
     and the laid cable's direction from it."""
     up, slot, along = laid
     guide = step.guides[k]
+    nxt = step.guides[k + 1] if k + 1 < len(step.guides) else None
     where = f"steps[{state.step}] RouteCable {guide}"
     arms = r_arm, o_arm = step.arms(ctx, state)
     T_r = state.tcp[r_arm]
@@ -101,7 +102,7 @@ def _swaps(
     held = float((T_r[:3, 3] - slot) @ along)  # cable from slot to fingertips
     released = c._Builder(state)
     if o_arm in state.held and not routing_first:  # as before any guide
-        _release(ctx, released, state, arms, up, guide, dead, beside)
+        _release(ctx, released, state, arms, up, (guide, nxt), dead, beside)
     first: InputError | None = None
     found = False
     for away in aways:
@@ -119,7 +120,7 @@ def _swaps(
             )
             if o_arm in b.state.held:
                 # a segment of the swap: the compiler failing it fails this swap
-                _release(ctx, b, b.state, arms, up, guide, dead, beside, label)
+                _release(ctx, b, b.state, arms, up, (guide, nxt), dead, beside, label)
             T_above, T_take = _take(ctx, arms, b.state, r_on, T_r, along, up, where)
         except InputError as e:
             first = first or e
@@ -157,7 +158,7 @@ def _release(
     state: CableState,
     arms: tuple[str, str],
     up: np.ndarray,
-    guide: str,
+    guides: tuple[str, str | None],
     dead: Set[bytes],
     beside: tuple[str, ...],
     label: str = "",
@@ -165,9 +166,10 @@ def _release(
     """The other hand lets go of the last guide and stands back, as before any guide: the
     first stand-back the arms can do (c._letting_go) that the compiler did not fail; in the
     swap (``label``) after the routing hand went out of the way, the first the arms can do
-    (the compiler failing it fails the swap: key)."""
-    o_arm = arms[1]
-    released = c._letting_go(ctx, state, arms, up, guide)
+    (the compiler failing it fails the swap: key). ``guides``: the guide and the one after
+    it (None after the last)."""
+    o_arm, guide = arms[1], guides[0]
+    released = c._letting_go(ctx, state, arms, up, *guides)
     first: InputError | None = None
     for back, release in released.items():
         poses = c._stand_back(state, o_arm, up, back)

@@ -96,7 +96,9 @@ def top_ways(
     of the last guide is ``dead`` (RouteCable.guide_plans)."""
     r_arm, o_arm = step.arms(ctx, state)
     up = cg.platform_up(ctx.world, step.guides[k])
-    released = c._letting_go(ctx, state, (r_arm, o_arm), up, step.guides[k]).get(c.DEFAULT_BACK)
+    nxt = step.guides[k + 1] if k + 1 < len(step.guides) else None
+    let_go = c._letting_go(ctx, state, (r_arm, o_arm), up, step.guides[k], nxt)
+    released = let_go.get(c.DEFAULT_BACK)
     if isinstance(released, InputError):
         raise released  # every way lets go of the last guide so
     if o_arm in state.held and c._stand_back(state, o_arm, up, c.DEFAULT_BACK).tobytes() in dead:

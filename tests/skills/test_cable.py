@@ -1387,6 +1387,35 @@ def test_the_other_hand_letting_go_is_screened_once_per_state() -> None:
     )
 
 
+def test_the_other_hand_standing_back_keeps_the_cells_clearance_from_what_it_is_not_near(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Its open fingers stand back from beside the guides it held the cable at: held to
+    the cell's clearance from everything else, as the compiler holds them (before, a
+    stand-back through a connector guide was handed over and the compiler refused it). The
+    reference pivot hand passes 30.6 mm from guide1; with nothing counted as near and a
+    50 mm clearance, every stand-back is refused saying by how much and from what."""
+    world, _ = _world()
+    ctx, state, _, r_arm, o_arm = _after_guide1(world)
+    up = cg.platform_up(world, "routing.guide2")
+    guides = "routing.guide2", "routing.guide3"
+    near = C._standing_near(ctx, state, up, *guides)
+    assert {"routing.guide1", *guides, "table"} <= set(near)
+    free = C._letting_go(ctx, state, (r_arm, o_arm), up, *guides)
+    assert not any(isinstance(r, InputError) for r in free.values())
+    monkeypatch.setattr(C, "_standing_near", lambda *_: ())
+    far = replace(ctx, clearance=0.050)
+    whys = C._letting_go(far, state, (r_arm, o_arm), up, *guides)
+    assert set(whys) == set(C._all_backs())
+    assert all(isinstance(e, C._Blocked) for e in whys.values())
+    assert whys[C.DEFAULT_BACK].problems[0].message == (
+        "steps[2] RouteCable routing.guide2: right/tool/finger_left would pass 30.6 mm from "
+        "routing.guide1 while the other arm (right) lets go of routing.guide1 and stands back "
+        "100.0 mm; the cell's clearance is 50.0 mm: routing.guide1 would have to stand 19.4 mm "
+        "farther from the hand's path, or the fingers be narrower"
+    )
+
+
 def test_a_pivot_the_other_hand_cannot_stand_back_from_is_refused_at_its_guide() -> None:
     """The other hand comes down to the pivot and, at the next guide, lets go and stands
     back from it: the reference pivot allows that. A pivot 150 mm in front of the other
