@@ -418,7 +418,8 @@ class RouteCable(Skill):
             # no way's other hand lets go of the last guide: in the other roles the arms
             # stand elsewhere (PlaceConnector decides who routes, PickCable who holds what)
             why = max(whys, key=lambda e: e.distance if isinstance(e, _Blocked) else -math.inf)
-            why.blames = "arms"
+            if not isinstance(why, _Standing):  # where it holds the cable decides that
+                why.blames = "arms"
             raise why
         state = _still_on(state, r_arm, released)
         if shared is not None:  # the routing hand's screens of the same routing hand
@@ -696,7 +697,7 @@ def _letting_go(
         found = _env_near(ctx, o_arm, poses, OPEN, near, _checker_clearance(), stride=1)
         if found is not None:
             tool, limit, own = found
-            out[back] = _Blocked.of(
+            out[back] = _Standing.of(
                 tool.distance - limit,
                 f"{where}: {tool.tool} {_passes(tool, limit)} while {what} {how}; "
                 + _env_fix(ctx, tool, own, limit),
@@ -2782,6 +2783,11 @@ class _Blocked(InputError):
         e = cls(Problem(message))
         e.distance = distance
         return e
+
+
+class _Standing(_Blocked):
+    """The other hand's fingers standing back from the last guide come too near something:
+    where it holds the cable there (the last guide's way) decides it, not which arm routes."""
 
 
 def _error(message: str) -> InputError:

@@ -1396,7 +1396,7 @@ def test_the_other_hand_standing_back_keeps_the_cells_clearance_from_what_it_is_
     reference pivot hand passes 30.6 mm from guide1; with nothing counted as near and a
     50 mm clearance, every stand-back is refused saying by how much and from what."""
     world, _ = _world()
-    ctx, state, _, r_arm, o_arm = _after_guide1(world)
+    ctx, state, route, r_arm, o_arm = _after_guide1(world)
     up = cg.platform_up(world, "routing.guide2")
     guides = "routing.guide2", "routing.guide3"
     near = C._standing_near(ctx, state, up, *guides)
@@ -1407,13 +1407,17 @@ def test_the_other_hand_standing_back_keeps_the_cells_clearance_from_what_it_is_
     far = replace(ctx, clearance=0.050)
     whys = C._letting_go(far, state, (r_arm, o_arm), up, *guides)
     assert set(whys) == set(C._all_backs())
-    assert all(isinstance(e, C._Blocked) for e in whys.values())
+    # where the other hand holds the cable decides it, not which arm routes: no blame
+    assert all(isinstance(e, C._Standing) for e in whys.values())
     assert whys[C.DEFAULT_BACK].problems[0].message == (
         "steps[2] RouteCable routing.guide2: right/tool/finger_left would pass 30.6 mm from "
         "routing.guide1 while the other arm (right) lets go of routing.guide1 and stands back "
         "100.0 mm; the cell's clearance is 50.0 mm: routing.guide1 would have to stand 19.4 mm "
         "farther from the hand's path, or the fingers be narrower"
     )
+    with pytest.raises(C._Standing) as err:  # guide2 is refused before any way is built
+        next(route.guide_plans(far, state, 1))
+    assert err.value.blames is None
 
 
 def test_a_pivot_the_other_hand_cannot_stand_back_from_is_refused_at_its_guide() -> None:
