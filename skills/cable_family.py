@@ -138,6 +138,11 @@ def _guide(
                 return
             except InputError as e:
                 if not offered:
+                    if k == 0 and e.blames is None:
+                        # the first guide, from where the connector was placed: the other
+                        # routing arm changes every way of it, another placing by the same
+                        # arm few (PlaceConnector decides who routes; the rest are tried after)
+                        e.blames = "arms"
                     failed[key] = e
                 raise
             narrowed = _narrowed(ctx, state, segments, after)

@@ -99,3 +99,25 @@ def test_a_cable_picked_twice_is_refused_at_the_second_pick(tmp_path: Path) -> N
         f"{plan}:5:5: steps[1] PickCable: 'cable1' was picked by steps[0]; a cable is picked "
         "from its combs once"
     )
+
+
+def test_the_first_guide_with_no_way_sends_the_search_to_the_other_routing_arm(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The first guide is routed from where the connector was placed: when none of its ways
+    passes, the error blames which arm routes (PlaceConnector decides it), so the search
+    tries the other arm's placing before the same arm's other ones (they are still tried
+    after). A later guide's error blames nothing: the guide before it decides its state."""
+    loaded = load_plan(CELLS / "cable_routing" / "plan_straight.yaml")
+    ctx, steps = build_context(loaded.world), loaded.plan.steps
+    state = CableState.at_home(ctx)
+
+    def refused(*_: object) -> object:
+        raise InputError.at("no way", None)
+        yield  # a generator, as the guide's ways
+
+    monkeypatch.setattr(cable_family, "_ways", refused)
+    for k, blames in ((0, "arms"), (1, None)):
+        with pytest.raises(InputError) as err:
+            next(cable_family._guide(ctx, steps, 2, state, k, {}))
+        assert err.value.blames == blames
