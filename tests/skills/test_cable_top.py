@@ -19,6 +19,7 @@ from cellengine.pipeline import compile_plan
 from cellengine.skills import cable as C
 from cellengine.skills import cable_family, cable_top
 from cellengine.skills.cable_state import ANY_BRANCH, CableState
+from cellengine.skills.cable_top import TopPlan
 from tests.skills.test_cable_search import board
 
 GUIDE2, GUIDE3 = "Guide_U_001", "Guide_U_002"  # routing.guide2, routing.guide3 (map.csv)
@@ -90,14 +91,8 @@ def test_the_routing_arm_laying_over_the_top_is_screened_for_its_own_links(
     was on: a way passes the checks only if the arm follows them clear of itself on a branch
     it may be on (before, the family dropped each such way after building it)."""
     ctx, route, state = at_guide2(tmp_path)
-    arms = r_arm, o_arm = route.arms(ctx, state)
-    for way in cable_top._ways(ctx, state, route, 1, r_arm, o_arm):
-        try:
-            tp = cable_top._plan(ctx, state, route, 1, r_arm, o_arm, way)
-        except InputError:
-            continue
-        if cable_top._check(ctx, route.cable, tp, arms, {}, ANY_BRANCH) is None:
-            break
+    arms = r_arm, _ = route.arms(ctx, state)
+    tp = first_passing(ctx, route, state)
     alive, _ = surviving(
         ctx.cell, ctx.checker, r_arm, np.concatenate([tp.lay, tp.insert]), ctx.home
     )
@@ -123,12 +118,7 @@ def test_the_arms_laying_pushing_and_inserting_are_screened_against_each_other(
     on some boards); where no pair does, the way is refused saying how close they come."""
     ctx, route, state = at_guide2(tmp_path)
     arms = r_arm, o_arm = route.arms(ctx, state)
-    tp = next(
-        tp
-        for way in cable_top._ways(ctx, state, route, 1, r_arm, o_arm)
-        if (tp := cable_top._plan(ctx, state, route, 1, r_arm, o_arm, way)) is not None
-        and cable_top._check(ctx, route.cable, tp, arms, {}, ANY_BRANCH) is None
-    )
+    tp = first_passing(ctx, route, state)
     apart = cable_top._arms_apart(ctx, state, tp, arms, (ANY_BRANCH, ANY_BRANCH), {})
     assert isinstance(apart, cable_top.Apart)
     ((a, b, pairs),) = apart.push
@@ -162,12 +152,7 @@ def test_the_pusher_arm_is_screened_against_the_cell_not_only_its_fingers(
     saying which."""
     ctx, route, state = at_guide2(tmp_path)
     arms = r_arm, o_arm = route.arms(ctx, state)
-    tp = next(
-        tp
-        for way in cable_top._ways(ctx, state, route, 1, r_arm, o_arm)
-        if (tp := cable_top._plan(ctx, state, route, 1, r_arm, o_arm, way)) is not None
-        and cable_top._check(ctx, route.cable, tp, arms, {}, ANY_BRANCH) is None
-    )
+    tp = first_passing(ctx, route, state)
     assert cable_top._free(ctx, tp, arms, "over the cable", tp.above, ANY_BRANCH) is None
     sunk = tp.push[-1].copy()
     sunk[:3, 3] -= 0.15 * tp.up  # the pusher's wrist down in the board
@@ -198,3 +183,16 @@ def at_guide2(tmp_path: Path) -> tuple[PlanningContext, C.RouteCable, CableState
     r_arm, o_arm = route.arms(ctx, state)
     state = next(route.guide_plans(ctx, state, 0)).after(state, r_arm, o_arm, route.cable)
     return ctx, route, state
+
+
+def first_passing(ctx: PlanningContext, route: C.RouteCable, state: CableState) -> TopPlan:
+    """guide2's first way over the top that its plan and checks pass (on any branch)."""
+    arms = r_arm, o_arm = route.arms(ctx, state)
+    for way in cable_top._ways(ctx, state, route, 1, r_arm, o_arm):
+        try:
+            tp = cable_top._plan(ctx, state, route, 1, r_arm, o_arm, way)
+        except InputError:
+            continue
+        if cable_top._check(ctx, route.cable, tp, arms, {}, ANY_BRANCH) is None:
+            return tp
+    raise AssertionError("no way over guide2 passes its checks")
