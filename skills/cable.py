@@ -60,7 +60,8 @@ if TYPE_CHECKING:  # planning needs the motion stack; parsing a plan does not
     from cellengine.motion.probe import Nearest
 
 OPEN, SLIDE, GRASP = "open", "slide", "grasp"  # jaw modes the method uses (the tool's table)
-CENTRING_STEP = 0.001  # m: how finely the room after a guide is measured for a centred hand
+CENTRING_STEP = 0.001  # m: how finely the room after a guide is scanned for a centred hand
+CENTRING_TOL = 1e-9  # m: and how finely the element that ends it is found
 
 
 # =========================================================================== the skills
@@ -2302,12 +2303,22 @@ def _centred_gap(world: World, guide: str, b: _Basics, after: bool) -> tuple[flo
     # only what stands within the hand's half width of its line (most elements do not)
     end = face + reach * direction
     elements = [f for f in elements if f.distance(face, end, b.up) <= b.hand.width / 2.0]
+
+    def touches(d: float) -> bool:  # the hand's line d from the face meets an element
+        p = face + d * direction
+        return any(f.distance(p - across, p + across, b.up) <= 0.0 for f in elements)
+
     for k in range(1, int(reach / CENTRING_STEP) + 1 if elements else 0):
-        p = face + k * CENTRING_STEP * direction
-        if any(f.distance(p - across, p + across, b.up) <= 0.0 for f in elements):
-            gap = k * CENTRING_STEP / 2.0 - b.hand.half_length
+        if touches(k * CENTRING_STEP):
+            # then finely: a millimetre's step leaves the hand up to half of one
+            # off centre, and 5 mm either side of an 8 mm finger is all an 18 mm room has
+            lo, hi = (k - 1) * CENTRING_STEP, k * CENTRING_STEP
+            while hi - lo > CENTRING_TOL:
+                mid = 0.5 * (lo + hi)
+                lo, hi = (lo, mid) if touches(mid) else (mid, hi)
+            gap = lo / 2.0 - b.hand.half_length
             near = min(cg.APPROACH_GAPS, key=lambda a: abs(a - gap))
-            return (gap,) if gap > 0.0 and abs(near - gap) > CENTRING_STEP else ()
+            return (gap,) if gap > 0.0 and abs(near - gap) > 1e-6 else ()  # 1 um: the same
     return ()
 
 

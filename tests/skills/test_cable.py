@@ -1052,7 +1052,8 @@ def test_route_cable_way_parameters_shape_the_motion() -> None:
         assert float(T[:3, 2] @ normal) == pytest.approx(0.0, abs=1e-9)
     moved = _with_element(world, "routing.guide2", xyz=[0.43, -0.016, 0.01])
     b = _basics(moved, state, "routing.guide1", "left")
-    assert _centred_gap(moved, "routing.guide1", b, after=True) == pytest.approx((0.013,), abs=1e-9)
+    # to 0.1 um: the X3D's meshes are single precision (the slot is 40 nm off its 60 mm)
+    assert _centred_gap(moved, "routing.guide1", b, after=True) == pytest.approx((0.013,), abs=1e-7)
     assert _centred_gap(world, "routing.guide1", b, after=True) == ()
 
 
