@@ -1034,7 +1034,8 @@ def test_route_cable_way_parameters_shape_the_motion() -> None:
     """A way turning first turns in place at the stop, then slides straight; a way tipping
     only along the cable keeps both tools' axes in the vertical plane of the guide's axis;
     guide2 44 mm after guide1 (34 mm face to face) offers an insert end centred between
-    them: 17 mm from each face less the fingers' 4 mm half thickness, 13 mm."""
+    them: 17 mm from each face less the fingers' 4 mm half thickness, 13 mm (and 13.3 mm
+    at 34.6 mm: centred to the micrometre)."""
     from cellengine.skills.cable import GuideWay, _basics, _centred_gap, _guide_plan
 
     plan = planned("plan_straight")
@@ -1054,6 +1055,11 @@ def test_route_cable_way_parameters_shape_the_motion() -> None:
     b = _basics(moved, state, "routing.guide1", "left")
     # to 0.1 um: the X3D's meshes are single precision (the slot is 40 nm off its 60 mm)
     assert _centred_gap(moved, "routing.guide1", b, after=True) == pytest.approx((0.013,), abs=1e-7)
+    # 34.6 mm face to face: 13.3 mm, not the 13.5 mm of the millimetre scan's step
+    moved = _with_element(world, "routing.guide2", xyz=[0.43, -0.0154, 0.01])
+    assert _centred_gap(moved, "routing.guide1", b, after=True) == pytest.approx(
+        (0.0133,), abs=1e-7
+    )
     assert _centred_gap(world, "routing.guide1", b, after=True) == ()
 
 
