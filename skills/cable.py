@@ -1109,6 +1109,8 @@ def _stand_back_from(T: Mat, along: Vec, up: Vec, back: Back) -> Poses:
     """_stand_back from ``T``, the route going ``along`` at its end."""
     distance, lift, turn = back
     T_up = cg.lifted(T, up, lift)
+    if distance == 0.0:
+        return cg.line(T, T_up)
     away = g.axis_angle_to_matrix(up, turn) @ -cg.horizontal(along, up)
     return ip.concatenate(
         [cg.line(T, T_up), cg.line(T_up, cg.at(T_up, T_up[:3, 3] + distance * away))]
@@ -1130,6 +1132,8 @@ def _with_back(way: _Backed, back: Back) -> _Backed:
 def _back_text(back: Back) -> str:
     """How a stand-back reads in a message."""
     distance, lift, turn = back
+    if distance == 0.0:
+        return f"only up {_mm(lift)} mm"
     up = "" if lift == cg.RETRACT_HEIGHT else f" from {_mm(lift)} mm up"
     side = "" if turn == 0.0 else f" to the {'left' if turn > 0.0 else 'right'}"
     return f"{_mm(distance)} mm{side}{up}"
@@ -3161,6 +3165,7 @@ def _all_backs() -> tuple[Back, ...]:
     its forearm into it)."""
     backs = [(d, cg.RETRACT_HEIGHT, 0.0) for d in cg.STAND_BACKS]
     backs += [(cg.STAND_BACK, lift, turn) for lift, turn in cg.STAND_LOWS]
+    backs.append(cg.STAND_UP)
     return tuple(sorted(backs, key=_back_cost))
 
 

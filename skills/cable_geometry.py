@@ -137,6 +137,10 @@ STAND_BACKS = (STAND_BACK, 0.050, 0.150)
 # about the vertical from back along the route, positive to the left)
 STAND_LOW = 0.030
 STAND_LOWS = ((STAND_LOW, 0.0), (STAND_LOW, -math.pi / 2.0), (STAND_LOW, math.pi / 2.0))
+# Or it only rises RETRACT_HEIGHT, straight up off the cable: backing off along the route or
+# to a side, the open fingers sweep whatever stands beside the pivot (a connector guide the
+# route turns back past).
+STAND_UP = (0.0, RETRACT_HEIGHT, 0.0)
 # A, the routing hand's stop before a guide, smaller where guides stand close together (the
 # slide then starts nearer the guide, and must be steeper: theta > atan((W + W_g) / 2A))
 APPROACH_GAPS = (APPROACH_GAP, 0.015, 0.010)

@@ -1427,6 +1427,35 @@ def test_the_other_hand_standing_back_keeps_the_cells_clearance_from_what_it_is_
     assert err.value.blames is None
 
 
+def test_the_other_hand_may_stand_back_only_up(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Besides backing off along the route or to a side, the released hand may only rise
+    (cg.STAND_UP): straight up RETRACT_HEIGHT, turned as it held the cable. With the
+    connector not counted near and a 20 mm clearance, the low stand-back along the route
+    sweeps its fingers past the connector (board 120: every other stand-back did); rising
+    only does not."""
+    world, _ = _world()
+    ctx, state, _, r_arm, o_arm = _after_guide1(world)
+    up = cg.platform_up(world, "routing.guide2")
+    assert cg.STAND_UP in C._all_backs()
+    poses = C._stand_back(state, o_arm, up, cg.STAND_UP)
+    T0, T1 = poses[0], poses[-1]
+    assert np.allclose(T1[:3, :3], T0[:3, :3], atol=1e-9)
+    assert np.allclose(T1[:3, 3] - T0[:3, 3], cg.RETRACT_HEIGHT * up, atol=1e-9)
+    monkeypatch.setattr(
+        C, "_standing_near", lambda *_: ("routing.guide2", "routing.guide3", "table")
+    )
+    near = replace(ctx, clearance=0.020)
+    whys = C._letting_go(near, state, (r_arm, o_arm), up, "routing.guide2", "routing.guide3")
+    low = whys[(cg.STAND_BACK, cg.STAND_LOW, 0.0)]
+    assert isinstance(low, C._Standing) and low.problems[0].message == (
+        "steps[2] RouteCable routing.guide2: right/tool/finger_right would pass 14.0 mm from "
+        "routing.connector while the other arm (right) lets go of routing.guide1 and stands "
+        "back 100.0 mm from 30.0 mm up; the cell's clearance is 20.0 mm: routing.connector "
+        "would have to stand 6.0 mm farther from the hand's path, or the fingers be narrower"
+    )
+    assert not isinstance(whys[cg.STAND_UP], InputError)
+
+
 def test_a_pivot_the_other_hand_cannot_stand_back_from_is_refused_at_its_guide() -> None:
     """The other hand comes down to the pivot and, at the next guide, lets go and stands
     back from it: the reference pivot allows that. A pivot 150 mm in front of the other
