@@ -3162,7 +3162,7 @@ def _all_backs() -> tuple[Back, ...]:
     """Every stand-back, best first (_back_cost): up RETRACT_HEIGHT and back along the route
     each of STAND_BACKS; just clear of the cable and back STAND_BACK along the route or to
     either side (STAND_LOWS: where a routing arm reaches over the pivot hand, rising takes
-    its forearm into it)."""
+    its forearm into it); only up RETRACT_HEIGHT (STAND_UP)."""
     backs = [(d, cg.RETRACT_HEIGHT, 0.0) for d in cg.STAND_BACKS]
     backs += [(cg.STAND_BACK, lift, turn) for lift, turn in cg.STAND_LOWS]
     backs.append(cg.STAND_UP)
