@@ -1035,7 +1035,7 @@ def test_route_cable_way_parameters_shape_the_motion() -> None:
     only along the cable keeps both tools' axes in the vertical plane of the guide's axis;
     guide2 44 mm after guide1 (34 mm face to face) offers an insert end centred between
     them: 17 mm from each face less the fingers' 4 mm half thickness, 13 mm (and 13.3 mm
-    at 34.6 mm: centred to the micrometre)."""
+    at 34.6 mm: centred to the micrometre, and offered unless a standard stop is the same)."""
     from cellengine.skills.cable import GuideWay, _basics, _centred_gap, _guide_plan
 
     plan = planned("plan_straight")
@@ -1059,6 +1059,11 @@ def test_route_cable_way_parameters_shape_the_motion() -> None:
     moved = _with_element(world, "routing.guide2", xyz=[0.43, -0.0154, 0.01])
     assert _centred_gap(moved, "routing.guide1", b, after=True) == pytest.approx(
         (0.0133,), abs=1e-7
+    )
+    # 37 mm: 14.5 mm, offered though within 1 mm of the 15 mm stop (0.5 mm nearer guide2)
+    moved = _with_element(world, "routing.guide2", xyz=[0.43, -0.013, 0.01])
+    assert _centred_gap(moved, "routing.guide1", b, after=True) == pytest.approx(
+        (0.0145,), abs=1e-7
     )
     assert _centred_gap(world, "routing.guide1", b, after=True) == ()
 
