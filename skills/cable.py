@@ -788,20 +788,35 @@ def _approach_how(
     arms: tuple[str, str],
     prints: Sequence[cg.Footprint],
 ) -> str:
-    """The first of APPROACHES on which the routing hand keeps clear coming to the approach
-    pose of ``way`` (``gp``, built with way.approach), as _check_clear holds it; the first
-    when none does (_check_clear says why)."""
+    """The first of APPROACHES on which the routing hand keeps clear turning to face the
+    guide and coming to the approach pose of ``way`` (``gp``, built with way.approach), as
+    _check_clear holds it; the first when none does (_check_clear says why)."""
     from cellengine.motion.collision import DEFAULT_CLEARANCE  # the motion stack: planning only
 
+    def clear(poses: Poses | None) -> bool:
+        return poses is None or (
+            _env_near(ctx, arms[0], poses, SLIDE, gp.beside, DEFAULT_CLEARANCE, 1) is None
+        )
+
+    turned: bool | None = None  # the others all turn in place, from the same pose
+    came: str | None = None  # the first whose approach alone keeps clear
     for how in APPROACHES:
         if how != way.approach:
             built = _guide_plan(
                 ctx.world, state, cable, gp.guide, *arms, replace(way, approach=how), prints
             )
             gp = replace(built, beside=gp.beside)
-        if _env_near(ctx, arms[0], gp.approach, SLIDE, gp.beside, DEFAULT_CLEARANCE, 1) is None:
+        if how == OVER_ALL:
+            if clear(gp.reorient) and clear(gp.approach):
+                return how
+            break
+        if not clear(gp.approach):
+            continue
+        turned = clear(gp.reorient) if turned is None else turned
+        if turned:
             return how
-    return APPROACHES[0]
+        came = came or how
+    return came or APPROACHES[0]
 
 
 def _routing_hand_blocked(
@@ -2049,7 +2064,11 @@ class GuideWay:
 # last along the guide's axis from X_offset before Ap; down onto Ap from over the guide's
 # top. (Coming in at an angle, the hand turned to the guide sweeps its fingers over the
 # guide's near corner.)
-APPROACHES = ("direct", "along the axis", "from above")
+APPROACHES = ("direct", "along the axis", "from above", "over everything on the way")
+# The last rises over the tallest element beside its path, not only over the guide (a comb
+# by the guide before can stand taller), and turns to face the guide up there: the others
+# turn in place where the hand inserted.
+OVER_ALL = APPROACHES[-1]
 
 
 @dataclass(frozen=True)
@@ -2348,11 +2367,19 @@ def _guide_plan(
     T_pivot = _pivot(state, b, o_arm, tip_o, way)
     r_cable, pull_r = b.r_cable, b.pull
     d = _slide_direction(b, way)
+    prints = cg.footprints(world, guide, up) if prints is None else prints
+    over = b.rise + cg.Z_OFFSET  # over the slot, from above
+    if way.approach == OVER_ALL:
+        over = max(over, _over_all(b, T_r0, T_ap, prints, world.cell.clearance))
     reorient = None
     if g.rotation_angle(T_r0, T_ap) > cg.REORIENT_MIN:
+        up_by = _rise(T_r0, b, over) if way.approach == OVER_ALL else 0.0
         reorient = cg.turn_in_place(T_r0, T_ap)
+        if up_by > 0.0:
+            T_up = cg.lifted(T_r0, up, up_by)
+            reorient = np.concatenate([cg.line(T_r0, T_up), cg.turn_in_place(T_up, T_ap)[1:]])
         T_r0 = reorient[-1]
-    approach = _approach_path(T_r0, T_ap, b, way.approach)
+    approach = _approach_path(T_r0, T_ap, b, way.approach, over)
     slide = _slide(b, way, T_ap)
     pull_path = cg.line(slide[-1], cg.at(slide[-1], ap + (r_cable + pull_r) * d))
     # Lift: up on the circle about the pivot in the vertical plane of the slide, to the
@@ -2362,7 +2389,6 @@ def _guide_plan(
     # Higher when a taller element stands in the sector the swing sweeps.
     dims = b.dims
     elevation = math.atan2(b.rise + cg.Z_OFFSET, dims.length + x_off)
-    prints = cg.footprints(world, guide, up) if prints is None else prints
     elevation = max(elevation, _swept_elevation(prints, b, theta, side))
     lift = cg.arc(pull_path[-1], ap, g.cross(d, up), elevation, turn=False)
     # Swing about the vertical through the pivot until the cable is over the slot, turning
@@ -2487,15 +2513,33 @@ def _pivot(state: CableState, b: _Basics, o_arm: str, tip_o: Vec, way: GuideWay)
     return cg.nearer_turn(state.tcp[o_arm], T, state.wound.get(o_arm, 0.0))
 
 
-def _approach_path(T_r0: Mat, T_ap: Mat, b: _Basics, how: str) -> Poses:
-    """The routing hand's path from ``T_r0`` to ``T_ap``, ``how`` (APPROACHES)."""
+def _over_all(
+    b: _Basics, T_r0: Mat, T_ap: Mat, prints: Sequence[cg.Footprint], clearance: float
+) -> float:
+    """How high over the slot the hand passes coming from ``T_r0`` to ``T_ap`` over every
+    element whose footprint lies within the hand's reach of that path seen from above: its
+    fingertips (the TCP) the cell's clearance over the tallest, and cg.CLEARANCE more for the
+    corners of tipped fingers, which hang below the TCP."""
+    reach = b.hand.width / 2.0 + b.hand.half_length + clearance
+    level = float(b.slot @ b.up)
+    tops = [f.top for f in prints if f.distance(T_r0[:3, 3], T_ap[:3, 3], b.up) <= reach]
+    return max(tops, default=level) - level + clearance + cg.CLEARANCE
+
+
+def _rise(T_r0: Mat, b: _Basics, over: float) -> float:
+    """How far the hand at ``T_r0`` rises to be ``over`` the slot (<= 0: it is)."""
+    return float(np.dot(b.ap + over * b.up - T_r0[:3, 3], b.up))
+
+
+def _approach_path(T_r0: Mat, T_ap: Mat, b: _Basics, how: str, over: float) -> Poses:
+    """The routing hand's path from ``T_r0`` to ``T_ap``, ``how`` (APPROACHES); coming from
+    above, it passes ``over`` the slot."""
     if how == "direct":
         return cg.line(T_r0, T_ap)
     if how == "along the axis":
         vias = [cg.at(T_ap, b.ap - b.x_offset * b.axis)]
     else:  # from above: up from where it is to over the guide's top, over and down
-        over = b.rise + cg.Z_OFFSET
-        up_by = float(np.dot(b.ap + over * b.up - T_r0[:3, 3], b.up))
+        up_by = _rise(T_r0, b, over)
         vias = [cg.lifted(T_r0, b.up, up_by)] if up_by > 0.0 else []
         vias.append(cg.lifted(T_ap, b.up, over))
     points = [T_r0, *vias, T_ap]

@@ -430,13 +430,17 @@ def _world(
     return loaded.world, loaded.plan.steps  # type: ignore[return-value]
 
 
-def _with_element(world: World, ref: str, xyz: list[float] | None = None, **dims: float) -> World:
-    """The world with one element moved (its cell position) or its dimensions changed."""
+def _with_element(
+    world: World, ref: str, xyz: list[float] | None = None, *, turn: float = 0.0, **dims: float
+) -> World:
+    """The world with one element moved (its cell position, turned ``turn`` deg about the
+    cell's z) or its dimensions changed."""
     pname, ename = ref.split(".")
     platform = world.platforms[pname]
     element = platform.elements[ename]
     if xyz is not None:
         T = platform.T_cell_platform @ element.T_platform_element
+        T[:3, :3] = g.rot_z(math.radians(turn)) @ T[:3, :3]
         T[:3, 3] = xyz
         element = replace(element, T_platform_element=g.inverse(platform.T_cell_platform) @ T)
     if dims:
@@ -1430,6 +1434,40 @@ def test_the_other_hand_standing_back_keeps_the_cells_clearance_from_what_it_is_
     with pytest.raises(C._Standing) as err:  # guide2 is refused before any way is built
         next(route.guide_plans(far, state, 1))
     assert err.value.blames is None
+
+
+def test_the_routing_hand_comes_over_what_stands_taller_than_the_guide() -> None:
+    """The 70 mm comb turned across the routing hand's way from guide1 to guide2 (60 mm
+    tall): coming straight, along the axis or over guide2's top, the fingers run into it.
+    Coming over everything on the way (C.OVER_ALL), the fingertips pass the cell's clearance
+    and cg.CLEARANCE over its top, and that approach is the one chosen (the clearance set to
+    5 mm: the hand starts 7.4 mm from the comb)."""
+    world, _ = _world()
+    ctx, state, route, r_arm, o_arm = _after_guide1(world)
+    gp = next(route.guide_plans(ctx, state, 1))
+    moved = _with_element(world, "holder.comb_b", [0.430, -0.004, 0.010], turn=90.0)
+    ctx = replace(context(moved), clearance=0.005)
+    way = C.GuideWay(theta=gp.theta, side=gp.side)
+    prints = cg.footprints(moved, "routing.guide2", gp.up)
+
+    def built(how: str) -> C.GuidePlan:
+        way_ = replace(way, approach=how)
+        plan = C._guide_plan(moved, state, route.cable, "routing.guide2", r_arm, o_arm, way_)
+        return replace(plan, beside=gp.beside)
+
+    def least(p: C.GuidePlan) -> float:
+        comb = {"holder.comb_b"}
+        nearest = [ctx.probe.nearest(r_arm, [T], C.SLIDE, (), math.inf, comb) for T in p.approach]
+        return min(n.distance for n in nearest if n is not None)
+
+    assert all(least(built(how)) < 0.0 for how in C.APPROACHES if how != C.OVER_ALL)
+    over = built(C.OVER_ALL)
+    (top,) = [f.top for f in prints if f.name == "holder.comb_b"]
+    highest = max(float(T[:3, 3] @ gp.up) for T in over.approach)
+    assert highest == pytest.approx(top + world.cell.clearance + cg.CLEARANCE, abs=1e-9)
+    assert least(over) >= ctx.clearance
+    how = C._approach_how(ctx, state, route.cable, way, built("direct"), (r_arm, o_arm), prints)
+    assert how == C.OVER_ALL
 
 
 def test_the_other_hand_may_stand_back_only_up(monkeypatch: pytest.MonkeyPatch) -> None:
