@@ -268,7 +268,10 @@ def _place_carries(
     kept: list[tuple[int, float, int, tuple[float, float], str]] = []
     clear = False  # some way keeps the other hand's tool clear of the cell
     closest: Nearest | None = None  # else the way whose tool came least near, and to what
-    for k, (hold, order) in enumerate(itertools.product(cg.PLACE_HOLDS, PLACE_ORDERS)):
+    rolls = dict.fromkeys(roll for roll, _ in cg.PLACE_HOLDS)
+    centred = [(roll, f) for f in _centred_hold(ctx.world, step, f_arm) for roll in rolls]
+    holds = (*cg.PLACE_HOLDS, *centred)
+    for k, (hold, order) in enumerate(itertools.product(holds, PLACE_ORDERS)):
         geo = _place_geometry(ctx.world, state, step, c_arm, f_arm, where, order, hold=hold)
         poses = [pair for _, paths in geo.carry for pair in _samples(paths)]
         poses += _samples(geo.insert)
@@ -282,8 +285,8 @@ def _place_carries(
         clear = True
         room = max(_pair_rooms(ctx, c_arm, f_arm, poses, ctx.clearance).values())
         if room >= ctx.clearance:
-            published = hold == cg.PLACE_HOLDS[0]
-            kept.append((0, 0.0, k, hold, order) if published else (1, -room, k, hold, order))
+            rank = 0 if hold == cg.PLACE_HOLDS[0] else 2 if hold in centred else 1
+            kept.append((rank, -room if rank else 0.0, k, hold, order))
     if not kept:
         what = "the arms cannot keep the cell's clearance from each other"
         if not clear and closest is not None:
@@ -295,6 +298,30 @@ def _place_carries(
         error.blames = "arms"  # the other arm might place it: PickCable decides which
         raise error
     return [(hold, order) for *_, hold, order in sorted(kept)]
+
+
+def _centred_hold(world: World, step: PlaceConnector, f_arm: str) -> tuple[float, ...]:
+    """How much farther than published (cg.PLACE_HOLDS) the other hand holds the cable
+    centred in the room between the connector guide and the element next along the cable,
+    when one stands within twice the farthest hold (the published one may be in it): none
+    when none does, or when the room is too short for the hand."""
+    cable = world.cable(step.cable)
+    conn_len = cable.connector.length if cable.connector is not None else 0.0
+    hand = _hand(world, f_arm)
+    dims = world.dimensions(step.guide)
+    up, slot = cg.platform_up(world, step.guide), cg.position(world, step.guide)
+    axis = cg.horizontal(cg.keypoint_x(world, step.guide), up)
+    half = max(dims.get("length", 0.0), conn_len) / 2.0
+    published = _connector_spacing(world, step.guide, conn_len, hand)
+    reach = 2.0 * (published - half + max(farther for _, farther in cg.PLACE_HOLDS))
+    face = slot + half * axis
+    height = dims.get("height", 0.0)
+    room = _room(world, step.guide, slot, height, face, axis, up, hand, reach)
+    if room is None or room / 2.0 < hand.half_length:
+        return ()
+    farther = half + room / 2.0 - published
+    same = any(abs(farther - f) <= 1e-6 for _, f in cg.PLACE_HOLDS)  # 1 um: the same
+    return () if same else (farther,)
 
 
 def _check_insert(ctx: PlanningContext, geo: _PlaceGeometry, c_arm: str, where: str) -> None:
@@ -2318,18 +2345,40 @@ def _centred_gap(world: World, guide: str, b: _Basics, after: bool) -> tuple[flo
     gap is too short for the hand."""
     direction = b.axis if after else -b.axis
     face = b.slot + b.dims.length / 2.0 * direction
-    # what stands up to the fingers going down to the slot, not the plates
-    height = float(b.slot @ b.up) - b.dims.height / 2.0
-    elements = [f for f in cg.footprints(world, guide, b.up) if f.top > height]
-    across = b.hand.width / 2.0 * g.cross(b.up, b.axis)
     reach = 2.0 * (max(cg.APPROACH_GAPS) + b.hand.half_length)
+    room = _room(world, guide, b.slot, b.dims.height, face, direction, b.up, b.hand, reach)
+    if room is None:
+        return ()
+    gap = room / 2.0 - b.hand.half_length
+    near = min(cg.APPROACH_GAPS, key=lambda a: abs(a - gap))
+    return (gap,) if gap > 0.0 and abs(near - gap) > 1e-6 else ()  # 1 um: the same
+
+
+def _room(
+    world: World,
+    guide: str,
+    slot: Vec,
+    height: float,
+    face: Vec,
+    direction: Vec,
+    up: Vec,
+    hand: cg.Hand,
+    reach: float,
+) -> float | None:
+    """How far from ``face`` (a face of ``guide``, ``height`` tall about its ``slot``) along
+    ``direction`` the first element that stands in the way of a hand across the cable
+    begins (to CENTRING_TOL), within ``reach``; None when none does."""
+    # what stands up to the fingers going down to the slot, not the plates
+    level = float(slot @ up) - height / 2.0
+    elements = [f for f in cg.footprints(world, guide, up) if f.top > level]
+    across = hand.width / 2.0 * g.cross(up, direction)
     # only what stands within the hand's half width of its line (most elements do not)
     end = face + reach * direction
-    elements = [f for f in elements if f.distance(face, end, b.up) <= b.hand.width / 2.0]
+    elements = [f for f in elements if f.distance(face, end, up) <= hand.width / 2.0]
 
     def touches(d: float) -> bool:  # the hand's line d from the face meets an element
         p = face + d * direction
-        return any(f.distance(p - across, p + across, b.up) <= 0.0 for f in elements)
+        return any(f.distance(p - across, p + across, up) <= 0.0 for f in elements)
 
     for k in range(1, int(reach / CENTRING_STEP) + 1 if elements else 0):
         if touches(k * CENTRING_STEP):
@@ -2339,10 +2388,8 @@ def _centred_gap(world: World, guide: str, b: _Basics, after: bool) -> tuple[flo
             while hi - lo > CENTRING_TOL:
                 mid = 0.5 * (lo + hi)
                 lo, hi = (lo, mid) if touches(mid) else (mid, hi)
-            gap = lo / 2.0 - b.hand.half_length
-            near = min(cg.APPROACH_GAPS, key=lambda a: abs(a - gap))
-            return (gap,) if gap > 0.0 and abs(near - gap) > 1e-6 else ()  # 1 um: the same
-    return ()
+            return lo
+    return None
 
 
 def _guide_plan(

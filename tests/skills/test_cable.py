@@ -1436,6 +1436,39 @@ def test_the_other_hand_standing_back_keeps_the_cells_clearance_from_what_it_is_
     assert err.value.blames is None
 
 
+def test_the_other_hand_holds_the_cable_centred_behind_the_connector_guide(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """guide1 38 mm past the connector guide's exit face and guide2 where the hold 40 mm
+    farther would be: every hold of cg.PLACE_HOLDS comes within the clearance of one of them
+    carrying the connector (3.4 mm from guide1 at best). Centred in the 38 mm between the
+    connector guide and guide1 (19 mm from each: 10 mm nearer than published), the other hand
+    keeps it, and only those holds are kept (board 101's)."""
+    world, steps = _world()
+    moved = _with_element(world, "routing.guide1", [0.430, -0.105, 0.010])
+    moved = _with_element(moved, "routing.guide2", [0.430, -0.079, 0.010])
+    ctx = context(moved)
+    _, state = next(C.step_ways(ctx, steps, 0, CableState.at_home(ctx)))  # type: ignore[arg-type]
+    state = replace(state, step=1)
+    place = steps[1]
+    assert isinstance(place, PlaceConnector)
+    c_arm = place.connector_arm(moved, state.connector_arm, 1)
+    (f_arm,) = set(ctx.cell.arms) - {c_arm}
+    (farther,) = C._centred_hold(moved, place, f_arm)
+    assert farther == pytest.approx(-0.010, abs=1e-7)  # the meshes' single precision
+    where = "steps[1] PlaceConnector routing.connector"
+    kept = C._place_carries(ctx, state, place, c_arm, f_arm, where)
+    assert {hold for hold, _ in kept} == {(roll, farther) for roll, f in cg.PLACE_HOLDS if f == 0}
+    monkeypatch.setattr(C, "_centred_hold", lambda *_: ())
+    with pytest.raises(InputError) as err:
+        C._place_carries(ctx, state, place, c_arm, f_arm, where)
+    assert str(err.value) == (
+        f"{where}: however the other arm ({f_arm}) holds the cable, {f_arm}/tool/finger_right "
+        "would pass 3.4 mm from routing.guide1 carrying the connector to the guide (the cell's "
+        "clearance is 10.0 mm)"
+    )
+
+
 def test_the_routing_hand_comes_over_what_stands_taller_than_the_guide() -> None:
     """The 70 mm comb turned across the routing hand's way from guide1 to guide2 (60 mm
     tall): coming straight, along the axis or over guide2's top, the fingers run into it.
