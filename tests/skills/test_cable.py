@@ -1503,6 +1503,34 @@ def test_the_routing_hand_comes_over_what_stands_taller_than_the_guide() -> None
     assert how == C.OVER_ALL
 
 
+def test_coming_over_everything_the_hand_rises_then_turns() -> None:
+    """The routing hand turned 40 deg about the vertical after guide1: coming over
+    everything on the way, it first rises as it is to the height it passes over at, then
+    turns there to face guide2; the other approaches turn it in place where it is."""
+    world, _ = _world()
+    ctx, state, route, r_arm, o_arm = _after_guide1(world)
+    T0 = np.array(state.tcp[r_arm])
+    T0[:3, :3] = g.rot_z(math.radians(40.0)) @ T0[:3, :3]
+    state = state.moved(r_arm, T0)
+    gp = next(route.guide_plans(ctx, state, 1))
+    way = C.GuideWay(theta=gp.theta, side=gp.side)
+
+    def built(how: str) -> C.GuidePlan:
+        way_ = replace(way, approach=how)
+        return C._guide_plan(world, state, route.cable, "routing.guide2", r_arm, o_arm, way_)
+
+    in_place = built("direct").reorient
+    assert in_place is not None and np.allclose(in_place[:, :3, 3], T0[:3, 3], atol=1e-9)
+    over = built(C.OVER_ALL)
+    assert over.reorient is not None
+    rise = [T for T in over.reorient if np.allclose(T[:3, :3], T0[:3, :3], atol=1e-9)]
+    top = rise[-1][:3, 3]
+    assert np.allclose(top[:2], T0[:2, 3], atol=1e-9) and top[2] > T0[2, 3] + 0.010
+    assert np.allclose(over.reorient[len(rise) :, :3, 3], top, atol=1e-9)  # turns up there
+    assert np.allclose(over.reorient[-1][:3, :3], over.approach[-1][:3, :3], atol=1e-9)
+    assert max(T[2, 3] for T in over.approach) == pytest.approx(top[2], abs=1e-9)
+
+
 def test_the_other_hand_may_stand_back_only_up(monkeypatch: pytest.MonkeyPatch) -> None:
     """Besides backing off along the route or to a side, the released hand may only rise
     (cg.STAND_UP): straight up RETRACT_HEIGHT, turned as it held the cable. With the
