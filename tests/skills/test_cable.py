@@ -1116,22 +1116,28 @@ def _placing(name: str = "plan_straight") -> tuple[PlanningContext, CableState, 
 
 def test_placing_keeps_the_published_hold_first_then_the_most_room() -> None:
     """The published hold's carries come first, in PLACE_ORDERS' order (no regrasp: the
-    reference plans do not get slower); the other holds follow by the room the arms keep
-    along the carry and the insert, each at least the cell's clearance."""
+    reference plans do not get slower); the other holds of cg.PLACE_HOLDS follow by the room
+    the arms keep along the carry and the insert, each at least the cell's clearance; then,
+    the same way, the other hand centred between the connector guide and guide1."""
     ctx, state, step = _placing()
     carries = C._place_carries(ctx, state, step, "right", "left", "w")
     published = [order for hold, order in carries if hold == cg.PLACE_HOLDS[0]]
     assert published == list(C.PLACE_ORDERS)
     assert carries[: len(published)] == [(cg.PLACE_HOLDS[0], o) for o in published]
-    rooms = []
+    (centred,) = C._centred_hold(ctx.world, step, "left")
+    rooms: dict[bool, list[float]] = {False: [], True: []}
+    order_of = []  # whether each carry after the published is centred
     for hold, order in carries[len(published) :]:
         geo = C._place_geometry(ctx.world, state, step, "right", "left", "w", order, hold=hold)
         poses = [pair for _, paths in geo.carry for pair in C._samples(paths)]
         poses += C._samples(geo.insert)
-        rooms.append(max(C._pair_rooms(ctx, "right", "left", poses, ctx.clearance).values()))
-    assert len(rooms) > 0
-    assert min(rooms) >= ctx.clearance
-    assert rooms == sorted(rooms, reverse=True)
+        room = max(C._pair_rooms(ctx, "right", "left", poses, ctx.clearance).values())
+        order_of.append(hold[1] == centred)
+        rooms[hold[1] == centred].append(room)
+    assert order_of == sorted(order_of) and len(rooms[False]) > 0 and len(rooms[True]) > 0
+    for kept in rooms.values():
+        assert min(kept) >= ctx.clearance
+        assert kept == sorted(kept, reverse=True)
 
 
 def test_a_shortfall_is_never_printed_as_nothing() -> None:
