@@ -1322,7 +1322,8 @@ def test_a_hold_turned_about_the_cable_still_closes_across_it() -> None:
 def test_no_hold_keeping_the_clearance_blames_the_arms() -> None:
     """With a clearance no hold keeps (300 mm: not even from the cell), PlaceConnector is
     refused, naming the other arm and what its tool comes nearest on the hold that keeps
-    farthest, and the error blames the arms: another pick might give
+    farthest (centred between the connector guide and guide1), and the error blames the
+    arms: another pick might give
     the other arm the connector. (test_cable_search has the arms too close to each other.)"""
     ctx, state, step = _placing()
     wide = replace(ctx, clearance=0.300)
@@ -1332,7 +1333,7 @@ def test_no_hold_keeping_the_clearance_blames_the_arms() -> None:
     (problem,) = err.value.problems
     assert problem.message == (
         "steps[1] PlaceConnector routing.connector: however the other arm (left) holds the "
-        "cable, left/tool/finger_right would pass 25.1 mm from routing.connector carrying "
+        "cable, left/tool/finger_right would pass 34.8 mm from routing.guide1 carrying "
         "the connector to the guide (the cell's clearance is 300.0 mm)"
     )
 
