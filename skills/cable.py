@@ -227,27 +227,51 @@ class PlaceConnector(Skill):
         first: InputError | None = None
         found = False
         swap_first = route_end is not None and _crossed(ctx, c_arm, f_arm, self.guide, route_end)
-        carries = _place_carries(ctx, state, self, c_arm, f_arm, where)
-        for swap, (hold, order), along_tool in itertools.product(
-            (swap_first, not swap_first), carries, (False, True)
-        ):
-            geo = _place_geometry(world, state, self, c_arm, f_arm, where, order, along_tool, hold)
-            try:
-                _check_reach(ctx, c_arm, geo.reach(c_arm), where)
-                _check_reach(ctx, f_arm, geo.reach(f_arm), where)
-                _check_insert(ctx, geo, c_arm, where)
-                segments, after = _emit_place(self, state, geo, c_arm, f_arm)
-                segments = _place_apart(ctx, state, segments, (c_arm, f_arm), where)
-                if swap:
-                    more, after = _hand_over(ctx, after, geo, c_arm, f_arm, self.cable, where)
-                    segments += more
-            except InputError as e:
-                first = first or e
-                continue
-            found = True
-            yield segments, after
+        carries = _Replayed(_place_carries(ctx, state, self, c_arm, f_arm, where))
+        for swap in (swap_first, not swap_first):
+            for (hold, order), along_tool in ((c, a) for c in carries for a in (False, True)):
+                geo = _place_geometry(
+                    world, state, self, c_arm, f_arm, where, order, along_tool, hold
+                )
+                try:
+                    _check_reach(ctx, c_arm, geo.reach(c_arm), where)
+                    _check_reach(ctx, f_arm, geo.reach(f_arm), where)
+                    _check_insert(ctx, geo, c_arm, where)
+                    segments, after = _emit_place(self, state, geo, c_arm, f_arm)
+                    segments = _place_apart(ctx, state, segments, (c_arm, f_arm), where)
+                    if swap:
+                        more, after = _hand_over(ctx, after, geo, c_arm, f_arm, self.cable, where)
+                        segments += more
+                except InputError as e:
+                    first = first or e
+                    continue
+                found = True
+                yield segments, after
         if not found:
             raise first or _error(f"{where}: no way to place it")
+
+
+Carry = tuple[tuple[float, float], str]  # PlaceConnector's: (the other hand's hold, order)
+_Item = TypeVar("_Item")
+
+
+class _Replayed(Iterable[_Item]):
+    """An iterator's items, taken from it as they are first asked for, again each time the
+    object is iterated (``itertools.product`` takes them all first)."""
+
+    def __init__(self, items: Iterator[_Item]) -> None:
+        self._items, self._taken = items, list[_Item]()
+
+    def __iter__(self) -> Iterator[_Item]:
+        k = 0
+        while True:
+            if k == len(self._taken):
+                try:
+                    self._taken.append(next(self._items))
+                except StopIteration:
+                    return
+            yield self._taken[k]
+            k += 1
 
 
 def _place_carries(
@@ -257,21 +281,28 @@ def _place_carries(
     c_arm: str,
     f_arm: str,
     where: str,
-) -> list[tuple[tuple[float, float], str]]:
+) -> Iterator[Carry]:
     """The ways to carry the pair to the guide and insert the connector: how the other hand
     holds the cable meanwhile (cg.PLACE_HOLDS) and the order of the carry (PLACE_ORDERS).
     Left out: a way along which the other hand's tool comes within the cell's clearance of
     the cell, or no pair of the arms' IK branches stays free and the clearance apart (at
     poses along it, _pair_rooms). The published hold first (no regrasp: the shortest), then
-    the most room between the arms. None left: an error that blames the arms (the other arm
-    might place it)."""
+    the most room between the arms: the others are measured only when the published ones
+    are all taken. None at all: an error that blames the arms (the other arm might place
+    it)."""
     kept: list[tuple[int, float, int, tuple[float, float], str]] = []
     clear = False  # some way keeps the other hand's tool clear of the cell
     closest: Nearest | None = None  # else the way whose tool came least near, and to what
     rolls = dict.fromkeys(roll for roll, _ in cg.PLACE_HOLDS)
     centred = [(roll, f) for f in _centred_hold(ctx.world, step, f_arm) for roll in rolls]
     holds = (*cg.PLACE_HOLDS, *centred)
+    published = len(PLACE_ORDERS)  # the first carries: the published hold's
+    found = False
     for k, (hold, order) in enumerate(itertools.product(holds, PLACE_ORDERS)):
+        if k == published:  # then the rest, ranked
+            found = found or bool(kept)
+            yield from ((hold, order) for *_, hold, order in sorted(kept))
+            kept = []
         geo = _place_geometry(ctx.world, state, step, c_arm, f_arm, where, order, hold=hold)
         poses = [pair for _, paths in geo.carry for pair in _samples(paths)]
         poses += _samples(geo.insert)
@@ -287,7 +318,8 @@ def _place_carries(
         if room >= ctx.clearance:
             rank = 0 if hold == cg.PLACE_HOLDS[0] else 2 if hold in centred else 1
             kept.append((rank, -room if rank else 0.0, k, hold, order))
-    if not kept:
+    yield from ((hold, order) for *_, hold, order in sorted(kept))
+    if not (found or kept):
         what = "the arms cannot keep the cell's clearance from each other"
         if not clear and closest is not None:
             what = f"{closest.tool} {_passes(closest, ctx.clearance)}"
@@ -297,7 +329,6 @@ def _place_carries(
         )
         error.blames = "arms"  # the other arm might place it: PickCable decides which
         raise error
-    return [(hold, order) for *_, hold, order in sorted(kept)]
 
 
 def _centred_hold(world: World, step: PlaceConnector, f_arm: str) -> tuple[float, ...]:

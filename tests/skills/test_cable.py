@@ -1120,7 +1120,7 @@ def test_placing_keeps_the_published_hold_first_then_the_most_room() -> None:
     the arms keep along the carry and the insert, each at least the cell's clearance; then,
     the same way, the other hand centred between the connector guide and guide1."""
     ctx, state, step = _placing()
-    carries = C._place_carries(ctx, state, step, "right", "left", "w")
+    carries = list(C._place_carries(ctx, state, step, "right", "left", "w"))
     published = [order for hold, order in carries if hold == cg.PLACE_HOLDS[0]]
     assert published == list(C.PLACE_ORDERS)
     assert carries[: len(published)] == [(cg.PLACE_HOLDS[0], o) for o in published]
@@ -1464,11 +1464,11 @@ def test_the_other_hand_holds_the_cable_centred_behind_the_connector_guide(
     (farther,) = C._centred_hold(moved, place, f_arm)
     assert farther == pytest.approx(-0.010, abs=1e-7)  # the meshes' single precision
     where = "steps[1] PlaceConnector routing.connector"
-    kept = C._place_carries(ctx, state, place, c_arm, f_arm, where)
+    kept = list(C._place_carries(ctx, state, place, c_arm, f_arm, where))
     assert {hold for hold, _ in kept} == {(roll, farther) for roll, f in cg.PLACE_HOLDS if f == 0}
     monkeypatch.setattr(C, "_centred_hold", lambda *_: ())
     with pytest.raises(InputError) as err:
-        C._place_carries(ctx, state, place, c_arm, f_arm, where)
+        list(C._place_carries(ctx, state, place, c_arm, f_arm, where))
     assert str(err.value) == (
         f"{where}: however the other arm ({f_arm}) holds the cable, {f_arm}/tool/finger_right "
         "would pass 3.4 mm from routing.guide1 carrying the connector to the guide (the cell's "
