@@ -551,8 +551,8 @@ class RouteCable(Skill):
         self, ctx: PlanningContext, state: CableState, k: int
     ) -> Callable[[_Basics, float, bool], float | None]:
         """The least sliding angle (to BISECT_TOL, by bisection) at which the routing hand's
-        tool, sliding with the default tips, keeps cg.CLEARANCE from guide ``k``, for a stop,
-        side and turning first or not; None when not even THETA_MAX does. (The published
+        tool, sliding with the default tips, keeps the cell's work_clearance from guide ``k``,
+        for a stop, side and turning first or not; None when not even THETA_MAX does. (The published
         minimum assumes a hand W_gripper wide that does not turn; the steps of THETA_STEP
         above it miss a narrow range of angles that clear the guide and the elements on
         the slide's side.)"""
@@ -564,7 +564,7 @@ class RouteCable(Skill):
             way = GuideWay(theta, side, gap=b.gap, turn_first=first)
             slide = _slide(b, way, _approach_pose(ctx.world, state, b, r_arm, way))
             poses = [*slide[::2], slide[-1]]
-            return not ctx.probe.comes_within(r_arm, poses, SLIDE, (), cg.CLEARANCE, own)
+            return not ctx.probe.comes_within(r_arm, poses, SLIDE, (), b.hand.keep, own)
 
         def least(b: _Basics, side: float, first: bool) -> float | None:
             lo, hi = b.theta_min + cg.THETA_MARGIN, cg.THETA_MAX
@@ -2032,7 +2032,7 @@ class GuidePlan:
     stand_turn: float  # turned from back along the route by this (Back)
     # the elements the hands work between (this guide, and the one the cable leaves before
     # the pivot) and, once screened, the next guide (the insert ends before it) and what
-    # lies under the cable (_under): cg.CLEARANCE from them, the cell's clearance from
+    # lies under the cable (_under): the cell's work_clearance from them, the cell's clearance from
     # everything else
     beside: tuple[str, ...]
     # the routing arm's IK branches that can do it (of those it may be on), once screened
@@ -2545,8 +2545,8 @@ def _slide(b: _Basics, way: GuideWay, T_ap: Mat) -> Poses:
 
 def _under(ctx: PlanningContext, slot: Vec, up: Vec) -> tuple[str, ...]:
     """What lies wholly under the cable held at ``slot`` (the table, a plate): fingers that
-    take the cable where it lies come down towards it, so they keep cg.CLEARANCE from it,
-    as from the guides they work between."""
+    take the cable where it lies come down towards it, so they keep the cell's
+    work_clearance from it, as from the guides they work between."""
     return tuple(sorted(ctx.probe.under(float(slot @ up), up)))
 
 
@@ -2576,7 +2576,7 @@ def _swept_elevation(
         v = v - np.outer(v @ up, up)
         r = np.linalg.norm(v, axis=1)
         phi = np.arctan2(side * (v @ left), v @ axis)
-        spread = np.arctan2(b.hand.width / 2.0 + cg.CLEARANCE, r)
+        spread = np.arctan2(b.hand.width / 2.0 + b.hand.keep, r)
         inside = (r >= 1e-6) & (r <= b.reach + b.hand.width / 2.0)
         inside &= (-spread <= phi) & (phi <= theta + spread)
         if inside.any():
@@ -2596,12 +2596,12 @@ def _over_all(
 ) -> float:
     """How high over the slot the hand passes coming from ``T_r0`` to ``T_ap`` over every
     element whose footprint lies within the hand's reach of that path seen from above: its
-    fingertips (the TCP) the cell's clearance over the tallest, and cg.CLEARANCE more for the
-    corners of tipped fingers, which hang below the TCP."""
+    fingertips (the TCP) the cell's clearance over the tallest, and its work_clearance more
+    for the corners of tipped fingers, which hang below the TCP."""
     reach = b.hand.width / 2.0 + b.hand.half_length + clearance
     level = float(b.slot @ b.up)
     tops = [f.top for f in prints if f.distance(T_r0[:3, 3], T_ap[:3, 3], b.up) <= reach]
-    return max(tops, default=level) - level + clearance + cg.CLEARANCE
+    return max(tops, default=level) - level + clearance + b.hand.keep
 
 
 def _rise(T_r0: Mat, b: _Basics, over: float) -> float:
@@ -2709,7 +2709,7 @@ def _slide_sides(
     # the hand turns with the slide (its x along it): half its extent across the motion,
     # the collision checks' stand-in being square
     hand_radius = max(hand.width, 2.0 * hand.half_length) / 2.0
-    height = float(ap @ up) - cg.CLEARANCE
+    height = float(ap @ up) - hand.keep
     elements = [f for f in prints if f.top > height and f.name not in beside]
     clear: list[tuple[float, float]] = []
     blocked: list[str] = []
@@ -2721,11 +2721,11 @@ def _slide_sides(
             if m < margin:
                 margin, nearest = m, f.name
         name = "left" if side > 0 else "right"
-        if margin < cg.CLEARANCE:
+        if margin < hand.keep:
             why = (
                 f"its footprint and the sliding hand's overlap by {_mm(-margin)} mm"
                 if margin < 0.0
-                else f"{_mm(margin)} mm from the hand, {_mm(cg.CLEARANCE)} mm needed"
+                else f"{_mm(margin)} mm from the hand, {_mm(hand.keep)} mm needed"
             )
             blocked.append(f"{name} by {nearest} ({why})")
         else:
@@ -2747,20 +2747,22 @@ def _check_room(
     """A hand works between two consecutive elements of the route (the other hand grasps the
     cable between the last one routed and the guide; the routing hand inserts between the
     guide and the next one): the cable between their footprints holds its fingers, with
-    cg.CLEARANCE either side. (Footprints are bounding boxes: an element's may be larger
-    than what stands there, so this explains a failed search, and does not replace it.)"""
+    the cell's work_clearance either side. (Footprints are bounding boxes: an element's may
+    be larger than what stands there, so this explains a failed search, and does not
+    replace it.)"""
     if first is None or then is None:
         return
     up = cg.platform_up(world, then)
     room = cg.room_between(world, first, then, up)
-    need = 2.0 * (hand.half_length + cg.CLEARANCE)
+    need = 2.0 * (hand.half_length + hand.keep)
     if room is not None and room < need - 1e-9:
         a, b = cg.element_of(first), cg.element_of(then)
         raise _error(
             f"{where}: the cable runs {_mm(room)} mm from {a} to {b} (footprint to "
             f"footprint); a hand works between them, its fingers {_mm(2.0 * hand.half_length)} "
-            f"mm thick along it keeping {_mm(cg.CLEARANCE)} mm from each: {_mm(need)} mm. Move {b} "
-            f"at least {_mm(need - room)} mm farther from {a}, or use thinner fingers"
+            f"mm thick along it keeping {_mm(hand.keep)} mm from each (work_clearance in "
+            f"cell.yaml): {_mm(need)} mm. Move {b} at least {_mm(need - room)} mm farther from "
+            f"{a}, or use thinner fingers"
         )
 
 
@@ -2978,7 +2980,7 @@ def _hand(world: World, arm: str) -> cg.Hand:
     robot = world.cell.robots[arm]
     if robot.tool is None or robot.tool not in world.cell.tools:
         raise _error(f"arm '{arm}' has no tool: the cable skills need a parallel gripper")
-    return cg.Hand.from_tool(world.cell.tools[robot.tool], robot.tool)
+    return cg.Hand.from_tool(world.cell.tools[robot.tool], robot.tool, world.cell.work_clearance)
 
 
 def _check_jaw(world: World, arm: str, where: str, cable: str) -> None:
@@ -3485,8 +3487,8 @@ def _check_pair_along(
 
 def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, coming: bool) -> None:
     """The routing hand's tool keeps the cell's clearance from everything but the guide it
-    works at, and cg.CLEARANCE from that guide, along the way's Cartesian paths up to the
-    slide's end (``coming``) or from there on (every other
+    works at, and the cell's work_clearance from that guide, along the way's Cartesian
+    paths up to the slide's end (``coming``) or from there on (every other
     pose: the compiler checks them all, with the arms; leaving the guide before, every pose
     and the checker's clearance from the guides it works between, as the compiler holds
     it), so a way that cannot is not handed to the compiler. (The hand turning with the
@@ -3498,7 +3500,7 @@ def _check_clear(ctx: PlanningContext, gp: GuidePlan, r_arm: str, coming: bool) 
     # the compiler holds it (_emit_guide's near), clear of it by the checker's clearance.
     leave = DEFAULT_CLEARANCE, 1
     turn = () if gp.reorient is None else ((r_arm, "facing the guide", SLIDE, gp.reorient, leave),)
-    work = cg.CLEARANCE, 2
+    work = ctx.world.cell.work_clearance, 2
     paths = (
         *turn,
         (r_arm, "approaching", SLIDE, gp.approach, leave),
@@ -3585,27 +3587,32 @@ def _env_near(
     poses: Poses,
     mode: str,
     beside: Collection[str],
-    own_limit: float = cg.CLEARANCE,
+    own_limit: float | None = None,
     stride: int = 2,
 ) -> tuple[Nearest, float, bool] | None:
     """The first object ``arm``'s tool comes too near along ``poses`` (every ``stride``-th
     pose and the last), the distance it had to keep and whether it is one of the elements it
-    works ``beside``: the cell's clearance from everything else, ``own_limit`` from those;
-    None when it keeps both."""
+    works ``beside``: the cell's clearance from everything else, ``own_limit`` from those
+    (None: the cell's work_clearance); None when it keeps both."""
     sampled = [*poses[::stride], poses[-1]]
     own = set(beside)
-    for skip, limit, only in ((own, ctx.clearance, None), ((), own_limit, own)):
+    work = ctx.world.cell.work_clearance if own_limit is None else own_limit
+    for skip, limit, only in ((own, ctx.clearance, None), ((), work, own)):
         near = ctx.probe.nearest(arm, sampled, mode, skip, limit, only)
         if near is not None:
             return near, limit, only is not None
     return None
 
 
-def _env_fix(ctx: PlanningContext, near: Nearest, own: bool, limit: float = cg.CLEARANCE) -> str:
-    """What would clear ``near`` (found by :func:`_env_near` with ``limit``)."""
+def _env_fix(ctx: PlanningContext, near: Nearest, own: bool, limit: float | None = None) -> str:
+    """What would clear ``near`` (found by :func:`_env_near` with ``limit``; None: the
+    cell's work_clearance)."""
     if own:
+        work = ctx.world.cell.work_clearance
+        limit = work if limit is None else limit
+        setting = " (work_clearance in cell.yaml)" if limit == work else ""
         return (
-            f"a hand keeps {_mm(limit)} mm from the guides it works between: "
+            f"a hand keeps {_mm(limit)} mm from the guides it works between{setting}: "
             f"{near.other} would have to stand {_short(limit - near.distance)} mm farther "
             "from the hand's path (more room between the guides), or the fingers be narrower"
         )

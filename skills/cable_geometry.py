@@ -75,7 +75,6 @@ from cellengine.world import World
 # values; these fit a 6 mm cable and 20 mm fingers with room for a few mm of error.
 APPROACH_GAP = 0.025  # A: gripper front to guide face when the routing hand stops before it
 Z_OFFSET = 0.010  # Z_offset: lifted cable over the guide's top
-CLEARANCE = 0.005  # between a hand and a fixture it works beside (comb, guide wall)
 APPROACH_HEIGHT = 0.060  # a hand comes down onto a grasp or an insert from this high
 RETRACT_HEIGHT = 0.100  # and leaves upwards this far (a comb's slot is 18 mm deep)
 STAND_BACK = 0.100  # the pivot hand, released, then backs off this far along the route
@@ -277,9 +276,10 @@ class Hand:
     width: float  # W_gripper: across the cable (finger_width)
     thickness: float  # the fingers along the cable (finger_thickness)
     half_length: float  # half the extent along the cable that collision checks see
+    keep: float  # from the fixtures it works beside (the cell's work_clearance)
 
     @classmethod
-    def from_tool(cls, tool: Tool, tool_name: str) -> Hand:
+    def from_tool(cls, tool: Tool, tool_name: str, keep: float) -> Hand:
         if tool.finger_width is None or tool.finger_thickness is None:
             missing = "finger_width" if tool.finger_width is None else "finger_thickness"
             raise InputError(
@@ -291,7 +291,7 @@ class Hand:
             half = tool.fingers.size[0] / 2.0
         else:
             half = max(tool.finger_width, tool.finger_thickness) / 2.0
-        return cls(tool.finger_width, tool.finger_thickness, half)
+        return cls(tool.finger_width, tool.finger_thickness, half, keep)
 
     @property
     def x_offset(self) -> float:
@@ -301,7 +301,7 @@ class Hand:
     @property
     def end_margin(self) -> float:
         """Cable a hand needs beyond its fingertip centre to hold it."""
-        return self.half_length + CLEARANCE
+        return self.half_length + self.keep
 
 
 # --------------------------------------------------------------------------- the formulas

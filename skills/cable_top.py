@@ -81,7 +81,9 @@ class TopPlan:
     push: Poses  # the pusher down onto the cable to the slot's level (bottom_back)
     insert: Poses  # the routing hand down on the circle about the pusher
     laid: float  # route length from the connector's rear face to the push point
-    beside: tuple[str, ...]  # the elements the hands work between (cg.CLEARANCE from them)
+    beside: tuple[
+        str, ...
+    ]  # the elements the hands work between (the cell's work_clearance from them)
 
 
 def top_ways(
@@ -269,10 +271,10 @@ def _check(
 ) -> tuple[str, InputError] | None:
     """Why not, and what it depends on ("pusher": where the pusher stands; "routing": where
     the routing hand ends; "hands": both): reach, the cable's length, each hand's
-    clearances (cg.CLEARANCE from the elements it works between, the cell's from everything
-    else), the routing arm's from itself on a branch of ``may`` (it lays and inserts in
-    lines) and the two hands' from each other; each check made once for the poses it looks
-    at (``memo``)."""
+    clearances (the cell's work_clearance from the elements it works between, its clearance
+    from everything else), the routing arm's from itself on a branch of ``may`` (it lays and
+    inserts in lines) and the two hands' from each other; each check made once for the poses
+    it looks at (``memo``)."""
     world, (r_arm, o_arm) = ctx.world, arms
     hand = c._hand(world, r_arm)
     need = tp.laid + tp.radius + hand.end_margin

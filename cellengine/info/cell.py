@@ -24,6 +24,7 @@ BUILTIN_ROBOTS = ("ur3e", "ur5", "ur5e", "ur10e")
 MAX_ROBOTS = 8
 # m: the least distance between the arms, and from an arm to what it is not meant to touch
 DEFAULT_CLEARANCE = 0.010
+DEFAULT_WORK_CLEARANCE = 0.005
 
 
 class Pose(Frozen):
@@ -242,6 +243,10 @@ class Cell(Frozen):
     # every compiled segment keeps the arms this far apart, and from what they do not touch
     # on purpose (the gate refuses a segment passing closer); 0: measured and reported only
     clearance: Length = Field(DEFAULT_CLEARANCE, ge=0)
+    # the cable skills' hands keep this far from the fixtures they work beside on purpose
+    # (the guide a hand routes, the one the cable leaves, the comb it picks from): the
+    # cell's clearance is kept from everything else
+    work_clearance: Length = Field(DEFAULT_WORK_CLEARANCE, gt=0)
     # fractions of the joints' velocity and acceleration limits the trajectories are timed
     # with (one number: both); a plan's own replaces it
     speed: SpeedSpec = 1.0

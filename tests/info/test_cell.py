@@ -150,6 +150,17 @@ def test_clearance_in_the_files_length_unit(write) -> None:
     assert load(write, CELL + "clearance: 0\n").clearance == 0.0
 
 
+def test_work_clearance_in_the_files_length_unit(write) -> None:
+    """The cable skills' hands keep 5 mm from the fixtures they work beside unless the cell
+    says otherwise; it must be more than 0 (a finger touching a guide wall it slides along
+    is not planned)."""
+    assert load(write, CELL).work_clearance == pytest.approx(0.005)
+    assert load(write, CELL + "work_clearance: 3\n").work_clearance == pytest.approx(0.003)
+    assert errors(write, CELL + "work_clearance: 0\n") == [
+        ":22:17: work_clearance: must be greater than 0, got 0"
+    ]
+
+
 def test_negative_clearance_refused(write) -> None:
     assert errors(write, CELL + "clearance: -1\n") == [
         ":22:12: clearance: must be greater than or equal to 0, got -1"

@@ -560,8 +560,16 @@ def test_a_guide_too_close_after_another_fails_saying_how_much_room_the_hand_nee
     assert _fails(world, steps) == (
         "steps[2] RouteCable routing.guide2: the cable runs 15.0 mm from routing.guide1 to "
         "routing.guide2 (footprint to footprint); a hand works between them, its fingers 8.0 "
-        "mm thick along it keeping 5.0 mm from each: 18.0 mm. Move routing.guide2 at least 3.0 mm "
-        "farther from routing.guide1, or use thinner fingers"
+        "mm thick along it keeping 5.0 mm from each (work_clearance in cell.yaml): 18.0 mm. Move "
+        "routing.guide2 at least 3.0 mm farther from routing.guide1, or use thinner fingers"
+    )
+    # a cell whose hands may work nearer the fixtures says so, and the room needed follows
+    cell = world.cell.model_copy(update={"work_clearance": 4.0 * MM})
+    assert _fails(replace(world, cell=cell), steps) == (
+        "steps[2] RouteCable routing.guide2: the cable runs 15.0 mm from routing.guide1 to "
+        "routing.guide2 (footprint to footprint); a hand works between them, its fingers 8.0 "
+        "mm thick along it keeping 4.0 mm from each (work_clearance in cell.yaml): 16.0 mm. Move "
+        "routing.guide2 at least 1.0 mm farther from routing.guide1, or use thinner fingers"
     )
 
 
@@ -582,9 +590,9 @@ def test_the_pivot_hand_closed_on_the_cable_keeps_clear_of_the_guide_before() ->
     assert error is not None and error.problems[0].message == (
         "steps[2] RouteCable routing.guide2: right/tool/finger_right would pass 2.6 mm from "
         "routing.guide1 grasping at the pivot (stopping 15.0 mm before the guide); a hand "
-        "keeps 5.0 mm from the guides it works between: routing.guide1 would have to stand "
-        "2.4 mm farther from the hand's path (more room between the guides), or the fingers "
-        "be narrower"
+        "keeps 5.0 mm from the guides it works between (work_clearance in cell.yaml): "
+        "routing.guide1 would have to stand 2.4 mm farther from the hand's path (more room "
+        "between the guides), or the fingers be narrower"
     )
     assert not isinstance(blocked(10.0), InputError)  # the other arm's branches that can
     assert math.radians(10.0) in cg.PIVOT_LEANS
@@ -1480,8 +1488,8 @@ def test_the_routing_hand_comes_over_what_stands_taller_than_the_guide() -> None
     """The 70 mm comb turned across the routing hand's way from guide1 to guide2 (60 mm
     tall): coming straight, along the axis or over guide2's top, the fingers run into it.
     Coming over everything on the way (C.OVER_ALL), the fingertips pass the cell's clearance
-    and cg.CLEARANCE over its top, and that approach is the one chosen (the clearance set to
-    5 mm: the hand starts 7.4 mm from the comb)."""
+    and its work_clearance over its top, and that approach is the one chosen (the clearance
+    set to 5 mm: the hand starts 7.4 mm from the comb)."""
     world, _ = _world()
     ctx, state, route, r_arm, o_arm = _after_guide1(world)
     gp = next(route.guide_plans(ctx, state, 1))
@@ -1504,7 +1512,8 @@ def test_the_routing_hand_comes_over_what_stands_taller_than_the_guide() -> None
     over = built(C.OVER_ALL)
     (top,) = [f.top for f in prints if f.name == "holder.comb_b"]
     highest = max(float(T[:3, 3] @ gp.up) for T in over.approach)
-    assert highest == pytest.approx(top + world.cell.clearance + cg.CLEARANCE, abs=1e-9)
+    over_top = top + world.cell.clearance + world.cell.work_clearance
+    assert highest == pytest.approx(over_top, abs=1e-9)
     assert least(over) >= ctx.clearance
     how = C._approach_how(ctx, state, route.cable, way, built("direct"), (r_arm, o_arm), prints)
     assert how == C.OVER_ALL
