@@ -2032,7 +2032,7 @@ class GuidePlan:
     stand_turn: float  # turned from back along the route by this (Back)
     # the elements the hands work between (this guide, and the one the cable leaves before
     # the pivot) and, once screened, the next guide (the insert ends before it) and what
-    # lies under the cable (_under): the cell's work_clearance from them, the cell's clearance from
+    # lies under the cable (_under): the cell's work_clearance from them, its clearance from
     # everything else
     beside: tuple[str, ...]
     # the routing arm's IK branches that can do it (of those it may be on), once screened

@@ -81,9 +81,8 @@ class TopPlan:
     push: Poses  # the pusher down onto the cable to the slot's level (bottom_back)
     insert: Poses  # the routing hand down on the circle about the pusher
     laid: float  # route length from the connector's rear face to the push point
-    beside: tuple[
-        str, ...
-    ]  # the elements the hands work between (the cell's work_clearance from them)
+    # the elements the hands work between (the cell's work_clearance from them)
+    beside: tuple[str, ...]
 
 
 def top_ways(
