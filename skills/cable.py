@@ -2711,15 +2711,21 @@ def _slide_sides(
     hand_radius = max(hand.width, 2.0 * hand.half_length) / 2.0
     height = float(ap @ up) - hand.keep
     elements = [f for f in prints if f.top > height and f.name not in beside]
+    # nearest first by a bound that holds on both sides: the rest cannot come nearer (and
+    # of those as near, the first listed names the side's nearest, as without the bound)
+    bounds = sorted((f.least_distance(ap, b.reach, up), k) for k, f in enumerate(elements))
     clear: list[tuple[float, float]] = []
     blocked: list[str] = []
     for side in (1.0, -1.0):
         end = ap + b.reach * (math.cos(theta) * axis + side * math.sin(theta) * left)
-        margin, nearest = math.inf, ""
-        for f in elements:
-            m = f.distance(ap, end, up) - hand_radius
-            if m < margin:
-                margin, nearest = m, f.name
+        margin, first = math.inf, len(elements)
+        for bound, k in bounds:
+            if bound - hand_radius > margin:
+                break
+            m = elements[k].distance(ap, end, up) - hand_radius
+            if m < margin or (m == margin and k < first):
+                margin, first = m, k
+        nearest = elements[first].name if first < len(elements) else ""
         name = "left" if side > 0 else "right"
         if margin < hand.keep:
             why = (

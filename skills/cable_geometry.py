@@ -422,6 +422,21 @@ class Footprint:
         overlap)."""
         return outline_distance(self.outline, a, b, up)
 
+    @cached_property
+    def circle(self) -> tuple[Vec, float]:
+        """A circle (centre, radius) on the outline's plane that holds it."""
+        centre: Vec = self.outline.mean(axis=0)
+        return centre, float(np.linalg.norm(self.outline - centre, axis=1).max())
+
+    def least_distance(self, a: Vec, reach: float, up: Vec) -> float:
+        """At most :meth:`distance` from any segment that starts at ``a`` and is ``reach``
+        long (its circle's, less 1 nm for rounding): a cheap bound to leave out the elements
+        that stand far off."""
+        centre, radius = self.circle
+        off = a - centre
+        off = off - (off @ up) * up
+        return float(np.linalg.norm(off)) - radius - reach - 1e-9
+
 
 def footprints(world: World, exclude: str, up: Vec) -> list[Footprint]:
     """Every platform element with geometry but the one ``exclude`` (a reference; "": none)
