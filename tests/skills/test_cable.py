@@ -1122,6 +1122,27 @@ def _placing(name: str = "plan_straight") -> tuple[PlanningContext, CableState, 
     return ctx, replace(state, step=1), step
 
 
+def test_placing_measures_the_other_holds_only_once_the_published_ones_are_taken(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The arms' room along a carry (_pair_rooms, the costly part) is measured for the
+    published hold's carries before the first is offered, and for the others only when a
+    carry past those is asked for; PlaceConnector.ways takes them again for its second role
+    without measuring again."""
+    ctx, state, step = _placing()
+    measured: list[int] = []
+    rooms = C._pair_rooms
+    monkeypatch.setattr(C, "_pair_rooms", lambda *a, **k: measured.append(1) or rooms(*a, **k))
+    carries = C._Replayed(C._place_carries(ctx, state, step, "right", "left", "w"))
+    first = next(iter(carries))
+    assert first == (cg.PLACE_HOLDS[0], C.PLACE_ORDERS[0])
+    assert len(measured) == len(C.PLACE_ORDERS)
+    everything = list(carries)
+    assert len(everything) > len(C.PLACE_ORDERS) and len(measured) > len(C.PLACE_ORDERS)
+    done = len(measured)
+    assert list(carries) == everything and len(measured) == done
+
+
 def test_placing_keeps_the_published_hold_first_then_the_most_room() -> None:
     """The published hold's carries come first, in PLACE_ORDERS' order (no regrasp: the
     reference plans do not get slower); the other holds of cg.PLACE_HOLDS follow by the room

@@ -40,3 +40,24 @@ def test_nearer_turn_takes_the_smaller_rotation_unless_the_wrist_is_wound_up() -
     assert yaw(wound) == pytest.approx(120.0)
     # z (the tool's axis) is the same either way
     assert g.angle_between(wound[:3, 2], -UP) == pytest.approx(0.0, abs=1e-9)
+
+
+def test_a_footprints_bound_is_never_above_its_distance() -> None:
+    """_slide_sides leaves out the elements whose bound is past the nearest found: the bound
+    must hold for every segment of the reach from the point, on a tilted platform too, and
+    come within the reach of the distance for a segment pointing at the element."""
+    rng = np.random.default_rng(7)
+    for _ in range(300):
+        up = g.unit(np.array([0.0, 0.0, 1.0]) + 0.3 * rng.normal(size=3))
+        corners = rng.normal(size=(8, 3)) * 0.03 + rng.normal(size=3) * 0.2
+        flat = corners - np.outer(corners @ up, up)
+        foot = cg.Footprint("e", cg._convex(flat, up), 0.0)
+        a, reach = rng.normal(size=3) * 0.2, float(rng.uniform(0.0, 0.1))
+        direction = g.unit(np.cross(up, rng.normal(size=3)))
+        bound = foot.least_distance(a, reach, up)
+        assert bound <= foot.distance(a, a + reach * direction, up)
+        centre, radius = foot.circle
+        towards = centre - a - ((centre - a) @ up) * up
+        if np.linalg.norm(towards) > 1e-6:
+            end = a + reach * g.unit(towards)
+            assert foot.distance(a, end, up) <= bound + 2.0 * radius + 1e-9
