@@ -244,7 +244,7 @@ class Cell(Frozen):
     # on purpose (the gate refuses a segment passing closer); 0: measured and reported only
     clearance: Length = Field(DEFAULT_CLEARANCE, ge=0)
     # the cable skills' hands keep this far from the fixtures they work beside on purpose
-    # (the guide a hand routes, the one the cable leaves, the comb it picks from): the
+    # (the guide a hand routes, the one the cable leaves, the plate under the cable): the
     # cell's clearance is kept from everything else
     work_clearance: Length = Field(DEFAULT_WORK_CLEARANCE, gt=0)
     # fractions of the joints' velocity and acceleration limits the trajectories are timed
