@@ -2,6 +2,7 @@
 
 Run: .venv/bin/python bench/bench_boards.py --boards 50 --seed 1 [--strategies split,sync,async]
      [--remodel [--remodel-arms auto|file]] [--out DIR] [--jobs 2] [--timeout 900]
+     [--only 15,82 (these boards instead)] [--work-clearance MM (in every board's cell.yaml)]
 
 Board k is drawn from seed S + k by bench/boards.py (its docstring says what a board is and
 what is rejected); with --remodel the REMODEL sample is added at 8 placements, imported with
@@ -29,6 +30,7 @@ import subprocess
 import sys
 import time
 from collections import Counter
+from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -165,12 +167,22 @@ def run_one(plan: str, board: str, strategy: str, timeout: float = 0.0) -> Outco
     return Outcome(board, strategy, False, reason, first.message, dt, d)
 
 
-def make_boards(n: int, seed: int, remodel: bool, out: Path, arms: str = "auto") -> dict[str, Path]:
-    """Each board's plan file, written under out/boards/."""
+def make_boards(
+    seeds: Sequence[int],
+    remodel: bool,
+    out: Path,
+    arms: str = "auto",
+    work_clearance: float | None = None,
+) -> dict[str, Path]:
+    """Each board's plan file, written under out/boards/; ``work_clearance`` (mm): set in
+    each board's cell.yaml (None: the cell's default)."""
     plans: dict[str, Path] = {}
-    for k in range(n):
-        name = f"board_{seed + k}"
-        make_board(seed + k, out / "boards" / name)
+    for seed in seeds:
+        name = f"board_{seed}"
+        make_board(seed, out / "boards" / name)
+        if work_clearance is not None:
+            cell = out / "boards" / name / "cell.yaml"
+            cell.write_text(cell.read_text() + f"work_clearance: {work_clearance}\n")
         plans[name] = out / "boards" / name / "plan.yaml"
     if remodel:
         plans.update(_remodel_boards(out, arms))
@@ -315,10 +327,17 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=Path("bench_boards_out"))
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--timeout", type=float, default=900.0, help="s per compile; 0: none")
+    ap.add_argument("--only", help="these boards' seeds (comma-separated), not --seed/--boards")
+    ap.add_argument("--work-clearance", type=float, help="mm, set in every board's cell.yaml")
     args = ap.parse_args(argv)
     strategies = tuple(args.strategies.split(","))
     shutil.rmtree(args.out / "boards", ignore_errors=True)
-    plans = make_boards(args.boards, args.seed, args.remodel, args.out, args.remodel_arms)
+    seeds = (
+        [int(s) for s in args.only.split(",")]
+        if args.only
+        else list(range(args.seed, args.seed + args.boards))
+    )
+    plans = make_boards(seeds, args.remodel, args.out, args.remodel_arms, args.work_clearance)
     tasks = [(str(p), b, s) for b, p in plans.items() for s in strategies]
     t0 = time.perf_counter()
     outcomes = _run_all(tasks, args.jobs, args.out / "outcomes.jsonl", args.timeout)

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 import cellengine.skills.cable  # noqa: F401  (the real skills package registers the cable skills)
-from bench.bench_boards import classify, run_one
+from bench.bench_boards import classify, make_boards, run_one
 from bench.board_check import check_compiled
 from bench.boards import Guide, make_board, rejection, remodel_placements
 from cellengine.info.load import load_plan
@@ -33,6 +33,17 @@ def test_same_seed_same_files(tmp_path: Path) -> None:
         _files(tmp_path / "a")["routing/routing.x3d"]
         != _files(tmp_path / "c")["routing/routing.x3d"]
     )
+
+
+def test_chosen_boards_with_a_working_margin(tmp_path: Path) -> None:
+    """--only 5,9 --work-clearance 3: those boards, each cell saying 3 mm."""
+    plans = make_boards([5, 9], False, tmp_path, work_clearance=3.0)
+    assert sorted(plans) == ["board_5", "board_9"]
+    for name, plan in plans.items():
+        assert plan == tmp_path / "boards" / name / "plan.yaml"
+        assert load_plan(plan).world.cell.work_clearance == pytest.approx(0.003)
+    (plan,) = make_boards([5], False, tmp_path / "default").values()
+    assert load_plan(plan).world.cell.work_clearance == pytest.approx(0.005)
 
 
 def test_every_board_loads_and_validates(tmp_path: Path) -> None:
