@@ -2700,7 +2700,7 @@ def _slide_sides(
     """The sides the slide at ``theta`` may take, farthest from every other element that
     stands up to the hand's height first (a base plate does not count; +1, left of the axis,
     on a tie), and for each blocked side what blocks it: within the hand's and the element's
-    radii plus CLEARANCE. The elements the hand starts ``beside`` (the guide before, which
+    radii plus the work clearance. The elements the hand starts ``beside`` (the guide before, which
     the slide starts next to) are left to the tool probe, which measures the hand itself:
     a round hand would stand in them. ``prints``: the footprints of the elements but the
     guide's (cg.footprints)."""
