@@ -39,3 +39,10 @@ def write(tmp_path: Path):
         return p
 
     return _write
+
+
+@pytest.fixture(autouse=True)
+def _compile_cache(tmp_path_factory: pytest.TempPathFactory, monkeypatch: pytest.MonkeyPatch):
+    """Each test its own compile cache: no outcome leaks from one test into another (a test
+    that patches the engine must see it compile), and none into the user's ~/.cache."""
+    monkeypatch.setenv("CELLENGINE_CACHE_DIR", str(tmp_path_factory.mktemp("cache")))

@@ -8,11 +8,11 @@ import json
 import os
 import stat
 import sys
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from cellengine.cache import CACHE_ENV, Cache, default_folder
 from cellengine.errors import (
     EXIT_INVALID,
     EXIT_OK,
@@ -22,9 +22,10 @@ from cellengine.errors import (
     display_path,
     printable,
 )
-from cellengine.info.files import real
+from cellengine.info.files import Reads, noted, real, recording
 from cellengine.info.load import LoadedPlan, load_objects, load_plan, load_world
 from cellengine.info.yamlio import load_yaml
+from cellengine.workers import Crashed, Raised, default_jobs, run_tasks
 from cellengine.world import World
 
 if TYPE_CHECKING:
@@ -47,6 +48,24 @@ def add_parser(sub: Any, name: str) -> None:
         action="store_true",
         help="check files and references only; do not compile plans to motion",
     )
+    p.add_argument(
+        "--jobs",
+        "-j",
+        type=int,
+        metavar="N",
+        help="compile plans in N worker processes (default: one per core)",
+    )
+    p.add_argument(
+        "--no-cache",
+        action="store_true",
+        help="compile every plan, neither using nor keeping the compile cache",
+    )
+    p.add_argument(
+        "--cache-dir",
+        type=Path,
+        metavar="DIR",
+        help=f"the compile cache's folder (default: ${CACHE_ENV}, else ~/.cache/cellengine)",
+    )
     p.set_defaults(run=run)
 
 
@@ -59,14 +78,38 @@ class Result:
 
 
 def run(args: argparse.Namespace) -> int:
-    results = validate_paths(args.paths, compile_plans=not args.no_compile)
+    if args.jobs is not None and args.jobs < 1:
+        raise UsageError(Problem(f"--jobs must be at least 1, got {args.jobs}"))
+    cache = None if args.no_cache else Cache(args.cache_dir or default_folder())
+    results = validate_paths(
+        args.paths, compile_plans=not args.no_compile, jobs=args.jobs, cache=cache
+    )
     {"text": _text, "json": _json, "github": _github}[args.format](results)
     return EXIT_OK if all(not r.problems for r in results) else EXIT_INVALID
 
 
-def validate_paths(paths: list[Path], compile_plans: bool = False) -> list[Result]:
-    """Every cell, objects and plan file in ``paths``; with ``compile_plans``, every plan is
-    also compiled to motion (skills, planning, limits, collisions), as `run` would."""
+def validate_paths(
+    paths: list[Path],
+    compile_plans: bool = False,
+    jobs: int | None = 1,
+    cache: Cache | None = None,
+) -> list[Result]:
+    """Every cell, objects and plan file in ``paths``, in that order; with
+    ``compile_plans``, every plan is also compiled to motion (skills, planning, limits,
+    collisions), as `run` would, in ``jobs`` worker processes (None: one per core), a
+    plan's outcome taken from ``cache`` while none of its files changed."""
+    files = _files(paths)
+    checker = Checker(compile_plans, cache)
+    jobs = default_jobs() if jobs is None else jobs
+    if compile_plans and jobs > 1 and len(files) > 1:  # checking files alone is quick
+        found = _in_workers(checker, files, jobs)
+    else:
+        found = [checker.check(task) for task in files]
+    return [r for r in found if r is not None]
+
+
+def _files(paths: list[Path]) -> list[tuple[Path, bool]]:
+    """The files to check (and whether each was named), each once, in the given order."""
     files: list[tuple[Path, bool]] = []
     for p in paths:
         if p.is_dir():
@@ -75,48 +118,79 @@ def validate_paths(paths: list[Path], compile_plans: bool = False) -> list[Resul
             files.append((p, True))  # not a regular file: reading it says what it is
         else:
             raise UsageError.at("no such file or folder", p)
-    # each cell loaded once, whether it loads or not (plans sharing a broken cell do not
-    # load it again each), and its planning context built once for the plans that use it
-    worlds: dict[Path, World | InputError] = {}
-    contexts: dict[tuple[Path, str], PlanningContext] = {}
+    seen: set[Path] = set()
+    unique = []
+    for f, explicit in files:
+        if real(f) not in seen:
+            seen.add(real(f))
+            unique.append((f, explicit))
+    return unique
 
-    def world_of(cell: Path) -> World:
+
+def _in_workers(checker: Checker, files: list[tuple[Path, bool]], jobs: int) -> list[Result | None]:
+    """The files checked in worker processes, each outcome at its file's place; a worker
+    that dies is that file's problem, and the other files are still checked."""
+    import cellengine.pipeline  # noqa: F401  imported once, before the workers fork
+
+    found: list[Result | None] = [None] * len(files)
+    for i, outcome in run_tasks(checker.check, files, jobs):
+        if isinstance(outcome, Crashed):
+            f = files[i][0]
+            found[i] = Result(f, None, [Problem(f"not checked: {outcome}", str(f))])
+        elif isinstance(outcome, Raised):  # a defect, not the files': as without workers
+            raise outcome.error or RuntimeError(outcome.text)
+        else:
+            found[i] = outcome
+    return found
+
+
+class Checker:
+    """Checks files one at a time, in one process: each cell loaded once, whether it loads
+    or not (plans sharing a broken cell do not load it again each), and its planning
+    context built once for the plans that use it."""
+
+    def __init__(self, compile_plans: bool, cache: Cache | None) -> None:
+        self.compile_plans, self.cache = compile_plans, cache
+        self._worlds: dict[Path, tuple[World | InputError, Reads]] = {}
+        self._contexts: dict[tuple[Path, str], tuple[PlanningContext, Reads]] = {}
+
+    def check(self, task: tuple[Path, bool]) -> Result | None:
+        f, explicit = task
+        return _validate_file(f, explicit, self)
+
+    def world_of(self, cell: Path) -> World:
         key = real(cell)
-        if key not in worlds:
-            try:
-                from cellengine.motion.robot import build_cell_model  # pinocchio: when needed
+        if key not in self._worlds:
+            with recording() as reads:
+                try:
+                    from cellengine.motion.robot import build_cell_model  # pinocchio: lazily
 
-                built = load_world(cell)
-                build_cell_model(built)  # URDFs, meshes, tips: the robots must build
-                worlds[key] = built
-            except InputError as e:
-                worlds[key] = e
-        loaded = worlds[key]
+                    world = load_world(cell)
+                    build_cell_model(world)  # URDFs, meshes, tips: the robots must build
+                    built: World | InputError = world
+                except InputError as e:
+                    built = e
+            self._worlds[key] = (built, reads)
+        loaded, reads = self._worlds[key]
+        noted(reads)
         if isinstance(loaded, InputError):
             raise InputError(loaded.problems)
         return loaded
 
-    def compile_one(loaded: LoadedPlan) -> None:
+    def compile(self, loaded: LoadedPlan) -> None:
         # imported here: the motion stack is only needed when plans are compiled
         from cellengine.context import build_context
         from cellengine.pipeline import compile_loaded
 
         world = loaded.world  # the scene has the containers of the plan's objects
         key = (real(world.cell_file), world.objects.model_dump_json())
-        if key not in contexts:
-            contexts[key] = build_context(world)
-        compile_loaded(loaded, context=contexts[key])
-
-    results = []
-    seen: set[Path] = set()
-    for f, explicit in files:
-        if real(f) in seen:
-            continue
-        seen.add(real(f))
-        result = _validate_file(f, explicit, world_of, compile_one if compile_plans else None)
-        if result is not None:
-            results.append(result)
-    return results
+        if key not in self._contexts:
+            with recording() as reads:
+                built = build_context(world)
+            self._contexts[key] = (built, reads)
+        context, reads = self._contexts[key]
+        noted(reads)
+        compile_loaded(loaded, context=context)
 
 
 def _visible(f: Path, top: Path) -> bool:
@@ -146,9 +220,7 @@ def _loops(p: Path) -> bool:
     return False
 
 
-def _validate_file(
-    f: Path, explicit: bool, world_of: Any, compile_one: Callable[[LoadedPlan], None] | None
-) -> Result | None:
+def _validate_file(f: Path, explicit: bool, checker: Checker) -> Result | None:
     try:
         kind = classify(f)
     except InputError as e:
@@ -161,20 +233,56 @@ def _validate_file(
             "'containers', a plan has 'steps'"
         )
         return Result(f, None, [Problem(msg, str(f), 1, 1)])
+    if kind == "plan" and checker.compile_plans:
+        return _compiled_plan(f, checker)
     result = Result(f, kind)
     try:
         if kind == "cell":
-            result.warnings = list(world_of(f).warnings)
+            result.warnings = list(checker.world_of(f).warnings)
         elif kind == "objects":
             load_objects(f)
         else:
-            loaded = load_plan(f, world_of)
-            result.warnings = list(loaded.world.warnings)
-            if compile_one is not None:
-                compile_one(loaded)
+            result.warnings = list(load_plan(f, checker.world_of).world.warnings)
     except InputError as e:
         result.problems = _unique(e.problems)
     return result
+
+
+def _compiled_plan(f: Path, checker: Checker) -> Result:
+    """A plan file loaded and compiled, or its outcome from the cache. Only outcomes of
+    plans that loaded are kept: a missing file's absence is no file to watch."""
+    from cellengine.pipeline import CompileFailed
+
+    request = {"command": "validate", "plan": str(f), "real": str(real(f)), "cwd": os.getcwd()}
+    cache = checker.cache
+    if cache is not None and (hit := cache.lookup(request)) is not None:
+        return Result(
+            f, "plan", _problems(hit.result["problems"]), _problems(hit.result["warnings"])
+        )
+    result = Result(f, "plan")
+    keep = False
+    with recording() as reads:
+        try:
+            loaded = load_plan(f, checker.world_of)
+            result.warnings = list(loaded.world.warnings)
+            checker.compile(loaded)
+            keep = True
+        except CompileFailed as e:
+            result.problems, keep = _unique(e.problems), True
+        except InputError as e:
+            result.problems = _unique(e.problems)
+    if cache is not None and keep:
+        outcome = {"problems": _rows(result.problems), "warnings": _rows(result.warnings)}
+        cache.store(request, reads, outcome)
+    return result
+
+
+def _rows(problems: list[Problem]) -> list[list[Any]]:
+    return [[p.message, p.file, p.line, p.col] for p in problems]
+
+
+def _problems(rows: list[list[Any]]) -> list[Problem]:
+    return [Problem(str(m), f, line, col) for m, f, line, col in rows]
 
 
 def classify(f: Path) -> str | None:

@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import errno
+import hashlib
 import os
 import re
 import stat
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from pathlib import Path
 
 from cellengine.errors import InputError
@@ -130,4 +133,31 @@ def read_capped(
         os.close(fd)
     if len(data) > cap:  # grew while reading
         raise InputError.at(f"file is more than the {cap}-byte limit for {kind} files", path)
+    if _recordings:
+        noted({real(path): hashlib.sha256(data).hexdigest()})
     return data
+
+
+# What the open recordings have seen read: each file's real path and content digest.
+Reads = dict[Path, str]
+_recordings: list[Reads] = []
+
+
+@contextmanager
+def recording() -> Iterator[Reads]:
+    """Every file read (by :func:`read_capped`) inside the block, with the digest of what
+    was read: what a result computed there depends on (a compile cache's key). Nested
+    recordings each see the reads of the blocks inside them."""
+    reads: Reads = {}
+    _recordings.append(reads)
+    try:
+        yield reads
+    finally:
+        del _recordings[next(i for i, r in enumerate(_recordings) if r is reads)]
+
+
+def noted(reads: Mapping[Path, str]) -> None:
+    """Count ``reads`` as read in every open recording: a loader's cached result (a cell
+    loaded once for several plans) notes again the files it read when it was built."""
+    for r in _recordings:
+        r.update(reads)

@@ -1,0 +1,177 @@
+"""The compile cache: a result reused while every file it was computed from is unchanged.
+
+An entry is found by its request (what was asked: the command, its options, the plan's path
+and the working folder) and the engine's fingerprint, and holds the content digest of every
+file read to compute it (:func:`cellengine.info.files.recording`), like a depfile. It is
+used only when those files still have those digests, so a moved guide recompiles the plans
+of its cell and no other. Entries are checked, never trusted: one that does not parse, whose
+own checksum does not match, or that was made for another request or engine, is a miss.
+The folder must be as trusted as the cell files themselves (an entry is a compiled program).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import sys
+import tempfile
+import zlib
+from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import cache
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+from cellengine import __version__
+from cellengine.info.files import Reads
+
+CACHE_ENV = "CELLENGINE_CACHE_DIR"
+FORMAT = "cellengine.cache/1"
+MAX_ENTRY_BYTES = 16 << 20  # an entry's JSON (blobs are apart); larger is not ours
+# the libraries whose behaviour a compiled program depends on
+LIBRARIES = ("pin", "coal", "ompl", "ruckig", "numpy", "trimesh", "lxml", "pydantic", "PyYAML")
+
+
+def default_folder() -> Path:
+    """$CELLENGINE_CACHE_DIR, else $XDG_CACHE_HOME/cellengine, else ~/.cache/cellengine."""
+    if env := os.environ.get(CACHE_ENV):
+        return Path(env)
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    return (Path(xdg) if xdg else Path.home() / ".cache") / "cellengine"
+
+
+@cache
+def engine_fingerprint() -> str:
+    """The engine's code (every module of the package, the skills included), the skill
+    families installed and the libraries' versions: any change is another engine."""
+    h = hashlib.sha256(__version__.encode())
+    root = Path(__file__).resolve().parent
+    for folder, dirs, files in os.walk(root, followlinks=True):  # skills/ is a link
+        dirs.sort()
+        for name in sorted(f for f in files if f.endswith(".py")):
+            path = Path(folder, name)
+            h.update(str(path.relative_to(root)).encode())
+            h.update(hashlib.sha256(path.read_bytes()).digest())
+    for ep in sorted(metadata.entry_points(group="cellengine.skills"), key=lambda e: e.name):
+        dist = f"{ep.dist.name} {ep.dist.version}" if ep.dist else ""
+        h.update(f"{ep.name}={ep.value} {dist}".encode())
+    for name in LIBRARIES:
+        try:
+            h.update(f"{name}=={metadata.version(name)}".encode())
+        except metadata.PackageNotFoundError:
+            h.update(f"{name} absent".encode())
+    return h.hexdigest()
+
+
+@dataclass(frozen=True)
+class Hit:
+    """A usable entry: its result and, by name, the blobs stored with it."""
+
+    result: dict[str, Any]
+    blobs: dict[str, bytes]
+
+
+@dataclass(frozen=True)
+class Cache:
+    folder: Path
+
+    def lookup(self, request: Mapping[str, Any], blobs: tuple[str, ...] = ()) -> Hit | None:
+        """The entry for ``request`` when every file it read is unchanged and it checks out
+        (with ``blobs``, each of them too); else None."""
+        path = self._path(request)
+        try:
+            entry = json.loads(_read(path, MAX_ENTRY_BYTES))
+            body = entry["body"]
+            if entry["check"] != _digest(body) or body["format"] != FORMAT:
+                return None
+            if body["request"] != _canonical(request) or body["engine"] != engine_fingerprint():
+                return None  # another request hashed alike, or another engine's
+            if any(_file_digest(Path(f)) != d for f, d in body["reads"].items()):
+                return None
+            got = {}
+            for name in blobs:
+                data = zlib.decompress(_read(path.with_suffix(f".{name}.z"), None))
+                if hashlib.sha256(data).hexdigest() != body["blobs"][name]:
+                    return None
+                got[name] = data
+            return Hit(dict(body["result"]), got)
+        except (OSError, ValueError, KeyError, TypeError, AttributeError, zlib.error):
+            return None  # absent, unreadable, foreign or corrupt: compiled again
+
+    def store(
+        self,
+        request: Mapping[str, Any],
+        reads: Reads,
+        result: Mapping[str, Any],
+        blobs: Mapping[str, bytes] | None = None,
+    ) -> None:
+        """Keep ``result`` (JSON data) for ``request``, computed from the files ``reads``.
+        A cache that cannot be written is said once and otherwise ignored."""
+        path = self._path(request)
+        blobs = blobs or {}
+        body = {
+            "format": FORMAT,
+            "request": _canonical(request),
+            "engine": engine_fingerprint(),
+            "reads": {str(f): d for f, d in sorted(reads.items())},
+            "result": result,
+            "blobs": {n: hashlib.sha256(b).hexdigest() for n, b in blobs.items()},
+        }
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            for name, data in blobs.items():  # before the entry that vouches for them
+                _write(path.with_suffix(f".{name}.z"), zlib.compress(data, 1))
+            _write(path, json.dumps({"check": _digest(body), "body": body}).encode())
+        except OSError as e:
+            _warn_once(f"warning: the compile cache in {self.folder} is not written: {e}")
+
+    def _path(self, request: Mapping[str, Any]) -> Path:
+        key = hashlib.sha256(json.dumps(_canonical(request)).encode()).hexdigest()
+        return self.folder / key[:2] / f"{key}.json"
+
+
+def _canonical(request: Mapping[str, Any]) -> Any:
+    return json.loads(json.dumps(request, sort_keys=True))
+
+
+def _digest(body: Any) -> str:
+    return hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()
+
+
+def _file_digest(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        while chunk := f.read(1 << 20):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def _read(path: Path, cap: int | None) -> bytes:
+    with open(path, "rb") as f:
+        data = f.read() if cap is None else f.read(cap + 1)
+    if cap is not None and len(data) > cap:
+        raise ValueError("entry too large")
+    return data
+
+
+def _write(path: Path, data: bytes) -> None:
+    """All or nothing: a reader never sees half an entry."""
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+_warned: set[str] = set()
+
+
+def _warn_once(message: str) -> None:
+    if message not in _warned:
+        _warned.add(message)
+        print(message, file=sys.stderr)

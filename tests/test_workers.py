@@ -1,0 +1,54 @@
+"""Worker processes: every task answered once, a dead worker's task reported, the rest run."""
+
+from __future__ import annotations
+
+import os
+import signal
+
+import pytest
+
+from cellengine.workers import Crashed, Raised, run_tasks
+
+
+def _square_or_die(x: int) -> int:
+    if x == 3:
+        os.kill(os.getpid(), signal.SIGKILL)
+    if x == 5:
+        raise ValueError("five")
+    return x * x
+
+
+def test_every_task_answered_once_with_its_index() -> None:
+    got = dict(run_tasks(lambda x: x * x, list(range(10)), jobs=2))
+    assert got == {i: i * i for i in range(10)}
+
+
+def test_a_killed_worker_is_its_task_only() -> None:
+    got = dict(run_tasks(_square_or_die, list(range(8)), jobs=2))
+    assert sorted(got) == list(range(8))
+    assert got[3] == Crashed(-signal.SIGKILL)
+    assert str(got[3]) == "its worker process was killed by SIGKILL"
+    raised = got[5]
+    assert isinstance(raised, Raised) and isinstance(raised.error, ValueError)
+    assert "ValueError: five" in raised.text
+    assert {i: v for i, v in got.items() if i not in (3, 5)} == {
+        i: i * i for i in (0, 1, 2, 4, 6, 7)
+    }
+
+
+def test_a_result_that_does_not_pickle_is_said() -> None:
+    ((index, got),) = list(run_tasks(lambda _: (lambda: None), [0], jobs=1))
+    assert index == 0 and isinstance(got, Raised) and got.error is None
+    assert "pickle" in got.text.lower()
+
+
+def test_a_worker_that_exits_is_reported_with_its_status() -> None:
+    got = dict(run_tasks(lambda x: os._exit(7) if x else x, [0, 1, 0], jobs=1))
+    assert got[1] == Crashed(7)
+    assert str(got[1]) == "its worker process exited with status 7 before answering"
+    assert got[0] == 0 and got[2] == 0
+
+
+@pytest.mark.parametrize("jobs", [1, 3])
+def test_no_tasks_no_workers(jobs: int) -> None:
+    assert list(run_tasks(lambda x: x, [], jobs)) == []
