@@ -37,7 +37,7 @@ def test_a_killed_worker_is_its_task_only() -> None:
 
 
 def test_a_result_that_does_not_pickle_is_said() -> None:
-    ((index, got),) = list(run_tasks(lambda _: (lambda: None), [0], jobs=1))
+    ((index, got),) = list(run_tasks(lambda _: lambda: None, [0], jobs=1))
     assert index == 0 and isinstance(got, Raised) and got.error is None
     assert "pickle" in got.text.lower()
 
