@@ -9,7 +9,9 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from cellengine.cache import CACHE_ENV, Cache, Hit, default_folder
 from cellengine.errors import EXIT_OK, UsageError, display_path, printable
+from cellengine.info.files import real, recording
 
 if TYPE_CHECKING:  # the motion stack is imported when a command runs, not by `--help`
     from cellengine.pipeline import Compiled, Progress
@@ -26,7 +28,22 @@ def add_parser(sub: Any, name: str) -> None:
         "report.html. Nothing is sent to a driver.",
     )
     add_common(p)
+    add_cache_options(p)
     p.set_defaults(run=run)
+
+
+def add_cache_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--no-cache",
+        action="store_true",
+        help="compile, neither using nor keeping the compile cache",
+    )
+    p.add_argument(
+        "--cache-dir",
+        type=Path,
+        metavar="DIR",
+        help=f"the compile cache's folder (default: ${CACHE_ENV}, else ~/.cache/cellengine)",
+    )
 
 
 def add_common(p: argparse.ArgumentParser) -> None:
@@ -102,15 +119,67 @@ def run(args: argparse.Namespace) -> int:
     from cellengine.pipeline import write_plan_outputs
     from cellengine.runfolder import using
 
-    compiled = compile_reporting(args)
+    cache = None if args.no_cache else Cache(args.cache_dir or default_folder())
+    request = _request(args)
+    if cache is not None and (hit := cache.lookup(request, OUTPUTS)) is not None:
+        return _from_cache(args, hit)
+    with recording() as reads:
+        compiled = compile_reporting(args)
     with using(args.out):
         if (replaced := refuse_unfinished(args.out)) is not None:
             print(printable(replaced), file=sys.stderr)
         paths = write_plan_outputs(compiled, args.out)
+    summary = {
+        "segments": len(compiled.program.segments),
+        "duration": compiled.program.duration,
+        "strategy": compiled.strategy,
+        "warnings": [w.warning() for w in compiled.world.warnings],
+    }
+    if cache is not None:
+        written = (paths["trajectory"], paths["report"], paths["html"])
+        cache.store(request, reads, summary, {p.name: p.read_bytes() for p in written})
+    _said(args, summary, paths["html"])
+    return EXIT_OK
+
+
+# the files `plan` writes (cellengine.pipeline, cellengine.report.write), kept in the cache
+OUTPUTS = ("trajectory.json", "report.json", "report.html")
+
+
+def _request(args: argparse.Namespace) -> dict[str, object]:
+    """What decides the outputs besides the files: the paths as given (the reports name
+    them) and the options."""
+    cell = None if args.cell is None else [str(args.cell), str(real(args.cell))]
+    return {
+        "command": "plan",
+        "plan": [str(args.plan), str(real(args.plan))],
+        "cell": cell,
+        "cwd": os.getcwd(),
+        "execution": args.execution,
+        "speed": args.speed,
+    }
+
+
+def _from_cache(args: argparse.Namespace, hit: Hit) -> int:
+    """The outputs of the same files compiled before, written as a compile would."""
+    from cellengine.journal import refuse_unfinished
+    from cellengine.outfiles import write_files
+    from cellengine.runfolder import using
+
+    for warning in hit.result["warnings"]:
+        print(warning, file=sys.stderr)
+    with using(args.out):
+        if (replaced := refuse_unfinished(args.out)) is not None:
+            print(printable(replaced), file=sys.stderr)
+        paths = write_files(args.out, {n: hit.blobs[n].decode() for n in OUTPUTS})
+    _said(args, hit.result, paths["report.html"], " (from the compile cache)")
+    return EXIT_OK
+
+
+def _said(args: argparse.Namespace, summary: dict[str, Any], html: Path, how: str = "") -> None:
     if not args.quiet:
         print(
-            f"compiled {len(compiled.program.segments)} segments, "
-            f"{compiled.program.duration:.2f} s of motion ({compiled.strategy})"
+            f"compiled {summary['segments']} segments, "
+            f"{summary['duration']:.2f} s of motion ({summary['strategy']}){how}"
         )
-        print(f"report: {display_path(paths['html'])}")
-    return EXIT_OK
+        print(f"report: {display_path(html)}")
