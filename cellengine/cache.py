@@ -44,13 +44,13 @@ def default_folder() -> Path:
 
 @cache
 def engine_fingerprint() -> str:
-    """The engine's code (every module of the package, the skills included), the skill
+    """The engine's files (its modules, the skills, the robot models it ships), the skill
     families installed and the libraries' versions: any change is another engine."""
     h = hashlib.sha256(__version__.encode())
     root = Path(__file__).resolve().parent
     for folder, dirs, files in os.walk(root, followlinks=True):  # skills/ is a link
-        dirs.sort()
-        for name in sorted(f for f in files if f.endswith(".py")):
+        dirs[:] = sorted(d for d in dirs if d != "__pycache__")
+        for name in sorted(files):
             path = Path(folder, name)
             h.update(str(path.relative_to(root)).encode())
             h.update(hashlib.sha256(path.read_bytes()).digest())
@@ -73,9 +73,12 @@ class Hit:
     blobs: dict[str, bytes]
 
 
-@dataclass(frozen=True)
 class Cache:
-    folder: Path
+    """The entries under ``folder``."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder
+        self._unwritable = False  # said once
 
     def lookup(self, request: Mapping[str, Any], blobs: tuple[str, ...] = ()) -> Hit | None:
         """The entry for ``request`` when every file it read is unchanged and it checks out
@@ -115,7 +118,7 @@ class Cache:
             "format": FORMAT,
             "request": _canonical(request),
             "engine": engine_fingerprint(),
-            "reads": {str(f): d for f, d in sorted(reads.items())},
+            "reads": {str(f): d for f, d in sorted(reads.items()) if not _engines(f)},
             "result": result,
             "blobs": {n: hashlib.sha256(b).hexdigest() for n, b in blobs.items()},
         }
@@ -125,11 +128,27 @@ class Cache:
                 _write(path.with_suffix(f".{name}.z"), zlib.compress(data, 1))
             _write(path, json.dumps({"check": _digest(body), "body": body}).encode())
         except OSError as e:
-            _warn_once(f"warning: the compile cache in {self.folder} is not written: {e}")
+            if not self._unwritable:
+                self._unwritable = True
+                print(
+                    f"warning: the compile cache in {self.folder} is not written: {e}",
+                    file=sys.stderr,
+                )
 
     def _path(self, request: Mapping[str, Any]) -> Path:
         key = hashlib.sha256(json.dumps(_canonical(request)).encode()).hexdigest()
         return self.folder / key[:2] / f"{key}.json"
+
+
+def _engines(path: Path) -> bool:
+    """Whether ``path`` is one of the engine's own files (a robot model it ships): the
+    fingerprint covers it, and another machine's engine has it elsewhere."""
+    return any(path.is_relative_to(root) for root in _engine_roots())
+
+
+def _engine_roots() -> tuple[Path, ...]:
+    package = Path(__file__).resolve().parent
+    return (package, (package / "skills").resolve())
 
 
 def _canonical(request: Mapping[str, Any]) -> Any:
@@ -166,12 +185,3 @@ def _write(path: Path, data: bytes) -> None:
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
-
-
-_warned: set[str] = set()
-
-
-def _warn_once(message: str) -> None:
-    if message not in _warned:
-        _warned.add(message)
-        print(message, file=sys.stderr)

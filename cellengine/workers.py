@@ -24,20 +24,23 @@ R = TypeVar("R")
 
 @dataclass(frozen=True)
 class Crashed:
-    """A task whose worker process ended before answering (killed, out of memory, a fault
-    in a compiled library)."""
+    """A task whose worker ended before answering (killed, out of memory, a fault in a
+    compiled library): why, as a message's end ("its worker process was killed by ...")."""
 
-    exitcode: int | None
+    why: str
 
-    def __str__(self) -> str:
-        code = self.exitcode
+    @classmethod
+    def of_exit(cls, code: int | None) -> Crashed:
         if code is not None and code < 0:
             try:
                 name = signal.Signals(-code).name
             except ValueError:
                 name = f"signal {-code}"
-            return f"its worker process was killed by {name}"
-        return f"its worker process exited with status {code} before answering"
+            return cls(f"its worker process was killed by {name}")
+        return cls(f"its worker process exited with status {code} before answering")
+
+    def __str__(self) -> str:
+        return self.why
 
 
 @dataclass(frozen=True)
@@ -90,7 +93,7 @@ def run_tasks(
                     result: R | Crashed | Raised = w.conn.recv()
                 except (EOFError, OSError):  # died before answering: replaced
                     w.process.join()
-                    result = Crashed(w.process.exitcode)
+                    result = Crashed.of_exit(w.process.exitcode)
                     w.conn.close()
                     workers[workers.index(w)] = w = _start(ctx, fn)
                 w.task = None

@@ -22,6 +22,7 @@ MUTATORS = {"append", "add", "clear", "extend", "insert", "pop", "popitem", "rem
 ALLOWED_CACHES = {
     "cellengine.family": "families",  # the entry points installed
     "cellengine.info.models_xml": "_schema",  # the XSD shipped with the package
+    "cellengine.cache": "engine_fingerprint",  # the installed engine's files and libraries
 }
 
 

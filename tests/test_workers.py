@@ -26,7 +26,7 @@ def test_every_task_answered_once_with_its_index() -> None:
 def test_a_killed_worker_is_its_task_only() -> None:
     got = dict(run_tasks(_square_or_die, list(range(8)), jobs=2))
     assert sorted(got) == list(range(8))
-    assert got[3] == Crashed(-signal.SIGKILL)
+    assert got[3] == Crashed.of_exit(-signal.SIGKILL)
     assert str(got[3]) == "its worker process was killed by SIGKILL"
     raised = got[5]
     assert isinstance(raised, Raised) and isinstance(raised.error, ValueError)
@@ -44,7 +44,7 @@ def test_a_result_that_does_not_pickle_is_said() -> None:
 
 def test_a_worker_that_exits_is_reported_with_its_status() -> None:
     got = dict(run_tasks(lambda x: os._exit(7) if x else x, [0, 1, 0], jobs=1))
-    assert got[1] == Crashed(7)
+    assert got[1] == Crashed.of_exit(7)
     assert str(got[1]) == "its worker process exited with status 7 before answering"
     assert got[0] == 0 and got[2] == 0
 

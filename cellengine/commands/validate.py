@@ -8,31 +8,21 @@ import json
 import os
 import stat
 import sys
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from cellengine.cache import CACHE_ENV, Cache, default_folder
+from cellengine.checker import Checker, Result
 from cellengine.errors import (
     EXIT_INVALID,
     EXIT_OK,
-    InputError,
     Problem,
     UsageError,
     display_path,
     printable,
 )
-from cellengine.info.files import Reads, noted, real, recording
-from cellengine.info.load import LoadedPlan, load_objects, load_plan, load_world
-from cellengine.info.yamlio import load_yaml
+from cellengine.info.files import real
 from cellengine.workers import Crashed, Raised, default_jobs, run_tasks
-from cellengine.world import World
-
-if TYPE_CHECKING:
-    from cellengine.context import PlanningContext
-
-KINDS = ("cell", "objects", "plan")
-_KEYS = {"plan": ("steps",), "cell": ("robots",), "objects": ("cables", "containers")}
 
 
 def add_parser(sub: Any, name: str) -> None:
@@ -66,15 +56,13 @@ def add_parser(sub: Any, name: str) -> None:
         metavar="DIR",
         help=f"the compile cache's folder (default: ${CACHE_ENV}, else ~/.cache/cellengine)",
     )
+    p.add_argument(
+        "--cluster",
+        metavar="ADDRESS",
+        help="compile plans on a Ray cluster: ray://HOST:PORT, HOST:PORT or auto "
+        "(pip install 'cellengine[cluster]')",
+    )
     p.set_defaults(run=run)
-
-
-@dataclass
-class Result:
-    file: Path
-    kind: str | None
-    problems: list[Problem] = field(default_factory=list)
-    warnings: list[Problem] = field(default_factory=list)  # the file is still ok
 
 
 def run(args: argparse.Namespace) -> int:
@@ -82,7 +70,11 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(Problem(f"--jobs must be at least 1, got {args.jobs}"))
     cache = None if args.no_cache else Cache(args.cache_dir or default_folder())
     results = validate_paths(
-        args.paths, compile_plans=not args.no_compile, jobs=args.jobs, cache=cache
+        args.paths,
+        compile_plans=not args.no_compile,
+        jobs=args.jobs,
+        cache=cache,
+        cluster=args.cluster,
     )
     {"text": _text, "json": _json, "github": _github}[args.format](results)
     return EXIT_OK if all(not r.problems for r in results) else EXIT_INVALID
@@ -93,19 +85,57 @@ def validate_paths(
     compile_plans: bool = False,
     jobs: int | None = 1,
     cache: Cache | None = None,
+    cluster: str | None = None,
 ) -> list[Result]:
     """Every cell, objects and plan file in ``paths``, in that order; with
     ``compile_plans``, every plan is also compiled to motion (skills, planning, limits,
-    collisions), as `run` would, in ``jobs`` worker processes (None: one per core), a
-    plan's outcome taken from ``cache`` while none of its files changed."""
+    collisions), as `run` would: in ``jobs`` worker processes (None: one per core), or on
+    the Ray ``cluster`` at that address; a plan's outcome taken from ``cache`` while none
+    of its files changed."""
     files = _files(paths)
-    checker = Checker(compile_plans, cache)
+    found: list[Result | None] = [None] * len(files)
+    todo = list(range(len(files)))
+    if compile_plans and cache is not None:
+        for i, (f, _) in enumerate(files):
+            if (hit := cache.lookup(_request(f))) is not None:
+                found[i] = Result.of_outcome(f, "plan", hit.result)
+        todo = [i for i in todo if found[i] is None]
+    tasks = [files[i] for i in todo]
     jobs = default_jobs() if jobs is None else jobs
-    if compile_plans and jobs > 1 and len(files) > 1:  # checking files alone is quick
-        found = _in_workers(checker, files, jobs)
+    if compile_plans and cluster is not None:
+        from cellengine.cluster import check_on_cluster
+
+        outcomes = check_on_cluster(cluster, tasks)
+    elif compile_plans and jobs > 1 and len(tasks) > 1:  # checking files alone is quick
+        import cellengine.pipeline  # noqa: F401  imported once, before the workers fork
+
+        outcomes = run_tasks(Checker(compile_plans).check, tasks, jobs)
     else:
-        found = [checker.check(task) for task in files]
+        checker = Checker(compile_plans)
+        outcomes = ((k, checker.check(task)) for k, task in enumerate(tasks))
+    for k, outcome in outcomes:
+        i = todo[k]
+        found[i] = result = _result(files[i][0], outcome)
+        if cache is not None and result is not None and result.reads is not None:
+            cache.store(_request(result.file), result.reads, result.outcome())
     return [r for r in found if r is not None]
+
+
+def _request(plan: Path) -> dict[str, str]:
+    """What, besides the files, decides a plan's outcome: the path as given (messages
+    name it) and the working folder they are relative to."""
+    return {"command": "validate", "plan": str(plan), "real": str(real(plan)), "cwd": os.getcwd()}
+
+
+def _result(f: Path, outcome: Result | Crashed | Raised | None) -> Result | None:
+    """A worker's answer for ``f``: a worker that died is that file's problem (the other
+    files are still checked); a file's check that raised is a defect, raised as it would
+    be without workers."""
+    if isinstance(outcome, Crashed):
+        return Result(f, None, [Problem(f"not checked: {outcome}", str(f))])
+    if isinstance(outcome, Raised):
+        raise outcome.error or RuntimeError(outcome.text)
+    return outcome
 
 
 def _files(paths: list[Path]) -> list[tuple[Path, bool]]:
@@ -125,72 +155,6 @@ def _files(paths: list[Path]) -> list[tuple[Path, bool]]:
             seen.add(real(f))
             unique.append((f, explicit))
     return unique
-
-
-def _in_workers(checker: Checker, files: list[tuple[Path, bool]], jobs: int) -> list[Result | None]:
-    """The files checked in worker processes, each outcome at its file's place; a worker
-    that dies is that file's problem, and the other files are still checked."""
-    import cellengine.pipeline  # noqa: F401  imported once, before the workers fork
-
-    found: list[Result | None] = [None] * len(files)
-    for i, outcome in run_tasks(checker.check, files, jobs):
-        if isinstance(outcome, Crashed):
-            f = files[i][0]
-            found[i] = Result(f, None, [Problem(f"not checked: {outcome}", str(f))])
-        elif isinstance(outcome, Raised):  # a defect, not the files': as without workers
-            raise outcome.error or RuntimeError(outcome.text)
-        else:
-            found[i] = outcome
-    return found
-
-
-class Checker:
-    """Checks files one at a time, in one process: each cell loaded once, whether it loads
-    or not (plans sharing a broken cell do not load it again each), and its planning
-    context built once for the plans that use it."""
-
-    def __init__(self, compile_plans: bool, cache: Cache | None) -> None:
-        self.compile_plans, self.cache = compile_plans, cache
-        self._worlds: dict[Path, tuple[World | InputError, Reads]] = {}
-        self._contexts: dict[tuple[Path, str], tuple[PlanningContext, Reads]] = {}
-
-    def check(self, task: tuple[Path, bool]) -> Result | None:
-        f, explicit = task
-        return _validate_file(f, explicit, self)
-
-    def world_of(self, cell: Path) -> World:
-        key = real(cell)
-        if key not in self._worlds:
-            with recording() as reads:
-                try:
-                    from cellengine.motion.robot import build_cell_model  # pinocchio: lazily
-
-                    world = load_world(cell)
-                    build_cell_model(world)  # URDFs, meshes, tips: the robots must build
-                    built: World | InputError = world
-                except InputError as e:
-                    built = e
-            self._worlds[key] = (built, reads)
-        loaded, reads = self._worlds[key]
-        noted(reads)
-        if isinstance(loaded, InputError):
-            raise InputError(loaded.problems)
-        return loaded
-
-    def compile(self, loaded: LoadedPlan) -> None:
-        # imported here: the motion stack is only needed when plans are compiled
-        from cellengine.context import build_context
-        from cellengine.pipeline import compile_loaded
-
-        world = loaded.world  # the scene has the containers of the plan's objects
-        key = (real(world.cell_file), world.objects.model_dump_json())
-        if key not in self._contexts:
-            with recording() as reads:
-                built = build_context(world)
-            self._contexts[key] = (built, reads)
-        context, reads = self._contexts[key]
-        noted(reads)
-        compile_loaded(loaded, context=context)
 
 
 def _visible(f: Path, top: Path) -> bool:
@@ -218,86 +182,6 @@ def _loops(p: Path) -> bool:
     except OSError as e:
         return e.errno == errno.ELOOP
     return False
-
-
-def _validate_file(f: Path, explicit: bool, checker: Checker) -> Result | None:
-    try:
-        kind = classify(f)
-    except InputError as e:
-        return Result(f, None, list(e.problems))
-    if kind is None:
-        if not explicit:
-            return None  # not one of ours: other YAML may live in a folder
-        msg = (
-            "cannot tell what this file is: a cell has 'robots', objects have 'cables' or "
-            "'containers', a plan has 'steps'"
-        )
-        return Result(f, None, [Problem(msg, str(f), 1, 1)])
-    if kind == "plan" and checker.compile_plans:
-        return _compiled_plan(f, checker)
-    result = Result(f, kind)
-    try:
-        if kind == "cell":
-            result.warnings = list(checker.world_of(f).warnings)
-        elif kind == "objects":
-            load_objects(f)
-        else:
-            result.warnings = list(load_plan(f, checker.world_of).world.warnings)
-    except InputError as e:
-        result.problems = _unique(e.problems)
-    return result
-
-
-def _compiled_plan(f: Path, checker: Checker) -> Result:
-    """A plan file loaded and compiled, or its outcome from the cache. Only outcomes of
-    plans that loaded are kept: a missing file's absence is no file to watch."""
-    from cellengine.pipeline import CompileFailed
-
-    request = {"command": "validate", "plan": str(f), "real": str(real(f)), "cwd": os.getcwd()}
-    cache = checker.cache
-    if cache is not None and (hit := cache.lookup(request)) is not None:
-        return Result(
-            f, "plan", _problems(hit.result["problems"]), _problems(hit.result["warnings"])
-        )
-    result = Result(f, "plan")
-    keep = False
-    with recording() as reads:
-        try:
-            loaded = load_plan(f, checker.world_of)
-            result.warnings = list(loaded.world.warnings)
-            checker.compile(loaded)
-            keep = True
-        except CompileFailed as e:
-            result.problems, keep = _unique(e.problems), True
-        except InputError as e:
-            result.problems = _unique(e.problems)
-    if cache is not None and keep:
-        outcome = {"problems": _rows(result.problems), "warnings": _rows(result.warnings)}
-        cache.store(request, reads, outcome)
-    return result
-
-
-def _rows(problems: list[Problem]) -> list[list[Any]]:
-    return [[p.message, p.file, p.line, p.col] for p in problems]
-
-
-def _problems(rows: list[list[Any]]) -> list[Problem]:
-    return [Problem(str(m), f, line, col) for m, f, line, col in rows]
-
-
-def classify(f: Path) -> str | None:
-    """What a YAML file is, from its top-level keys, else from its name."""
-    data = load_yaml(f).data
-    if isinstance(data, dict):
-        for kind, keys in _KEYS.items():
-            if any(k in data for k in keys):
-                return kind
-    stem = f.stem.lower()
-    return next((k for k in KINDS if stem.startswith(k.rstrip("s"))), None)
-
-
-def _unique(problems: tuple[Problem, ...] | list[Problem]) -> list[Problem]:
-    return list(dict.fromkeys(problems))
 
 
 def _text(results: list[Result]) -> None:

@@ -9,6 +9,7 @@ import re
 import stat
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 
 from cellengine.errors import InputError
@@ -133,14 +134,14 @@ def read_capped(
         os.close(fd)
     if len(data) > cap:  # grew while reading
         raise InputError.at(f"file is more than the {cap}-byte limit for {kind} files", path)
-    if _recordings:
+    if _recordings.get():
         noted({real(path): hashlib.sha256(data).hexdigest()})
     return data
 
 
 # What the open recordings have seen read: each file's real path and content digest.
 Reads = dict[Path, str]
-_recordings: list[Reads] = []
+_recordings: ContextVar[tuple[Reads, ...]] = ContextVar("recordings", default=())
 
 
 @contextmanager
@@ -149,15 +150,15 @@ def recording() -> Iterator[Reads]:
     was read: what a result computed there depends on (a compile cache's key). Nested
     recordings each see the reads of the blocks inside them."""
     reads: Reads = {}
-    _recordings.append(reads)
+    token = _recordings.set((*_recordings.get(), reads))
     try:
         yield reads
     finally:
-        del _recordings[next(i for i, r in enumerate(_recordings) if r is reads)]
+        _recordings.reset(token)
 
 
 def noted(reads: Mapping[Path, str]) -> None:
     """Count ``reads`` as read in every open recording: a loader's cached result (a cell
     loaded once for several plans) notes again the files it read when it was built."""
-    for r in _recordings:
+    for r in _recordings.get():
         r.update(reads)

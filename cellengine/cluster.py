@@ -1,0 +1,147 @@
+"""Checking files on a Ray cluster, no shared file system assumed.
+
+Each file goes as a task with a snapshot of its folder (what it can reference is inside it:
+:func:`cellengine.info.files.resolve_inside`): regular files with their bytes, links with
+their targets. The worker rebuilds the folder at the same absolute path under a temporary
+root, works from the same working folder under it, checks the file as one process would,
+and takes the root back out of every path in the answer, so messages read exactly as a local
+check's. Folders that hold a run (a ``.lock``) and hidden entries are not sent.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import tempfile
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+from typing import Any
+
+from cellengine.cache import engine_fingerprint
+from cellengine.checker import Checker, Result
+from cellengine.errors import Problem, UsageError
+from cellengine.info.files import real
+from cellengine.runfolder import LOCK
+from cellengine.workers import Crashed, Raised
+
+# A snapshot: each entry's absolute path -> its bytes, or ("link", target) for a link.
+Snapshot = dict[str, bytes | tuple[str, str]]
+MAX_SNAPSHOT_BYTES = 512 << 20
+
+
+def connect(address: str) -> Any:
+    """The ray module, connected to the cluster at ``address``."""
+    try:
+        import ray
+    except ImportError:
+        raise UsageError(
+            Problem("--cluster needs Ray: pip install 'cellengine[cluster]'")
+        ) from None
+    try:
+        ray.init(address=address, logging_level=logging.ERROR, log_to_driver=False)
+    except Exception as e:  # Ray's own: ConnectionError, ValueError, RuntimeError...
+        raise UsageError(Problem(f"cannot reach the Ray cluster at '{address}': {e}")) from None
+    return ray
+
+
+def check_on_cluster(
+    address: str, tasks: Sequence[tuple[Path, bool]]
+) -> Iterator[tuple[int, Result | Crashed | Raised | None]]:
+    """Each (file, named) of ``tasks`` checked on the cluster, as (index, outcome) in the
+    tasks' order: a worker that died is a :class:`Crashed`."""
+    if not tasks:
+        return
+    ray = connect(address)
+    try:
+        remote = ray.remote(max_retries=0, num_cpus=1)(check_shipped)
+        folders: dict[Path, Any] = {}
+        refs = []
+        for f, named in tasks:
+            folder = real(f).parent
+            if folder not in folders:  # one snapshot for the files of a folder
+                folders[folder] = ray.put(snapshot(folder))
+            refs.append(remote.remote(folders[folder], str(f), named, os.getcwd()))
+        for k, ref in enumerate(refs):
+            yield k, _answer(ray, ref)
+    finally:
+        ray.shutdown()
+
+
+def _answer(ray: Any, ref: Any) -> Result | Crashed | Raised | None:
+    try:
+        engine, result = ray.get(ref)
+    except ray.exceptions.RayTaskError as e:  # the check raised: a defect
+        return Raised(None, str(e))
+    except ray.exceptions.RayError as e:  # the worker or its node died
+        return Crashed(f"its Ray worker died ({type(e).__name__})")
+    if engine != engine_fingerprint():
+        raise UsageError(
+            Problem(
+                "the Ray cluster runs another cellengine (its code or libraries differ "
+                "from this one's); install this one on its nodes"
+            )
+        )
+    return result  # type: ignore[no-any-return]
+
+
+def snapshot(folder: Path) -> Snapshot:
+    """``folder``'s regular files and links, by absolute path, less hidden entries and run
+    folders (what a check can read: references are resolved inside the folder)."""
+    out: Snapshot = {}
+    total = 0
+    for top, dirs, files in os.walk(folder):  # links to folders are listed, not walked
+        dirs[:] = [d for d in dirs if not d.startswith(".") and not Path(top, d, LOCK).exists()]
+        for name in sorted(n for n in files if not n.startswith(".")) + sorted(dirs):
+            path = Path(top, name)
+            if path.is_symlink():
+                out[str(path)] = ("link", os.readlink(path))
+            elif path.is_file():
+                total += path.stat().st_size
+                if total > MAX_SNAPSHOT_BYTES:
+                    raise UsageError.at(
+                        f"the folder holds more than {MAX_SNAPSHOT_BYTES >> 20} MB to send "
+                        "to the cluster; keep a cell's folder to its files",
+                        folder,
+                    )
+                out[str(path)] = path.read_bytes()
+    return out
+
+
+def check_shipped(files: Snapshot, file: str, named: bool, cwd: str) -> tuple[str, Result | None]:
+    """On a worker: ``file`` (as given, from ``cwd``) checked in the rebuilt ``files``;
+    the engine's fingerprint and the outcome, its paths as the sender's."""
+    with tempfile.TemporaryDirectory(prefix="cellengine-") as tmp:
+        root = real(Path(tmp))
+        for path, content in files.items():
+            here = root / path.lstrip("/")
+            here.parent.mkdir(parents=True, exist_ok=True)
+            if isinstance(content, tuple):
+                here.symlink_to(content[1])
+            else:
+                here.write_bytes(content)
+        work = root / cwd.lstrip("/")
+        work.mkdir(parents=True, exist_ok=True)
+        before = os.getcwd()
+        os.chdir(work)
+        try:
+            result = Checker(compile_plans=True).check((Path(file), named))
+        finally:
+            os.chdir(before)
+        return engine_fingerprint(), None if result is None else _sent_back(result, str(root))
+
+
+def _sent_back(result: Result, root: str) -> Result:
+    """``result`` with the temporary root taken out of its paths and messages."""
+
+    def back(text: str | None) -> str | None:
+        return None if text is None else text.replace(root, "")
+
+    def problems(ps: list[Problem]) -> list[Problem]:
+        return [Problem(str(back(p.message)), back(p.file), p.line, p.col) for p in ps]
+
+    reads = None
+    if result.reads is not None:
+        reads = {Path(str(back(str(f)))): d for f, d in result.reads.items()}
+    return Result(
+        result.file, result.kind, problems(result.problems), problems(result.warnings), reads
+    )

@@ -1,0 +1,158 @@
+"""`validate --cluster`: a local Ray head on the loopback address with two worker processes
+checks the repository's cells and generated boards exactly as one process and two local
+workers do; a Ray worker killed mid-compile is its plan's problem only."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from bench.boards import make_board
+from cellengine.cache import Cache
+from cellengine.cli import main
+from tests.conftest import CELLS, ROOT
+
+RAY = Path(sys.executable).parent / "ray"
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+@pytest.fixture(scope="module")
+def ray_head(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
+    """A Ray head on 127.0.0.1 with two CPUs (two workers at a time), stopped after the
+    module's tests; its Ray Client address."""
+    client = _free_port()
+    log = tmp_path_factory.mktemp("ray") / "head.log"
+    cmd = [str(RAY), "start", "--head", "--block", "--node-ip-address=127.0.0.1"]
+    cmd += [f"--port={_free_port()}", f"--ray-client-server-port={client}", "--num-cpus=2"]
+    cmd += ["--include-dashboard=false", "--disable-usage-stats"]
+    cmd += ["--object-store-memory=100000000"]
+    with open(log, "w") as out:
+        head = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT)
+    try:
+        deadline = time.monotonic() + 90
+        while "Ray runtime started" not in log.read_text():
+            assert head.poll() is None, log.read_text()
+            assert time.monotonic() < deadline, log.read_text()
+            time.sleep(0.2)
+        yield f"ray://127.0.0.1:{client}"
+    finally:
+        head.terminate()  # --block: the head stops every process it started
+        head.wait(timeout=60)
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The repository's cells, two generated boards, a board whose cable is too short and a
+    cell that does not parse."""
+    top = tmp_path_factory.mktemp("cells")
+    shutil.copytree(CELLS, top / "cells")
+    for seed in (1, 2):
+        make_board(seed, top / "boards" / f"board_{seed}")
+    make_board(3, top / "boards" / "short")
+    objects = top / "boards" / "short" / "objects.yaml"
+    text = objects.read_text()
+    objects.write_text(text.replace("    length: ", "    length: 300  # ", 1))
+    (top / "broken").mkdir()
+    (top / "broken" / "cell.yaml").write_text("robots: [\n")
+    (top / "broken" / "plan.yaml").write_text("cell: cell.yaml\nsteps: []\n")
+    return top
+
+
+FOLDERS = ("cells", "boards", "broken", "--format", "json")
+
+
+def _validate(folder: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "cellengine", "validate", *FOLDERS, "--no-cache", *args],
+        cwd=folder,
+        capture_output=True,
+        text=True,
+        timeout=900,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )
+
+
+def test_the_cluster_one_process_and_two_workers_agree(folder: Path, ray_head: str) -> None:
+    one = _validate(folder, "--jobs", "1")
+    two = _validate(folder, "--jobs", "2")
+    ray = _validate(folder, "--cluster", ray_head)
+    assert one.returncode == two.returncode == ray.returncode == 1, ray.stderr
+    assert one.stdout == two.stdout == ray.stdout
+    assert '"file": "boards/board_1/plan.yaml",\n      "kind": "plan",\n      "ok": true' in (
+        ray.stdout
+    )
+    assert "is too short for the route" in ray.stdout
+    assert '"file": "cells/cable_routing/plan_two_turns.yaml",\n      "kind": "plan",\n' in (
+        ray.stdout
+    )
+
+
+KILLING = """
+import os, signal, sys
+import cellengine.cluster as cluster
+from cellengine.cli import main
+
+original = cluster.check_shipped
+
+def killing(files, file, named, cwd):
+    if file == "b/plan_straight.yaml":
+        os.kill(os.getpid(), signal.SIGKILL)
+    return original(files, file, named, cwd)
+
+cluster.check_shipped = killing
+sys.exit(main(["validate", "a", "b", "--cluster", sys.argv[1], "--cache-dir", "cache"]))
+"""
+
+
+def test_a_killed_ray_worker_is_its_plan_only(tmp_path: Path, ray_head: str) -> None:
+    for name in ("a", "b"):
+        shutil.copytree(CELLS / "cable_routing", tmp_path / name)
+        for plan in ("plan_one_turn.yaml", "plan_two_turns.yaml"):
+            (tmp_path / name / plan).unlink()
+    run = subprocess.run(
+        [sys.executable, "-c", KILLING, ray_head],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )
+    assert run.returncode == 1, run.stderr
+    out = run.stdout.splitlines()
+    assert "a/plan_straight.yaml: ok (plan)" in out
+    assert "b/objects.yaml: ok (objects)" in out
+    (killed,) = [line for line in out if line.startswith("b/plan_straight.yaml")]
+    assert killed.startswith("b/plan_straight.yaml: not checked: its Ray worker died (")
+    # what the cluster compiled is kept with the sender's paths: found again here
+    os.chdir(tmp_path)
+    request = {
+        "command": "validate",
+        "plan": "a/plan_straight.yaml",
+        "real": str((tmp_path / "a" / "plan_straight.yaml").resolve()),
+        "cwd": str(tmp_path),
+    }
+    hit = Cache(tmp_path / "cache").lookup(request)
+    assert hit is not None and hit.result == {"problems": [], "warnings": []}
+
+
+def test_without_ray_the_flag_says_what_to_install(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    shutil.copytree(CELLS / "cable_routing", tmp_path / "a")
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setitem(sys.modules, "ray", None)  # import ray: ImportError
+    assert main(["validate", "a", "--cluster", "auto", "--no-cache"]) == 2
+    assert capsys.readouterr().err == "--cluster needs Ray: pip install 'cellengine[cluster]'\n"
