@@ -91,6 +91,11 @@ class Checker:
         compile_loaded(loaded, context=context)
 
 
+def check_file(task: tuple[Path, bool]) -> Result | None:
+    """One file checked by a fresh checker: a task sent to another machine."""
+    return Checker(compile_plans=True).check(task)
+
+
 def _check_file(f: Path, explicit: bool, checker: Checker) -> Result | None:
     try:
         kind = classify(f)

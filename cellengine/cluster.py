@@ -13,12 +13,12 @@ from __future__ import annotations
 import logging
 import os
 import tempfile
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from cellengine.cache import engine_fingerprint
-from cellengine.checker import Checker, Result
+from cellengine.checker import Result
 from cellengine.errors import Problem, UsageError
 from cellengine.info.files import real
 from cellengine.runfolder import LOCK
@@ -27,6 +27,8 @@ from cellengine.workers import Crashed, Raised
 # A snapshot: each entry's absolute path -> its bytes, or ("link", target) for a link.
 Snapshot = dict[str, bytes | tuple[str, str]]
 MAX_SNAPSHOT_BYTES = 512 << 20
+T = TypeVar("T")
+R = TypeVar("R")
 
 
 def connect(address: str) -> Any:
@@ -44,33 +46,33 @@ def connect(address: str) -> Any:
     return ray
 
 
-def check_on_cluster(
-    address: str, tasks: Sequence[tuple[Path, bool]]
-) -> Iterator[tuple[int, Result | Crashed | Raised | None]]:
-    """Each (file, named) of ``tasks`` checked on the cluster, as (index, outcome) in the
-    tasks' order: a worker that died is a :class:`Crashed`."""
+def on_cluster(
+    address: str, tasks: Sequence[tuple[Path, T]], fn: Callable[[T], R]
+) -> Iterator[tuple[int, R | Crashed | Raised]]:
+    """``fn(arg)`` on the cluster for each (file, arg) of ``tasks``, with a snapshot of the
+    file's folder rebuilt around it; (index, answer) in the tasks' order."""
     if not tasks:
         return
     ray = connect(address)
     try:
-        remote = ray.remote(max_retries=0, num_cpus=1)(check_shipped)
+        remote = ray.remote(max_retries=0, num_cpus=1)(run_shipped)
         folders: dict[Path, Any] = {}
         refs = []
-        for f, named in tasks:
+        for f, arg in tasks:
             folder = real(f).parent
             if folder not in folders:  # one snapshot for the files of a folder
                 folders[folder] = ray.put(snapshot(folder))
-            refs.append(remote.remote(folders[folder], str(f), named, os.getcwd()))
+            refs.append(remote.remote(folders[folder], os.getcwd(), fn, arg))
         for k, ref in enumerate(refs):
             yield k, _answer(ray, ref)
     finally:
         ray.shutdown()
 
 
-def _answer(ray: Any, ref: Any) -> Result | Crashed | Raised | None:
+def _answer(ray: Any, ref: Any) -> Any:
     try:
-        engine, result = ray.get(ref)
-    except ray.exceptions.RayTaskError as e:  # the check raised: a defect
+        engine, answer = ray.get(ref)
+    except ray.exceptions.RayTaskError as e:  # the task raised: a defect
         return Raised(None, str(e))
     except ray.exceptions.RayError as e:  # the worker or its node died
         return Crashed(f"its Ray worker died ({type(e).__name__})")
@@ -81,7 +83,7 @@ def _answer(ray: Any, ref: Any) -> Result | Crashed | Raised | None:
                 "from this one's); install this one on its nodes"
             )
         )
-    return result  # type: ignore[no-any-return]
+    return answer
 
 
 def snapshot(folder: Path) -> Snapshot:
@@ -107,9 +109,9 @@ def snapshot(folder: Path) -> Snapshot:
     return out
 
 
-def check_shipped(files: Snapshot, file: str, named: bool, cwd: str) -> tuple[str, Result | None]:
-    """On a worker: ``file`` (as given, from ``cwd``) checked in the rebuilt ``files``;
-    the engine's fingerprint and the outcome, its paths as the sender's."""
+def run_shipped(files: Snapshot, cwd: str, fn: Callable[[T], R], arg: T) -> tuple[str, R]:
+    """On a worker: ``fn(arg)`` in the rebuilt ``files``, from ``cwd`` rebuilt there; the
+    engine's fingerprint and the answer, its paths as the sender's."""
     with tempfile.TemporaryDirectory(prefix="cellengine-") as tmp:
         root = real(Path(tmp))
         for path, content in files.items():
@@ -124,24 +126,32 @@ def check_shipped(files: Snapshot, file: str, named: bool, cwd: str) -> tuple[st
         before = os.getcwd()
         os.chdir(work)
         try:
-            result = Checker(compile_plans=True).check((Path(file), named))
+            answer = fn(arg)
         finally:
             os.chdir(before)
-        return engine_fingerprint(), None if result is None else _sent_back(result, str(root))
+        return engine_fingerprint(), _sent_back(answer, str(root))
 
 
-def _sent_back(result: Result, root: str) -> Result:
-    """``result`` with the temporary root taken out of its paths and messages."""
-
-    def back(text: str | None) -> str | None:
-        return None if text is None else text.replace(root, "")
-
-    def problems(ps: list[Problem]) -> list[Problem]:
-        return [Problem(str(back(p.message)), back(p.file), p.line, p.col) for p in ps]
-
-    reads = None
-    if result.reads is not None:
-        reads = {Path(str(back(str(f)))): d for f, d in result.reads.items()}
-    return Result(
-        result.file, result.kind, problems(result.problems), problems(result.warnings), reads
-    )
+def _sent_back(answer: Any, root: str) -> Any:
+    """``answer`` with the temporary root taken out of every path and text in it."""
+    if isinstance(answer, str):
+        return answer.replace(root, "")
+    if isinstance(answer, Path):
+        return Path(str(answer).replace(root, ""))
+    if isinstance(answer, list | tuple):
+        return type(answer)(_sent_back(a, root) for a in answer)
+    if isinstance(answer, dict):
+        return {_sent_back(k, root): _sent_back(v, root) for k, v in answer.items()}
+    if isinstance(answer, Problem):
+        return Problem(
+            _sent_back(answer.message, root), _sent_back(answer.file, root), answer.line, answer.col
+        )
+    if isinstance(answer, Result):
+        return Result(
+            answer.file,
+            answer.kind,
+            _sent_back(answer.problems, root),
+            _sent_back(answer.warnings, root),
+            _sent_back(answer.reads, root),
+        )
+    return answer

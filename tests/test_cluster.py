@@ -102,17 +102,17 @@ def test_the_cluster_one_process_and_two_workers_agree(folder: Path, ray_head: s
 
 KILLING = """
 import os, signal, sys
-import cellengine.cluster as cluster
+import cellengine.commands.validate as validate
 from cellengine.cli import main
 
-original = cluster.check_shipped
+original = validate.check_file
 
-def killing(files, file, named, cwd):
-    if file == "b/plan_straight.yaml":
+def killing(task):
+    if str(task[0]) == "b/plan_straight.yaml":
         os.kill(os.getpid(), signal.SIGKILL)
-    return original(files, file, named, cwd)
+    return original(task)
 
-cluster.check_shipped = killing
+validate.check_file = killing
 sys.exit(main(["validate", "a", "b", "--cluster", sys.argv[1], "--cache-dir", "cache"]))
 """
 

@@ -12,7 +12,8 @@ from pathlib import Path
 from typing import Any
 
 from cellengine.cache import CACHE_ENV, Cache, default_folder
-from cellengine.checker import Checker, Result
+from cellengine.checker import Checker, Result, check_file
+from cellengine.dispatch import dispatch
 from cellengine.errors import (
     EXIT_INVALID,
     EXIT_OK,
@@ -22,7 +23,7 @@ from cellengine.errors import (
     printable,
 )
 from cellengine.info.files import real
-from cellengine.workers import Crashed, Raised, default_jobs, run_tasks
+from cellengine.workers import Crashed, Raised, default_jobs
 
 
 def add_parser(sub: Any, name: str) -> None:
@@ -100,19 +101,13 @@ def validate_paths(
             if (hit := cache.lookup(_request(f))) is not None:
                 found[i] = Result.of_outcome(f, "plan", hit.result)
         todo = [i for i in todo if found[i] is None]
-    tasks = [files[i] for i in todo]
+    tasks = [(files[i][0], files[i]) for i in todo]
     jobs = default_jobs() if jobs is None else jobs
-    if compile_plans and cluster is not None:
-        from cellengine.cluster import check_on_cluster
-
-        outcomes = check_on_cluster(cluster, tasks)
-    elif compile_plans and jobs > 1 and len(tasks) > 1:  # checking files alone is quick
-        import cellengine.pipeline  # noqa: F401  imported once, before the workers fork
-
-        outcomes = run_tasks(Checker(compile_plans).check, tasks, jobs)
-    else:
-        checker = Checker(compile_plans)
-        outcomes = ((k, checker.check(task)) for k, task in enumerate(tasks))
+    if compile_plans:
+        outcomes = dispatch(tasks, Checker(True).check, check_file, jobs, cluster)
+    else:  # checking files alone is quick
+        checker = Checker(False)
+        outcomes = ((k, checker.check(arg)) for k, (_, arg) in enumerate(tasks))
     for k, outcome in outcomes:
         i = todo[k]
         found[i] = result = _result(files[i][0], outcome)

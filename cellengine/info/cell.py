@@ -124,6 +124,14 @@ class Tool(Frozen):
         return self
 
 
+class ElementPose(Frozen):
+    """An element's pose in its platform's frame, over what the CAD says: a guide moved
+    on the real board, a layout being compared. What is not given is the CAD's."""
+
+    xyz: Vec3Length | None = None
+    rpy: Vec3Angle | None = None
+
+
 class PlatformSpec(Frozen):
     pose: Pose = Pose()
     format: Literal["x3d", "remodel"] = "x3d"
@@ -132,6 +140,7 @@ class PlatformSpec(Frozen):
     map: str | None = None  # x3d: the mapping CSV
     ids: str | None = None  # remodel: the *_ids.wri file
     up: Literal["y", "z"] = "y"
+    elements: dict[Name, ElementPose] = {}
 
     @model_validator(mode="after")
     def _files_for_format(self) -> PlatformSpec:

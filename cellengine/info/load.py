@@ -12,6 +12,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from cellengine import geometry
 from cellengine.errors import InputError, Problem, known
 from cellengine.family import families
 from cellengine.info.cell import BUILTIN_ROBOTS, Cell, PlatformSpec, UrdfModel
@@ -20,7 +21,8 @@ from cellengine.info.files import resolve_inside
 from cellengine.info.objects import Objects
 from cellengine.info.overlaps import overlaps
 from cellengine.info.plan import Plan, parse_plan
-from cellengine.info.platform import Platform
+from cellengine.info.platform import Platform, frozen_array
+from cellengine.info.settings import overlaid
 from cellengine.info.units import Units
 from cellengine.info.validation import dotted, validate
 from cellengine.info.yamlio import YamlDoc, load_yaml
@@ -42,7 +44,7 @@ def _require_mapping(doc: YamlDoc, what: str) -> None:
 
 
 def load_cell(path: Path) -> tuple[Cell, YamlDoc]:
-    doc = load_yaml(path)
+    doc = overlaid(load_yaml(path), "cell")
     _require_mapping(doc, "cell")
     cell = validate(Cell, doc, _units(doc).context())
     problems = _check_cell(cell, doc)
@@ -201,10 +203,30 @@ def load_platform(name: str, spec: PlatformSpec, doc: YamlDoc) -> Platform:
     if spec.format == "remodel":
         from cellengine.info.remodel import load_remodel_platform
 
-        return load_remodel_platform(name, T, cad, ref("ids"), models, root, spec.up)
-    from cellengine.info.native import load_native_platform
+        platform = load_remodel_platform(name, T, cad, ref("ids"), models, root, spec.up)
+    else:
+        from cellengine.info.native import load_native_platform
 
-    return load_native_platform(name, T, cad, models, ref("map"), root, spec.up)
+        platform = load_native_platform(name, T, cad, models, ref("map"), root, spec.up)
+    return _moved(platform, spec, doc)
+
+
+def _moved(platform: Platform, spec: PlatformSpec, doc: YamlDoc) -> Platform:
+    """``platform`` with the elements cell.yaml places itself (``elements``) moved there."""
+    elements = dict(platform.elements)
+    for element, pose in spec.elements.items():
+        if element not in elements:
+            loc = ("platforms", platform.name, "elements", element)
+            raise doc.error(
+                f"unknown element '{platform.name}.{element}'" + known(elements), loc, key=True
+            )
+        T = elements[element].T_platform_element.copy()
+        if pose.xyz is not None:
+            T[:3, 3] = pose.xyz
+        if pose.rpy is not None:
+            T[:3, :3] = geometry.pose((0.0, 0.0, 0.0), pose.rpy)[:3, :3]
+        elements[element] = replace(elements[element], T_platform_element=frozen_array(T))
+    return replace(platform, elements=elements) if spec.elements else platform
 
 
 def load_objects(path: Path) -> Objects:
@@ -212,7 +234,7 @@ def load_objects(path: Path) -> Objects:
 
 
 def _load_objects(path: Path) -> tuple[Objects, YamlDoc]:
-    doc = load_yaml(path)
+    doc = overlaid(load_yaml(path), "objects")
     _require_mapping(doc, "objects")
     return validate(Objects, doc, _units(doc).context()), doc
 
@@ -284,7 +306,7 @@ def load_plan(
     """Load a plan, its cell and objects. ``load_cell_world`` lets a caller reuse worlds
     already loaded (validating a folder loads each cell once). ``cell``: run the plan in
     this cell file instead of the one it names (the same plan on other hardware)."""
-    doc = load_yaml(path)
+    doc = overlaid(load_yaml(path), "plan")
     _require_mapping(doc, "plan")
     plan = parse_plan(doc)
     root = path.parent
