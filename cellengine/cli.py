@@ -18,6 +18,7 @@ EXIT_BROKEN_PIPE = 141
 # each command's module (cellengine.commands.*), imported when the parser needs it
 COMMANDS = {
     "validate": "validate",
+    "sweep": "sweep",
     "plan": "plan",
     "run": "run",
     "show": "show",

@@ -156,3 +156,23 @@ def test_without_ray_the_flag_says_what_to_install(
     monkeypatch.setitem(sys.modules, "ray", None)  # import ray: ImportError
     assert main(["validate", "a", "--cluster", "auto", "--no-cache"]) == 2
     assert capsys.readouterr().err == "--cluster needs Ray: pip install 'cellengine[cluster]'\n"
+
+
+def test_a_sweep_on_the_cluster_gives_the_local_table(tmp_path: Path, ray_head: str) -> None:
+    shutil.copytree(CELLS / "cable_routing", tmp_path / "cell")
+    vary = ["--vary", "objects:cables.cable1.length=[650, 300]", "--no-cache"]
+
+    def sweep(*args: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run(
+            [sys.executable, "-m", "cellengine", "sweep", "plan_straight.yaml", *vary, *args],
+            cwd=tmp_path / "cell",
+            capture_output=True,
+            text=True,
+            timeout=600,
+            env={**os.environ, "PYTHONPATH": str(ROOT)},
+        )
+
+    local, ray = sweep("-j", "1"), sweep("--cluster", ray_head)
+    assert local.returncode == ray.returncode == 0, ray.stderr
+    assert local.stdout == ray.stdout
+    assert [line.split(",")[2] for line in ray.stdout.splitlines()] == ["feasible", "true", "false"]

@@ -17,6 +17,7 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 from typing import Any
 
+from cellengine.info.platform import Platform
 from cellengine.info.yamlio import Loc, YamlDoc
 
 KINDS = ("cell", "objects", "plan")
@@ -50,20 +51,23 @@ def _set(doc: YamlDoc, data: Any, loc: Loc, value: Any) -> Any:
     if not isinstance(data, dict):
         raise doc.error("a setting needs a map here; the file has something else", ())
     node = data
-    for i, key in enumerate(loc[:-1]):
-        here = loc[: i + 1]
+    for i, key in enumerate(loc):
+        last = i == len(loc) - 1
         if isinstance(node, list) and isinstance(key, int) and 0 <= key < len(node):
+            if last:
+                node[key] = value
             node = node[key]
         elif isinstance(node, dict):
+            if last:
+                node[key] = value
             node = node.setdefault(key, {})
         else:
-            raise doc.error(f"setting '{dotted(loc)}': '{dotted(here)}' is not in the file", here)
-    last = loc[-1]
-    in_list = isinstance(node, list) and isinstance(last, int) and 0 <= last < len(node)
-    if in_list or isinstance(node, dict):
-        node[last] = value
-    else:
-        raise doc.error(f"setting '{dotted(loc)}': '{dotted(loc[:-1])}' holds no '{last}'", loc)
+            what = f"a list of {len(node)}" if isinstance(node, list) else f"'{node}'"
+            raise doc.error(
+                f"setting '{dotted(loc)}': '{dotted(loc[:i])}' is {what} in the file, "
+                f"which has no '{key}'",
+                loc[:i],
+            )
     return data
 
 
@@ -71,7 +75,7 @@ def dotted(loc: Loc) -> str:
     return ".".join(str(k) for k in loc)
 
 
-def parse_key(text: str, platforms: Mapping[str, Any] | None = None) -> tuple[str, Loc]:
+def parse_key(text: str, platforms: Mapping[str, Platform] | None = None) -> tuple[str, Loc]:
     """``cell:robots.right.base.xyz`` (a file kind, a dotted key path; list items by
     index) or ``routing.guide3.xyz`` (a platform's element: its ``xyz`` or ``rpy`` in the
     platform's frame, cell.yaml's ``platforms.P.elements.E``) into a setting's kind and
@@ -89,6 +93,9 @@ def parse_key(text: str, platforms: Mapping[str, Any] | None = None) -> tuple[st
         if platforms is not None and bits[0] not in platforms:
             known = ", ".join(sorted(platforms)) or "none"
             raise ValueError(f"'{text}': no platform '{bits[0]}' in the cell (it has {known})")
+        if platforms is not None and bits[1] not in platforms[bits[0]].elements:
+            known = ", ".join(platforms[bits[0]].elements)
+            raise ValueError(f"'{text}': no element '{bits[1]}' on '{bits[0]}' (it has {known})")
         return "cell", ("platforms", bits[0], "elements", bits[1], bits[2])
     raise ValueError(
         f"'{text}': write PLATFORM.ELEMENT.xyz (or .rpy), or cell:KEY, objects:KEY, plan:KEY"
