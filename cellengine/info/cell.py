@@ -125,11 +125,14 @@ class Tool(Frozen):
 
 
 class ElementPose(Frozen):
-    """An element's pose in its platform's frame, over what the CAD says: a guide moved
-    on the real board, a layout being compared. What is not given is the CAD's."""
+    """An element's pose over what the CAD says: a guide moved on the real board, a layout
+    being compared. ``xyz``, ``rpy``: in its platform's frame; ``move``: a shift in the
+    cell's frame (the frame `cellengine show` prints keypoints in), after those. What is
+    not given is the CAD's."""
 
     xyz: Vec3Length | None = None
     rpy: Vec3Angle | None = None
+    move: Vec3Length | None = None
 
 
 class PlatformSpec(Frozen):

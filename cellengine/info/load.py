@@ -12,6 +12,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from cellengine import geometry
 from cellengine.errors import InputError, Problem, known
 from cellengine.family import families
@@ -225,6 +227,8 @@ def _moved(platform: Platform, spec: PlatformSpec, doc: YamlDoc) -> Platform:
             T[:3, 3] = pose.xyz
         if pose.rpy is not None:
             T[:3, :3] = geometry.pose((0.0, 0.0, 0.0), pose.rpy)[:3, :3]
+        if pose.move is not None:  # a shift in the cell, into the platform's frame
+            T[:3, 3] += platform.T_cell_platform[:3, :3].T @ np.asarray(pose.move)
         elements[element] = replace(elements[element], T_platform_element=frozen_array(T))
     return replace(platform, elements=elements) if spec.elements else platform
 

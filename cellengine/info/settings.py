@@ -77,9 +77,9 @@ def dotted(loc: Loc) -> str:
 
 def parse_key(text: str, platforms: Mapping[str, Platform] | None = None) -> tuple[str, Loc]:
     """``cell:robots.right.base.xyz`` (a file kind, a dotted key path; list items by
-    index) or ``routing.guide3.xyz`` (a platform's element: its ``xyz`` or ``rpy`` in the
-    platform's frame, cell.yaml's ``platforms.P.elements.E``) into a setting's kind and
-    key path."""
+    index) or ``routing.guide3.move`` (a platform's element: a shift in the cell's frame,
+    or its ``xyz`` or ``rpy`` in the platform's; cell.yaml's ``platforms.P.elements.E``)
+    into a setting's kind and key path."""
     kind, sep, rest = text.partition(":")
     if sep and kind in KINDS:
         parts: list[str | int] = [int(p) if p.isdigit() else p for p in rest.split(".")]
@@ -89,7 +89,7 @@ def parse_key(text: str, platforms: Mapping[str, Platform] | None = None) -> tup
     if sep:
         raise ValueError(f"'{text}': the file is one of {', '.join(KINDS)}, not '{kind}'")
     bits = text.split(".")
-    if len(bits) == 3 and bits[2] in ("xyz", "rpy") and all(bits):
+    if len(bits) == 3 and bits[2] in ("xyz", "rpy", "move") and all(bits):
         if platforms is not None and bits[0] not in platforms:
             known = ", ".join(sorted(platforms)) or "none"
             raise ValueError(f"'{text}': no platform '{bits[0]}' in the cell (it has {known})")
@@ -98,5 +98,5 @@ def parse_key(text: str, platforms: Mapping[str, Platform] | None = None) -> tup
             raise ValueError(f"'{text}': no element '{bits[1]}' on '{bits[0]}' (it has {known})")
         return "cell", ("platforms", bits[0], "elements", bits[1], bits[2])
     raise ValueError(
-        f"'{text}': write PLATFORM.ELEMENT.xyz (or .rpy), or cell:KEY, objects:KEY, plan:KEY"
+        f"'{text}': write PLATFORM.ELEMENT.move (or .xyz, .rpy), or cell:KEY, objects:KEY, plan:KEY"
     )

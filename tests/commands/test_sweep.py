@@ -131,6 +131,6 @@ def test_a_bad_key_in_a_variants_file_is_at_its_line(
     (cell / "variants.yaml").write_text("- name: a\n  routing.guide3: [0, 0, 0]\n")
     assert main(["sweep", "plan_straight.yaml", "--variants", "variants.yaml"]) == 1
     assert capsys.readouterr().err == (
-        "variants.yaml:2:3: 'routing.guide3': write PLATFORM.ELEMENT.xyz (or .rpy), or "
-        "cell:KEY, objects:KEY, plan:KEY\n"
+        "variants.yaml:2:3: 'routing.guide3': write PLATFORM.ELEMENT.move (or .xyz, .rpy), "
+        "or cell:KEY, objects:KEY, plan:KEY\n"
     )

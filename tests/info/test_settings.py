@@ -37,8 +37,8 @@ def test_keys_name_a_file_and_a_path() -> None:
         ("robot:base", "'robot:base': the file is one of cell, objects, plan, not 'robot'"),
         ("cell:", "'cell:': write cell:key.path"),
         ("routing.guide3",
-         "'routing.guide3': write PLATFORM.ELEMENT.xyz (or .rpy), or cell:KEY, objects:KEY, "
-         "plan:KEY"),
+         "'routing.guide3': write PLATFORM.ELEMENT.move (or .xyz, .rpy), or cell:KEY, "
+         "objects:KEY, plan:KEY"),
     ],
 )  # fmt: skip
 def test_a_bad_key_says_how_to_write_one(key: str, message: str) -> None:
@@ -111,3 +111,13 @@ def test_an_unknown_element_is_named_with_the_known_ones(cell: Path) -> None:
         "cell.yaml:44:13: unknown element 'routing.guideX'; known: connector, guide1, guide2, "
         "guide3, guide4, guide5, guide6, guide7, plate"
     )
+
+
+def test_a_move_is_in_the_cell_frame(cell: Path) -> None:
+    """routing is turned 180 deg in the cell: +10 mm in the cell's y is -10 in its own."""
+    before = _guide3()
+    kind, loc = parse_key("routing.guide3.move")
+    with settings([(kind, loc, [0, 10, 0])]):
+        after = _guide3()
+    np.testing.assert_allclose(after[:3, 3] - before[:3, 3], [0, -0.010, 0], atol=1e-9)
+    np.testing.assert_allclose(after[:3, :3], before[:3, :3], atol=1e-12)
