@@ -9,7 +9,7 @@ import io
 import itertools
 import json
 import os
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -129,7 +129,7 @@ def run_sweep(
     jobs: int,
     cluster: str | None = None,
     cache: Cache | None = None,
-    compile_one: Callable[[tuple[Path, tuple[Setting, ...]]], dict[str, Any]] = evaluate,
+    timeout: float | None = None,
 ) -> list[dict[str, Any]]:
     """Each variant's row, in the variants' order."""
     rows: dict[int, dict[str, Any]] = {}
@@ -140,7 +140,7 @@ def run_sweep(
                 rows[i] = hit.result
     todo = [i for i in range(len(variants)) if i not in rows]
     tasks = [(plan, (plan, variants[i].settings)) for i in todo]
-    for k, answer in dispatch(tasks, compile_one, compile_one, jobs, cluster):
+    for k, answer in dispatch(tasks, evaluate, evaluate, jobs, cluster, timeout):
         i = todo[k]
         if isinstance(answer, Crashed):
             why = f"not compiled: {answer}"

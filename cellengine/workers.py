@@ -12,6 +12,7 @@ import contextlib
 import multiprocessing
 import os
 import signal
+import time
 import traceback
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
@@ -56,6 +57,7 @@ class _Worker(Generic[T]):
     process: Any  # multiprocessing's Process (the context's own class)
     conn: Connection
     task: int | None = None
+    started: float = 0.0  # when it was given its task (time.monotonic)
 
 
 def default_jobs() -> int:
@@ -67,12 +69,13 @@ def default_jobs() -> int:
 
 
 def run_tasks(
-    fn: Callable[[T], R], tasks: Sequence[T], jobs: int
+    fn: Callable[[T], R], tasks: Sequence[T], jobs: int, timeout: float | None = None
 ) -> Iterator[tuple[int, R | Crashed | Raised]]:
     """``fn(task)`` for every task in up to ``jobs`` worker processes, yielding (index,
     result) as each ends, in the order they end; :class:`Raised` when ``fn`` raised,
-    :class:`Crashed` when its worker died. ``fn`` and the tasks must be picklable where
-    processes are spawned rather than forked."""
+    :class:`Crashed` when its worker died or was stopped after ``timeout`` seconds on the
+    task. ``fn`` and the tasks must be picklable where processes are spawned rather than
+    forked."""
     ctx = _context()
     pending = list(range(len(tasks)))[::-1]  # popped from the end: first task first
     workers: list[_Worker[T]] = []
@@ -83,17 +86,25 @@ def run_tasks(
             _give(w, tasks, pending)
         while any(w.task is not None for w in workers):
             busy = [w for w in workers if w.task is not None]
-            ready = wait([w.conn for w in busy] + [w.process.sentinel for w in busy])
+            left = None if timeout is None else min(w.started + timeout for w in busy)
+            ready = wait(
+                [w.conn for w in busy] + [w.process.sentinel for w in busy],
+                None if left is None else max(0.0, left - time.monotonic()),
+            )
             for w in busy:
-                if w.conn not in ready and w.process.sentinel not in ready:
+                over = timeout is not None and time.monotonic() > w.started + timeout
+                if w.conn not in ready and w.process.sentinel not in ready and not over:
                     continue
                 index = w.task
                 assert index is not None
-                try:
-                    result: R | Crashed | Raised = w.conn.recv()
-                except (EOFError, OSError):  # died before answering: replaced
+                result: R | Crashed | Raised
+                if w.conn in ready or w.process.sentinel in ready:
+                    result, gone = _answer(w)
+                else:  # still at it: stopped
+                    w.process.kill()
                     w.process.join()
-                    result = Crashed.of_exit(w.process.exitcode)
+                    result, gone = Crashed(f"it took longer than the {timeout:g} s allowed"), True
+                if gone:  # another worker takes its place
                     w.conn.close()
                     workers[workers.index(w)] = w = _start(ctx, fn)
                 w.task = None
@@ -102,6 +113,15 @@ def run_tasks(
     finally:
         for w in workers:
             _stop(w)
+
+
+def _answer(w: _Worker[T]) -> tuple[Any, bool]:
+    """The worker's answer, and whether it is gone (died before answering)."""
+    try:
+        return w.conn.recv(), False
+    except (EOFError, OSError):
+        w.process.join()
+        return Crashed.of_exit(w.process.exitcode), True
 
 
 def _context() -> Any:
@@ -121,6 +141,7 @@ def _start(ctx: Any, fn: Callable[[T], R]) -> _Worker[T]:
 def _give(w: _Worker[T], tasks: Sequence[T], pending: list[int]) -> None:
     if pending:
         w.task = pending.pop()
+        w.started = time.monotonic()
         w.conn.send(tasks[w.task])
 
 

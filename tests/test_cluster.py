@@ -172,7 +172,8 @@ def test_a_sweep_on_the_cluster_gives_the_local_table(tmp_path: Path, ray_head: 
             env={**os.environ, "PYTHONPATH": str(ROOT)},
         )
 
-    local, ray = sweep("-j", "1"), sweep("--cluster", ray_head)
+    # on the cluster with a time limit: each variant in a process of its own on its node
+    local, ray = sweep("-j", "1"), sweep("--cluster", ray_head, "--timeout", "600")
     assert local.returncode == ray.returncode == 0, ray.stderr
     assert local.stdout == ray.stdout
     assert [line.split(",")[2] for line in ray.stdout.splitlines()] == ["feasible", "true", "false"]

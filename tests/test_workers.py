@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import signal
+import time
 
 import pytest
 
@@ -52,3 +53,16 @@ def test_a_worker_that_exits_is_reported_with_its_status() -> None:
 @pytest.mark.parametrize("jobs", [1, 3])
 def test_no_tasks_no_workers(jobs: int) -> None:
     assert list(run_tasks(lambda x: x, [], jobs)) == []
+
+
+def _slow_at_1(x: int) -> int:
+    if x == 1:
+        time.sleep(30)
+    return x
+
+
+def test_a_task_past_its_time_is_stopped_and_the_rest_run() -> None:
+    t0 = time.monotonic()
+    got = dict(run_tasks(_slow_at_1, [0, 1, 2, 3], jobs=1, timeout=1.0))
+    assert time.monotonic() - t0 < 20
+    assert got == {0: 0, 1: Crashed("it took longer than the 1 s allowed"), 2: 2, 3: 3}

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from cellengine.cache import CACHE_ENV, Cache, default_folder
+from cellengine.commands.validate import seconds
 from cellengine.errors import EXIT_OK, Problem, UsageError, display_path
 
 
@@ -48,6 +49,12 @@ def add_parser(sub: Any, name: str) -> None:
         metavar="DIR",
         help=f"the compile cache's folder (default: ${CACHE_ENV}, else ~/.cache/cellengine)",
     )
+    p.add_argument(
+        "--timeout",
+        type=seconds,
+        metavar="SECONDS",
+        help="a variant not compiled within SECONDS is a row saying so",
+    )
     p.set_defaults(run=run)
 
 
@@ -67,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
     variants = from_vary(args.vary, platforms) if args.vary else from_file(args.variants, platforms)
     cache = None if args.no_cache else Cache(args.cache_dir or default_folder())
     jobs = args.jobs or default_jobs()
-    rows = run_sweep(args.plan, variants, jobs, args.cluster, cache)
+    rows = run_sweep(args.plan, variants, jobs, args.cluster, cache, timeout=args.timeout)
     text = table_text(rows, fmt)
     if args.out is None:
         sys.stdout.write(text)

@@ -63,7 +63,24 @@ def add_parser(sub: Any, name: str) -> None:
         help="compile plans on a Ray cluster: ray://HOST:PORT, HOST:PORT or auto "
         "(pip install 'cellengine[cluster]')",
     )
+    p.add_argument(
+        "--timeout",
+        type=seconds,
+        metavar="SECONDS",
+        help="a file not checked within SECONDS is reported so and its worker stopped",
+    )
     p.set_defaults(run=run)
+
+
+def seconds(text: str) -> float:
+    """``--timeout``'s value: a number of seconds above 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: '{text}'") from None
+    if not value > 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"must be more than 0 seconds, got {text}")
+    return value
 
 
 def run(args: argparse.Namespace) -> int:
@@ -76,6 +93,7 @@ def run(args: argparse.Namespace) -> int:
         jobs=args.jobs,
         cache=cache,
         cluster=args.cluster,
+        timeout=args.timeout,
     )
     {"text": _text, "json": _json, "github": _github}[args.format](results)
     return EXIT_OK if all(not r.problems for r in results) else EXIT_INVALID
@@ -87,6 +105,7 @@ def validate_paths(
     jobs: int | None = 1,
     cache: Cache | None = None,
     cluster: str | None = None,
+    timeout: float | None = None,
 ) -> list[Result]:
     """Every cell, objects and plan file in ``paths``, in that order; with
     ``compile_plans``, every plan is also compiled to motion (skills, planning, limits,
@@ -104,7 +123,7 @@ def validate_paths(
     tasks = [(files[i][0], files[i]) for i in todo]
     jobs = default_jobs() if jobs is None else jobs
     if compile_plans:
-        outcomes = dispatch(tasks, Checker(True).check, check_file, jobs, cluster)
+        outcomes = dispatch(tasks, Checker(True).check, check_file, jobs, cluster, timeout)
     else:  # checking files alone is quick
         checker = Checker(False)
         outcomes = ((k, checker.check(arg)) for k, (_, arg) in enumerate(tasks))

@@ -7,6 +7,7 @@ from __future__ import annotations
 import os
 import shutil
 import signal
+import time
 from pathlib import Path
 
 import pytest
@@ -120,3 +121,30 @@ def test_a_cache_folder_given_is_used(
 def test_jobs_must_be_positive(cells: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["validate", "--jobs", "0", "a"]) == 2
     assert capsys.readouterr().err == "--jobs must be at least 1, got 0\n"
+
+
+def test_a_plan_past_the_timeout_is_said_and_the_rest_checked(
+    cells: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    original = validate.Checker.compile
+
+    def slow_on_b(self: validate.Checker, loaded):  # type: ignore[no-untyped-def]
+        if loaded.plan.file.parent.name == "b":
+            time.sleep(60)
+        original(self, loaded)
+
+    monkeypatch.setattr(validate.Checker, "compile", slow_on_b)
+    code, out = _validate(capsys, "--jobs", "1", "--no-cache", "--timeout", "10")
+    assert code == 1
+    assert "b/plan_straight.yaml: not checked: it took longer than the 10 s allowed" in out
+    assert "a/plan_straight.yaml: ok (plan)" in out
+
+
+@pytest.mark.parametrize("value", ["0", "-1", "inf", "x"])
+def test_the_timeout_is_seconds_above_0(
+    cells: Path, capsys: pytest.CaptureFixture[str], value: str
+) -> None:
+    with pytest.raises(SystemExit) as e:
+        main(["validate", "--timeout", value, "a"])
+    assert e.value.code == 2
+    assert "--timeout: " in capsys.readouterr().err
