@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from cellengine.errors import InputError, Problem
 from cellengine.info.files import Reads, noted, real, recording
@@ -17,6 +17,8 @@ if TYPE_CHECKING:
     from cellengine.context import PlanningContext
 
 KINDS = ("cell", "objects", "plan")
+K = TypeVar("K")
+V = TypeVar("V")
 _KEYS = {"plan": ("steps",), "cell": ("robots",), "objects": ("cables", "containers")}
 
 
@@ -40,10 +42,15 @@ class Result:
         return cls(file, kind, _problems(outcome["problems"]), _problems(outcome["warnings"]))
 
 
+# cells whose world and planning context a checker keeps: a folder's plans of one cell are
+# checked one after another, and a few hundred boards would otherwise all stay in memory
+KEPT_CELLS = 4
+
+
 class Checker:
     """Checks files one at a time, in one process: each cell loaded once, whether it loads
     or not (plans sharing a broken cell do not load it again each), and its planning
-    context built once for the plans that use it."""
+    context built once for the plans that use it (the last KEPT_CELLS cells' are kept)."""
 
     def __init__(self, compile_plans: bool) -> None:
         self.compile_plans = compile_plans
@@ -68,7 +75,7 @@ class Checker:
                     built: World | InputError = world
                 except InputError as e:
                     built = e
-            self._worlds[key] = (built, reads)
+            _keep(self._worlds, key, (built, reads))
         loaded, reads = self._worlds[key]
         noted(reads)
         if isinstance(loaded, InputError):
@@ -85,10 +92,17 @@ class Checker:
         if key not in self._contexts:
             with recording() as reads:
                 built = build_context(world)
-            self._contexts[key] = (built, reads)
+            _keep(self._contexts, key, (built, reads))
         context, reads = self._contexts[key]
         noted(reads)
         compile_loaded(loaded, context=context)
+
+
+def _keep(kept: dict[K, V], key: K, value: V) -> None:
+    """``kept[key] = value``, the oldest entry dropped past KEPT_CELLS."""
+    kept[key] = value
+    while len(kept) > KEPT_CELLS:
+        del kept[next(iter(kept))]
 
 
 def check_file(task: tuple[Path, bool]) -> Result | None:

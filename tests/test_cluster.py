@@ -6,51 +6,26 @@ from __future__ import annotations
 
 import os
 import shutil
-import socket
 import subprocess
 import sys
-import time
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 from bench.boards import make_board
+from bench.ray_head import ray_head as local_ray_head
 from cellengine.cache import Cache
 from cellengine.cli import main
 from tests.conftest import CELLS, ROOT
 
-RAY = Path(sys.executable).parent / "ray"
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
 
 @pytest.fixture(scope="module")
-def ray_head(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
+def ray_head() -> Iterator[str]:
     """A Ray head on 127.0.0.1 with two CPUs (two workers at a time), stopped after the
     module's tests; its Ray Client address."""
-    client = _free_port()
-    log = tmp_path_factory.mktemp("ray") / "head.log"
-    cmd = [str(RAY), "start", "--head", "--block", "--node-ip-address=127.0.0.1"]
-    cmd += [f"--port={_free_port()}", f"--ray-client-server-port={client}", "--num-cpus=2"]
-    cmd += ["--include-dashboard=false", "--disable-usage-stats"]
-    cmd += ["--object-store-memory=100000000"]
-    with open(log, "w") as out:
-        head = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT)
-    try:
-        deadline = time.monotonic() + 90
-        while "Ray runtime started" not in log.read_text():
-            assert head.poll() is None, log.read_text()
-            assert time.monotonic() < deadline, log.read_text()
-            time.sleep(0.2)
-        yield f"ray://127.0.0.1:{client}"
-    finally:
-        head.terminate()  # --block: the head stops every process it started
-        head.wait(timeout=60)
+    with local_ray_head(cpus=2) as address:
+        yield address
 
 
 @pytest.fixture(scope="module")

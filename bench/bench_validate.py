@@ -1,0 +1,117 @@
+"""Wall time of `cellengine validate` compiling many plans (issue #18).
+
+  --cells            `validate cells/`: every plan compiled, one worker and one per core,
+                     and again with the compile cache filled (goals: <= 8 s, <= 1 s)
+  --boards N         N generated boards (bench/boards.py, seeds from --seed): one worker,
+                     two, and a local Ray head with two CPUs; the three outputs compared
+
+Run: .venv/bin/python bench/bench_validate.py --cells --boards 200 [--timeout S] [--out F]
+Each run is `cellengine validate ... --format json` in a fresh process, interpreter start
+included; --timeout is validate's own (a plan past it is reported, its worker stopped).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from bench.boards import make_board  # noqa: E402
+from bench.ray_head import ray_head  # noqa: E402
+
+EXE = [sys.executable, "-m", "cellengine", "validate"]
+
+
+def _timed(args: list[str], cwd: Path) -> tuple[float, subprocess.CompletedProcess[str]]:
+    t0 = time.perf_counter()
+    run = subprocess.run(EXE + args, cwd=cwd, capture_output=True, text=True)
+    return time.perf_counter() - t0, run
+
+
+def cells(runs: int) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for name, extra in (("one_worker", ["-j", "1"]), ("one_per_core", [])):
+        times = [_timed(["cells/", "--no-cache", *extra], ROOT)[0] for _ in range(runs)]
+        out[name] = times
+        print(f"validate cells/ --no-cache {' '.join(extra)}: {_show(times)}", flush=True)
+    with tempfile.TemporaryDirectory() as cache:
+        first, run = _timed(["cells/", "--cache-dir", cache], ROOT)
+        assert run.returncode == 0, run.stdout + run.stderr
+        times = [_timed(["cells/", "--cache-dir", cache], ROOT)[0] for _ in range(runs)]
+    out["cache_filling"], out["cached"] = first, times
+    print(f"validate cells/ filling the cache: {first:.2f} s; cached: {_show(times)}")
+    return out
+
+
+def boards(n: int, seed: int, timeout: float | None) -> dict[str, Any]:
+    with tempfile.TemporaryDirectory() as tmp:
+        top = Path(tmp)
+        for s in range(seed, seed + n):
+            make_board(s, top / "boards" / f"board_{s}")
+        args = ["boards/", "--no-cache", "--format", "json"]
+        args += [] if timeout is None else ["--timeout", f"{timeout:g}"]
+        runs: dict[str, tuple[float, subprocess.CompletedProcess[str]]] = {}
+        runs["one_worker"] = _timed([*args, "-j", "1"], top)
+        print(f"{n} boards, one worker: {runs['one_worker'][0]:.1f} s", flush=True)
+        runs["two_workers"] = _timed([*args, "-j", "2"], top)
+        print(f"{n} boards, two workers: {runs['two_workers'][0]:.1f} s", flush=True)
+        with ray_head(cpus=2) as address:
+            runs["ray"] = _timed([*args, "--cluster", address], top)
+        print(f"{n} boards, local Ray head (2 CPUs): {runs['ray'][0]:.1f} s", flush=True)
+    outputs = {k: r.stdout for k, (_, r) in runs.items()}
+    same = len(set(outputs.values())) == 1
+    report = json.loads(outputs["one_worker"])
+    plans = [f for f in report["files"] if f["kind"] == "plan" or f["file"].endswith("plan.yaml")]
+    timed_out = [
+        f["file"] for f in plans if any("s allowed" in p["message"] for p in f["problems"])
+    ]
+    failed = [f["file"] for f in plans if not f["ok"]]
+    print(
+        f"identical outputs: {same}; plans {len(plans)}, compiled {len(plans) - len(failed)}, "
+        f"refused {len(failed) - len(timed_out)}, past the timeout {len(timed_out)}"
+    )
+    return {
+        "boards": n,
+        "seed": seed,
+        "timeout_s": timeout,
+        "wall_s": {k: t for k, (t, _) in runs.items()},
+        "identical": same,
+        "plans": len(plans),
+        "failed": failed,
+        "timed_out": timed_out,
+    }
+
+
+def _show(times: list[float]) -> str:
+    return f"median {statistics.median(times):.2f} s (min {min(times):.2f}, max {max(times):.2f})"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--cells", action="store_true")
+    ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--boards", type=int, default=0)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--timeout", type=float)
+    ap.add_argument("--out", type=Path)
+    args = ap.parse_args()
+    results: dict[str, Any] = {}
+    if args.cells:
+        results["cells"] = cells(args.runs)
+    if args.boards:
+        results["boards"] = boards(args.boards, args.seed, args.timeout)
+    if args.out:
+        args.out.write_text(json.dumps(results, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()
