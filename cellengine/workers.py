@@ -21,6 +21,9 @@ from typing import Any, Generic, TypeVar
 
 T = TypeVar("T")
 R = TypeVar("R")
+# a worker holding more after a task is replaced by a fresh one (a board's search can take
+# a few GB; a few hundred boards in one long-lived worker would keep the most any took)
+RETIRE_BYTES = 1 << 30
 
 
 @dataclass(frozen=True)
@@ -69,19 +72,23 @@ def default_jobs() -> int:
 
 
 def run_tasks(
-    fn: Callable[[T], R], tasks: Sequence[T], jobs: int, timeout: float | None = None
+    fn: Callable[[T], R],
+    tasks: Sequence[T],
+    jobs: int,
+    timeout: float | None = None,
+    retire_bytes: int = RETIRE_BYTES,
 ) -> Iterator[tuple[int, R | Crashed | Raised]]:
     """``fn(task)`` for every task in up to ``jobs`` worker processes, yielding (index,
     result) as each ends, in the order they end; :class:`Raised` when ``fn`` raised,
     :class:`Crashed` when its worker died or was stopped after ``timeout`` seconds on the
-    task. ``fn`` and the tasks must be picklable where processes are spawned rather than
-    forked."""
+    task. A worker past ``retire_bytes`` of memory after a task is replaced. ``fn`` and
+    the tasks must be picklable where processes are spawned rather than forked."""
     ctx = _context()
     pending = list(range(len(tasks)))[::-1]  # popped from the end: first task first
     workers: list[_Worker[T]] = []
     try:
         for _ in range(min(jobs, len(tasks))):
-            workers.append(_start(ctx, fn))
+            workers.append(_start(ctx, fn, retire_bytes))
         for w in workers:
             _give(w, tasks, pending)
         while any(w.task is not None for w in workers):
@@ -106,7 +113,7 @@ def run_tasks(
                     result, gone = Crashed(f"it took longer than the {timeout:g} s allowed"), True
                 if gone:  # another worker takes its place
                     w.conn.close()
-                    workers[workers.index(w)] = w = _start(ctx, fn)
+                    workers[workers.index(w)] = w = _start(ctx, fn, retire_bytes)
                 w.task = None
                 yield index, result
                 _give(w, tasks, pending)
@@ -116,12 +123,15 @@ def run_tasks(
 
 
 def _answer(w: _Worker[T]) -> tuple[Any, bool]:
-    """The worker's answer, and whether it is gone (died before answering)."""
+    """The worker's answer, and whether it is gone (died before answering, or retired)."""
     try:
-        return w.conn.recv(), False
+        answer, retired = w.conn.recv()
     except (EOFError, OSError):
         w.process.join()
         return Crashed.of_exit(w.process.exitcode), True
+    if retired:
+        w.process.join()
+    return answer, retired
 
 
 def _context() -> Any:
@@ -130,9 +140,9 @@ def _context() -> Any:
     return multiprocessing.get_context("fork" if "fork" in methods else "spawn")
 
 
-def _start(ctx: Any, fn: Callable[[T], R]) -> _Worker[T]:
+def _start(ctx: Any, fn: Callable[[T], R], retire_bytes: int) -> _Worker[T]:
     parent, child = ctx.Pipe()
-    process = ctx.Process(target=_serve, args=(fn, child), daemon=True)
+    process = ctx.Process(target=_serve, args=(fn, child, retire_bytes), daemon=True)
     process.start()
     child.close()
     return _Worker(process, parent)
@@ -155,8 +165,11 @@ def _stop(w: _Worker[T]) -> None:
         w.process.join()
 
 
-def _serve(fn: Callable[[Any], Any], conn: Connection) -> None:
-    """A worker's loop: a task in, its result out, until None."""
+def _serve(fn: Callable[[Any], Any], conn: Connection, retire_bytes: int) -> None:
+    """A worker's loop: a task in, its result out (and whether it retires), until None. A
+    worker whose memory passed ``retire_bytes`` retires after answering: what a large
+    compile took is given back, where a long-lived process would keep it (the allocator
+    rarely returns it), and a fresh worker takes the next task."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     while True:
         try:
@@ -169,7 +182,20 @@ def _serve(fn: Callable[[Any], Any], conn: Connection) -> None:
             answer: Any = fn(task)
         except Exception as e:  # sent back whole: the parent decides what it means
             answer = Raised(e, traceback.format_exc())
+        retire = _resident_bytes() > retire_bytes
         try:
-            conn.send(answer)
+            conn.send((answer, retire))
         except Exception as e:  # the result or the exception would not pickle
-            conn.send(Raised(None, f"{type(e).__name__}: {e}\n{traceback.format_exc()}"))
+            text = f"{type(e).__name__}: {e}\n{traceback.format_exc()}"
+            conn.send((Raised(None, text), retire))
+        if retire:
+            return
+
+
+def _resident_bytes() -> int:
+    """This process's resident memory (0 where /proc is not there: it never retires)."""
+    try:
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError):
+        return 0

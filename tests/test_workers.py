@@ -66,3 +66,10 @@ def test_a_task_past_its_time_is_stopped_and_the_rest_run() -> None:
     got = dict(run_tasks(_slow_at_1, [0, 1, 2, 3], jobs=1, timeout=1.0))
     assert time.monotonic() - t0 < 20
     assert got == {0: 0, 1: Crashed("it took longer than the 1 s allowed"), 2: 2, 3: 3}
+
+
+def test_a_worker_past_its_memory_retires_and_the_next_task_gets_a_fresh_one() -> None:
+    got = dict(run_tasks(lambda _: os.getpid(), [0, 1, 2], jobs=1, retire_bytes=0))
+    assert len(set(got.values())) == 3  # a process each, none reported as crashed
+    kept = dict(run_tasks(lambda _: os.getpid(), [0, 1, 2], jobs=1))
+    assert len(set(kept.values())) == 1  # under the default: one worker for all
