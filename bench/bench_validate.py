@@ -3,7 +3,8 @@
   --cells            `validate cells/`: every plan compiled, one worker and one per core,
                      and again with the compile cache filled (goals: <= 8 s, <= 1 s)
   --boards N         N generated boards (bench/boards.py, seeds from --seed): one worker,
-                     two, and a local Ray head with two CPUs; the three outputs compared
+                     two, and a local Ray head with two CPUs (--ways: some of them); each
+                     output kept in --keep DIR, and those kept there compared
 
 Run: .venv/bin/python bench/bench_validate.py --cells --boards 200 [--timeout S] [--out F]
 Each run is `cellengine validate ... --format json` in a fresh process, interpreter start
@@ -52,39 +53,50 @@ def cells(runs: int) -> dict[str, Any]:
     return out
 
 
-def boards(n: int, seed: int, timeout: float | None) -> dict[str, Any]:
+WAYS = {"one_worker": ["-j", "1"], "two_workers": ["-j", "2"], "ray": []}
+
+
+def boards(
+    n: int, seed: int, timeout: float | None, ways: list[str], keep: Path | None
+) -> dict[str, Any]:
+    """``ways`` of validating the boards, each output kept in ``keep`` (if given) as soon as
+    it is there, and compared with the outputs already kept there (a run in parts)."""
     with tempfile.TemporaryDirectory() as tmp:
         top = Path(tmp)
         for s in range(seed, seed + n):
             make_board(s, top / "boards" / f"board_{s}")
         args = ["boards/", "--no-cache", "--format", "json"]
         args += [] if timeout is None else ["--timeout", f"{timeout:g}"]
-        runs: dict[str, tuple[float, subprocess.CompletedProcess[str]]] = {}
-        runs["one_worker"] = _timed([*args, "-j", "1"], top)
-        print(f"{n} boards, one worker: {runs['one_worker'][0]:.1f} s", flush=True)
-        runs["two_workers"] = _timed([*args, "-j", "2"], top)
-        print(f"{n} boards, two workers: {runs['two_workers'][0]:.1f} s", flush=True)
-        with ray_head(cpus=2) as address:
-            runs["ray"] = _timed([*args, "--cluster", address], top)
-        print(f"{n} boards, local Ray head (2 CPUs): {runs['ray'][0]:.1f} s", flush=True)
-    outputs = {k: r.stdout for k, (_, r) in runs.items()}
+        walls: dict[str, float] = {}
+        for way in ways:
+            if way == "ray":
+                with ray_head(cpus=2) as address:
+                    walls[way], run = _timed([*args, "--cluster", address], top)
+            else:
+                walls[way], run = _timed([*args, *WAYS[way]], top)
+            print(f"{n} boards, {way}: {walls[way]:.1f} s", flush=True)
+            if keep is not None:
+                keep.mkdir(parents=True, exist_ok=True)
+                (keep / f"{way}.json").write_text(run.stdout)
+    outputs = {p.stem: p.read_text() for p in sorted(keep.glob("*.json"))} if keep else {}
     same = len(set(outputs.values())) == 1
-    report = json.loads(outputs["one_worker"])
-    plans = [f for f in report["files"] if f["kind"] == "plan" or f["file"].endswith("plan.yaml")]
+    report = json.loads(next(iter(outputs.values())) if outputs else run.stdout)
+    plans = [f for f in report["files"] if f["file"].endswith("plan.yaml")]
     timed_out = [
         f["file"] for f in plans if any("s allowed" in p["message"] for p in f["problems"])
     ]
     failed = [f["file"] for f in plans if not f["ok"]]
     print(
-        f"identical outputs: {same}; plans {len(plans)}, compiled {len(plans) - len(failed)}, "
-        f"refused {len(failed) - len(timed_out)}, past the timeout {len(timed_out)}"
+        f"outputs kept: {sorted(outputs)}, identical: {same}; plans {len(plans)}, "
+        f"compiled {len(plans) - len(failed)}, refused {len(failed) - len(timed_out)}, "
+        f"past the timeout {len(timed_out)}"
     )
     return {
         "boards": n,
         "seed": seed,
         "timeout_s": timeout,
-        "wall_s": {k: t for k, (t, _) in runs.items()},
-        "identical": same,
+        "wall_s": walls,
+        "identical": {"ways": sorted(outputs), "same": same},
         "plans": len(plans),
         "failed": failed,
         "timed_out": timed_out,
@@ -102,13 +114,16 @@ def main() -> None:
     ap.add_argument("--boards", type=int, default=0)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--timeout", type=float)
+    ap.add_argument("--ways", default=",".join(WAYS), help=f"some of {','.join(WAYS)}")
+    ap.add_argument("--keep", type=Path, help="keep each way's output here, and compare")
     ap.add_argument("--out", type=Path)
     args = ap.parse_args()
     results: dict[str, Any] = {}
     if args.cells:
         results["cells"] = cells(args.runs)
     if args.boards:
-        results["boards"] = boards(args.boards, args.seed, args.timeout)
+        ways = args.ways.split(",")
+        results["boards"] = boards(args.boards, args.seed, args.timeout, ways, args.keep)
     if args.out:
         args.out.write_text(json.dumps(results, indent=1) + "\n")
 
