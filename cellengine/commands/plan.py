@@ -32,6 +32,11 @@ def add_parser(sub: Any, name: str) -> None:
     p.set_defaults(run=run)
 
 
+def cache_of(args: argparse.Namespace) -> Cache | None:
+    """The compile cache the options name (None with ``--no-cache``)."""
+    return None if args.no_cache else Cache(args.cache_dir or default_folder())
+
+
 def add_cache_options(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--no-cache",
@@ -119,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
     from cellengine.pipeline import write_plan_outputs
     from cellengine.runfolder import using
 
-    cache = None if args.no_cache else Cache(args.cache_dir or default_folder())
+    cache = cache_of(args)
     request = _request(args)
     if cache is not None and (hit := cache.lookup(request, OUTPUTS)) is not None:
         return _from_cache(args, hit)

@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from cellengine.cache import CACHE_ENV, Cache, default_folder
+from cellengine.commands.plan import add_cache_options, cache_of
 from cellengine.commands.validate import seconds
 from cellengine.errors import EXIT_OK, Problem, UsageError, display_path
 
@@ -42,13 +42,7 @@ def add_parser(sub: Any, name: str) -> None:
         "--jobs", "-j", type=int, metavar="N", help="worker processes (default: one per core)"
     )
     p.add_argument("--cluster", metavar="ADDRESS", help="compile on a Ray cluster (as validate)")
-    p.add_argument("--no-cache", action="store_true", help="neither use nor keep the compile cache")
-    p.add_argument(
-        "--cache-dir",
-        type=Path,
-        metavar="DIR",
-        help=f"the compile cache's folder (default: ${CACHE_ENV}, else ~/.cache/cellengine)",
-    )
+    add_cache_options(p)
     p.add_argument(
         "--timeout",
         type=seconds,
@@ -72,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError.at("the table is a .csv or a .json file", args.out)
     platforms = load_plan(args.plan).world.platforms
     variants = from_vary(args.vary, platforms) if args.vary else from_file(args.variants, platforms)
-    cache = None if args.no_cache else Cache(args.cache_dir or default_folder())
+    cache = cache_of(args)
     jobs = args.jobs or default_jobs()
     rows = run_sweep(args.plan, variants, jobs, args.cluster, cache, timeout=args.timeout)
     text = table_text(rows, fmt)

@@ -11,8 +11,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from cellengine.cache import CACHE_ENV, Cache, default_folder
+from cellengine.cache import Cache
 from cellengine.checker import Checker, Result, check_file
+from cellengine.commands.plan import add_cache_options, cache_of
 from cellengine.dispatch import dispatch
 from cellengine.errors import (
     EXIT_INVALID,
@@ -46,17 +47,7 @@ def add_parser(sub: Any, name: str) -> None:
         metavar="N",
         help="compile plans in N worker processes (default: one per core)",
     )
-    p.add_argument(
-        "--no-cache",
-        action="store_true",
-        help="compile every plan, neither using nor keeping the compile cache",
-    )
-    p.add_argument(
-        "--cache-dir",
-        type=Path,
-        metavar="DIR",
-        help=f"the compile cache's folder (default: ${CACHE_ENV}, else ~/.cache/cellengine)",
-    )
+    add_cache_options(p)
     p.add_argument(
         "--cluster",
         metavar="ADDRESS",
@@ -86,7 +77,7 @@ def seconds(text: str) -> float:
 def run(args: argparse.Namespace) -> int:
     if args.jobs is not None and args.jobs < 1:
         raise UsageError(Problem(f"--jobs must be at least 1, got {args.jobs}"))
-    cache = None if args.no_cache else Cache(args.cache_dir or default_folder())
+    cache = cache_of(args)
     results = validate_paths(
         args.paths,
         compile_plans=not args.no_compile,
