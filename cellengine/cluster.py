@@ -13,6 +13,7 @@ from __future__ import annotations
 import logging
 import os
 import tempfile
+import time
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
@@ -31,7 +32,13 @@ T = TypeVar("T")
 R = TypeVar("R")
 
 
-def connect(address: str) -> Any:
+# Ray Client's proxy forks a server for each connection, and that server sometimes dies at
+# birth (ray-project/ray#63202: a gRPC poller race in the fork); a new connection works.
+CONNECT_ATTEMPTS = 4
+SERVER_DIED = "Starting Ray client server failed"
+
+
+def connect(address: str, pause: float = 2.0) -> Any:
     """The ray module, connected to the cluster at ``address``."""
     try:
         import ray
@@ -39,11 +46,18 @@ def connect(address: str) -> Any:
         raise UsageError(
             Problem("--cluster needs Ray: pip install 'cellengine[cluster]'")
         ) from None
-    try:
-        ray.init(address=address, logging_level=logging.ERROR, log_to_driver=False)
-    except Exception as e:  # Ray's own: ConnectionError, ValueError, RuntimeError...
-        raise UsageError(Problem(f"cannot reach the Ray cluster at '{address}': {e}")) from None
-    return ray
+    attempt = 1
+    while True:
+        try:
+            ray.init(address=address, logging_level=logging.ERROR, log_to_driver=False)
+            return ray
+        except Exception as e:  # Ray's own: ConnectionError, ValueError, RuntimeError...
+            if SERVER_DIED not in str(e) or attempt == CONNECT_ATTEMPTS:
+                why = f"cannot reach the Ray cluster at '{address}': {e}"
+                raise UsageError(Problem(why)) from None
+        ray.shutdown()
+        time.sleep(pause)
+        attempt += 1
 
 
 def on_cluster(

@@ -182,7 +182,7 @@ def _serve(fn: Callable[[Any], Any], conn: Connection, retire_bytes: int) -> Non
             answer: Any = fn(task)
         except Exception as e:  # sent back whole: the parent decides what it means
             answer = Raised(e, traceback.format_exc())
-        retire = _resident_bytes() > retire_bytes
+        retire = _private_bytes() > retire_bytes
         try:
             conn.send((answer, retire))
         except Exception as e:  # the result or the exception would not pickle
@@ -192,10 +192,14 @@ def _serve(fn: Callable[[Any], Any], conn: Connection, retire_bytes: int) -> Non
             return
 
 
-def _resident_bytes() -> int:
-    """This process's resident memory (0 where /proc is not there: it never retires)."""
+def _private_bytes() -> int:
+    """The memory only this process holds: what its exit gives back. Pages still shared
+    with the parent since the fork are not counted (a worker forked from a large process
+    starts with the parent's resident size); 0 where /proc is not there: it never retires."""
     try:
-        with open("/proc/self/statm") as f:
-            return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
-    except (OSError, ValueError, IndexError):
+        with open("/proc/self/smaps_rollup") as f:
+            fields = dict(line.split(":", 1) for line in f if ":" in line)
+        kib = int(fields["Private_Clean"].split()[0]) + int(fields["Private_Dirty"].split()[0])
+        return kib * 1024
+    except (OSError, ValueError, KeyError, IndexError):
         return 0

@@ -10,6 +10,7 @@ import subprocess
 import sys
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -17,6 +18,8 @@ from bench.boards import make_board
 from bench.ray_head import ray_head as local_ray_head
 from cellengine.cache import Cache
 from cellengine.cli import main
+from cellengine.cluster import CONNECT_ATTEMPTS, connect
+from cellengine.errors import UsageError
 from tests.conftest import CELLS, ROOT
 
 
@@ -79,6 +82,8 @@ KILLING = """
 import os, signal, sys
 import cellengine.commands.validate as validate
 from cellengine.cli import main
+from cellengine.cluster import CONNECT_ATTEMPTS, connect
+from cellengine.errors import UsageError
 
 original = validate.check_file
 
@@ -131,6 +136,54 @@ def test_without_ray_the_flag_says_what_to_install(
     monkeypatch.setitem(sys.modules, "ray", None)  # import ray: ImportError
     assert main(["validate", "a", "--cluster", "auto", "--no-cache"]) == 2
     assert capsys.readouterr().err == "--cluster needs Ray: pip install 'cellengine[cluster]'\n"
+
+
+DIED = (
+    "Initialization failure from server:\nRuntimeError: Starting Ray client server failed. "
+    "See ray_client_server_23002.err for detailed logs."
+)
+
+
+def test_a_client_server_that_dies_at_birth_is_asked_for_again(
+    ray_head: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import ray
+
+    calls: list[str] = []
+    real_init = ray.init
+
+    def init(**kwargs: Any) -> Any:  # Ray's proxy losing the first two servers it forks
+        calls.append(kwargs["address"])
+        if len(calls) <= 2:
+            raise ConnectionAbortedError(DIED)
+        return real_init(**kwargs)
+
+    monkeypatch.setattr(ray, "init", init)
+    try:
+        assert connect(ray_head, pause=0.0) is ray and ray.is_initialized()
+        assert ray.get(ray.remote(lambda: 6 * 7).remote()) == 42
+    finally:
+        ray.shutdown()
+    assert calls == [ray_head] * 3
+
+
+def test_a_cluster_whose_servers_keep_dying_is_refused_after_some_attempts(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import ray
+
+    calls: list[str] = []
+
+    def init(**kwargs: Any) -> Any:
+        calls.append(kwargs["address"])
+        raise ConnectionAbortedError(DIED)
+
+    monkeypatch.setattr(ray, "init", init)
+    with pytest.raises(UsageError) as e:
+        connect("ray://127.0.0.1:1", pause=0.0)
+    shown = DIED.replace("\n", "\\n")  # a problem is one line
+    assert str(e.value) == f"cannot reach the Ray cluster at 'ray://127.0.0.1:1': {shown}"
+    assert len(calls) == CONNECT_ATTEMPTS
 
 
 def test_a_sweep_on_the_cluster_gives_the_local_table(tmp_path: Path, ray_head: str) -> None:

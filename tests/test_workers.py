@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import signal
 import time
+from collections.abc import Callable
 
 import pytest
 
@@ -73,3 +74,21 @@ def test_a_worker_past_its_memory_retires_and_the_next_task_gets_a_fresh_one() -
     assert len(set(got.values())) == 3  # a process each, none reported as crashed
     kept = dict(run_tasks(lambda _: os.getpid(), [0, 1, 2], jobs=1))
     assert len(set(kept.values())) == 1  # under the default: one worker for all
+
+
+def _holding(mib: int) -> Callable[[int], int]:
+    def task(_: int) -> int:
+        held.append(b"\x01" * (mib << 20))  # written, so resident and the worker's own
+        return os.getpid()
+
+    held: list[bytes] = []
+    return task
+
+
+def test_memory_shared_with_the_parent_is_not_the_workers() -> None:
+    parent = b"\x01" * (300 << 20)  # a large parent: its workers start as large
+    kept = dict(run_tasks(lambda _: os.getpid(), [0, 1, 2], jobs=1, retire_bytes=200 << 20))
+    assert len(set(kept.values())) == 1
+    grown = dict(run_tasks(_holding(250), [0, 1, 2], jobs=1, retire_bytes=200 << 20))
+    assert len(set(grown.values())) == 3
+    del parent
