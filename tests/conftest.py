@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -29,7 +30,7 @@ REMODEL = DATA / "shared" / "remodel"
 
 
 @pytest.fixture
-def write(tmp_path: Path):
+def write(tmp_path: Path) -> Callable[[str, str], Path]:
     """Write a text file under tmp_path and return its path."""
 
     def _write(name: str, text: str) -> Path:
@@ -42,7 +43,9 @@ def write(tmp_path: Path):
 
 
 @pytest.fixture(autouse=True)
-def _compile_cache(tmp_path_factory: pytest.TempPathFactory, monkeypatch: pytest.MonkeyPatch):
+def _compile_cache(
+    tmp_path_factory: pytest.TempPathFactory, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """Each test its own compile cache: no outcome leaks from one test into another (a test
     that patches the engine must see it compile), and none into the user's ~/.cache."""
     monkeypatch.setenv("CELLENGINE_CACHE_DIR", str(tmp_path_factory.mktemp("cache")))
