@@ -78,6 +78,7 @@ def boards(
             if keep is not None:
                 keep.mkdir(parents=True, exist_ok=True)
                 (keep / f"{way}.json").write_text(run.stdout)
+                (keep / f"{way}.stderr").write_text(run.stderr)
     outputs = {p.stem: p.read_text() for p in sorted(keep.glob("*.json"))} if keep else {}
     same = len(set(outputs.values())) == 1
     report = json.loads(next(iter(outputs.values())) if outputs else run.stdout)
