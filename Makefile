@@ -57,6 +57,7 @@ $(VENV)/.installed-bench: pyproject.toml | $(BIN)/python
 bench: $(VENV)/.installed-bench
 	$(BIN)/python bench/validate_speed.py
 	$(BIN)/python bench/bench_validate.py --cells
+	$(BIN)/python bench/bench_lab.py
 	$(BIN)/python bench/bench_x3d.py
 	$(BIN)/python bench/run_all.py
 
