@@ -82,8 +82,6 @@ KILLING = """
 import os, signal, sys
 import cellengine.commands.validate as validate
 from cellengine.cli import main
-from cellengine.cluster import CONNECT_ATTEMPTS, connect
-from cellengine.errors import UsageError
 
 original = validate.check_file
 
