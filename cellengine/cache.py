@@ -7,15 +7,22 @@ used only when those files still have those digests, so a moved guide recompiles
 of its cell and no other. Entries are checked, never trusted: one that does not parse, whose
 own checksum does not match, or that was made for another request or engine, is a miss.
 The folder must be as trusted as the cell files themselves (an entry is a compiled program).
+
+The folder is kept under $CELLENGINE_CACHE_MAX_MB (default 2048): a command that stores
+entries first removes the least recently used ones (a hit counts as a use) down to 80 % of
+that, as ccache does, so a CI that keeps the folder between runs does not see it grow
+without end (each engine change, another plan path or --out, is another entry).
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
 import sys
 import tempfile
+import time
 import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -28,6 +35,9 @@ from cellengine import __version__
 from cellengine.info.files import Reads
 
 CACHE_ENV = "CELLENGINE_CACHE_DIR"
+MAX_ENV = "CELLENGINE_CACHE_MAX_MB"
+DEFAULT_MAX_MB = 2048
+TMP_AGE = 3600.0  # s: a temporary file this old is a write that died, not one in progress
 FORMAT = "cellengine.cache/1"
 MAX_ENTRY_BYTES = 16 << 20  # an entry's JSON (blobs are apart); larger is not ours
 # the libraries whose behaviour a compiled program depends on
@@ -79,6 +89,7 @@ class Cache:
     def __init__(self, folder: Path) -> None:
         self.folder = folder
         self._unwritable = False  # said once
+        self._trimmed = False  # once per process: a walk of the folder is not free
 
     def lookup(self, request: Mapping[str, Any], blobs: tuple[str, ...] = ()) -> Hit | None:
         """The entry for ``request`` when every file it read is unchanged and it checks out
@@ -99,6 +110,7 @@ class Cache:
                 if hashlib.sha256(data).hexdigest() != body["blobs"][name]:
                     return None
                 got[name] = data
+            _touch(path)
             return Hit(dict(body["result"]), got)
         except (OSError, ValueError, KeyError, TypeError, AttributeError, zlib.error):
             return None  # absent, unreadable, foreign or corrupt: compiled again
@@ -123,6 +135,9 @@ class Cache:
             "blobs": {n: hashlib.sha256(b).hexdigest() for n, b in blobs.items()},
         }
         try:
+            if not self._trimmed:
+                self._trimmed = True
+                trim(self.folder, max_bytes())
             path.parent.mkdir(parents=True, exist_ok=True)
             for name, data in blobs.items():  # before the entry that vouches for them
                 _write(path.with_suffix(f".{name}.z"), zlib.compress(data, 1))
@@ -138,6 +153,58 @@ class Cache:
     def _path(self, request: Mapping[str, Any]) -> Path:
         key = hashlib.sha256(json.dumps(_canonical(request)).encode()).hexdigest()
         return self.folder / key[:2] / f"{key}.json"
+
+
+def max_bytes() -> int:
+    """$CELLENGINE_CACHE_MAX_MB in bytes (a bad value is the default: a cache setting
+    never stops a compile)."""
+    try:
+        mb = float(os.environ.get(MAX_ENV, DEFAULT_MAX_MB))
+    except ValueError:
+        mb = DEFAULT_MAX_MB
+    return int(max(mb, 0.0) * (1 << 20))
+
+
+def trim(folder: Path, limit: int) -> None:
+    """Past ``limit`` bytes, remove whole entries (the JSON and its blobs), least recently
+    used first, down to 80 % of it; and temporary files left by writes that died."""
+    entries: dict[Path, list[Path]] = {}
+    total, now = 0, time.time()
+    for path in folder.glob("??/*"):
+        try:
+            st = path.stat()
+        except OSError:
+            continue
+        if path.name.startswith(".tmp-"):
+            if now - st.st_mtime > TMP_AGE:
+                path.unlink(missing_ok=True)
+            continue
+        total += st.st_size
+        entries.setdefault(path.with_name(path.name.split(".", 1)[0] + ".json"), []).append(path)
+    if total <= limit:
+        return
+    for entry in sorted(entries, key=_used):
+        for path in entries[entry]:
+            try:
+                size = path.stat().st_size
+                path.unlink()
+                total -= size
+            except OSError:
+                continue
+        if total <= 0.8 * limit:
+            return
+
+
+def _used(entry: Path) -> float:
+    try:
+        return entry.stat().st_mtime
+    except OSError:
+        return 0.0  # blobs without their entry: unusable, first to go
+
+
+def _touch(path: Path) -> None:
+    with contextlib.suppress(OSError):  # a read-only cache is still a cache
+        os.utime(path)
 
 
 def _engines(path: Path) -> bool:

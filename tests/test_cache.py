@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import os
+import time
 from pathlib import Path
 
 import pytest
@@ -112,3 +114,52 @@ def test_the_folder_and_the_engine(tmp_path: Path, monkeypatch: pytest.MonkeyPat
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
     assert default_folder() == tmp_path / "xdg" / "cellengine"
     assert len(engine_fingerprint()) == 64
+
+
+def _fill(folder: Path, n: int, blob: int) -> list[dict[str, str]]:
+    """n entries, each with a blob of ``blob`` bytes (compressed to about that: random
+    bytes), the first stored first and last used first."""
+    requests = [{"command": "plan", "plan": f"p{k}.yaml"} for k in range(n)]
+    cache = Cache(folder)
+    cache._trimmed = True  # filled without trimming
+    for k, r in enumerate(requests):
+        cache.store(r, {}, {"k": k}, {"out": os.urandom(blob)})
+        entry = cache._path(r)
+        os.utime(entry, (time.time() - 1000 + k, time.time() - 1000 + k))
+    return requests
+
+
+def test_past_its_size_the_least_recently_used_entries_go(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    folder = tmp_path / "cache"
+    requests = _fill(folder, 10, 100_000)  # about 1 MB
+    assert Cache(folder).lookup(requests[0], ("out",)) is not None  # used now: the newest
+    dead = folder / "00" / ".tmp-died"
+    dead.parent.mkdir(exist_ok=True)
+    dead.write_bytes(b"half")
+    then = time.time() - 2 * cache_module.TMP_AGE
+    os.utime(dead, (then, then))
+    monkeypatch.setenv(cache_module.MAX_ENV, "0.5")  # 524 288 bytes: down to 419 430
+    cache = Cache(folder)
+    cache.store({"command": "validate", "plan": "new.yaml"}, {}, {"new": True})
+    kept = [k for k, r in enumerate(requests) if cache.lookup(r, ("out",)) is not None]
+    assert kept == [0, 7, 8, 9]  # the one just used and the three last stored
+    assert not dead.exists()
+    blobs = list(folder.glob("*/*.z"))
+    assert len(blobs) == 4  # each entry's blob went with it
+    assert all((p.parent / (p.name.split(".")[0] + ".json")).exists() for p in blobs)
+    sizes = sum(p.stat().st_size for p in folder.glob("*/*"))
+    assert sizes <= 0.8 * 0.5 * (1 << 20) + 10_000  # and the entry just stored
+
+
+def test_under_its_size_nothing_goes_and_a_bad_size_is_the_default(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    folder = tmp_path / "cache"
+    requests = _fill(folder, 3, 1000)
+    monkeypatch.setenv(cache_module.MAX_ENV, "a lot")
+    assert cache_module.max_bytes() == cache_module.DEFAULT_MAX_MB << 20
+    cache = Cache(folder)
+    cache.store({"command": "validate", "plan": "new.yaml"}, {}, {"new": True})
+    assert all(cache.lookup(r, ("out",)) is not None for r in requests)
