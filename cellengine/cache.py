@@ -177,7 +177,8 @@ def trim(folder: Path, limit: int) -> None:
             continue
         if path.name.startswith(".tmp-"):
             if now - st.st_mtime > TMP_AGE:
-                path.unlink(missing_ok=True)
+                with contextlib.suppress(OSError):  # trimming never stops a store
+                    path.unlink()
             continue
         total += st.st_size
         entries.setdefault(path.with_name(path.name.split(".", 1)[0] + ".json"), []).append(path)
