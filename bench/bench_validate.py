@@ -133,6 +133,8 @@ def main() -> None:
         results["cells"] = cells(args.runs)
     if args.boards:
         ways = args.ways.split(",")
+        if unknown := [w for w in ways if w not in WAYS]:
+            ap.error(f"--ways: unknown {', '.join(unknown)}; choose from {', '.join(WAYS)}")
         results["boards"] = boards(args.boards, args.seed, args.timeout, ways, args.keep)
     if args.out:
         args.out.write_text(json.dumps(results, indent=1) + "\n")

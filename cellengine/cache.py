@@ -19,6 +19,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import math
 import os
 import sys
 import tempfile
@@ -161,6 +162,8 @@ def max_bytes() -> int:
     try:
         mb = float(os.environ.get(MAX_ENV, DEFAULT_MAX_MB))
     except ValueError:
+        mb = DEFAULT_MAX_MB
+    if not math.isfinite(mb):  # "nan", "inf"
         mb = DEFAULT_MAX_MB
     return int(max(mb, 0.0) * (1 << 20))
 

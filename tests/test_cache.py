@@ -158,6 +158,9 @@ def test_under_its_size_nothing_goes_and_a_bad_size_is_the_default(
 ) -> None:
     folder = tmp_path / "cache"
     requests = _fill(folder, 3, 1000)
+    for bad in ("nan", "inf"):
+        monkeypatch.setenv(cache_module.MAX_ENV, bad)
+        assert cache_module.max_bytes() == cache_module.DEFAULT_MAX_MB << 20
     monkeypatch.setenv(cache_module.MAX_ENV, "a lot")
     assert cache_module.max_bytes() == cache_module.DEFAULT_MAX_MB << 20
     cache = Cache(folder)
