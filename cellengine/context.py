@@ -36,6 +36,8 @@ class PlanningContext:
     # cell.yaml's clearance (m): the gate's least distance between the arms and from the
     # environment, and the async schedule's between two arms moving on their own
     clearance: float = DEFAULT_CLEARANCE
+    # the plan's execution: "sequential" keeps a family's robots to one at a time
+    execution: str = "split"
     probe: ToolProbe = field(init=False)  # on ``scene``
 
     def __post_init__(self) -> None:
@@ -53,6 +55,9 @@ class PlanningContext:
     def with_masses(self, masses: Mapping[str, float]) -> PlanningContext:
         """The same cell with other measured masses (a replan after a weighing)."""
         return replace(self, masses=MappingProxyType(dict(masses)))
+
+    def with_execution(self, execution: str) -> PlanningContext:
+        return self if execution == self.execution else replace(self, execution=execution)
 
     @property
     def speed(self) -> Speed:

@@ -29,6 +29,7 @@ from importlib.metadata import entry_points
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
+from cellengine.concurrency import Overlap
 from cellengine.errors import InputError, Problem
 from cellengine.program import Program, Segment
 from cellengine.skill import Skill
@@ -50,13 +51,17 @@ class Candidate:
     to the latest choice that decided it, to a candidate that decides it otherwise.
     ``failed_at(j)``: called when the compiler could not compile the candidate's segment
     ``j``, so the family can leave out, before building them, the candidates it has not
-    offered yet that would fail there too (the compiler passes over those it is given)."""
+    offered yet that would fail there too (the compiler passes over those it is given).
+    ``overlap``: the rules under which the arms' segments may run at once (unless the plan's
+    execution is ``sequential``)."""
 
     segments: tuple[Segment, ...]
     then: Callable[[], Iterator[Candidate]] | None = None
     report: Callable[[Program], Mapping[str, Any]] | None = None
     decides: Mapping[str, str] = field(default_factory=dict)
     failed_at: Callable[[int], None] | None = None
+    # what lets the arms' segments run at once (execute/streams.py); None: one after another
+    overlap: Overlap | None = None
 
 
 @runtime_checkable

@@ -20,6 +20,7 @@ from cellengine.errors import InputError, Problem, StepError
 from cellengine.execute.candidates import compile_candidates
 from cellengine.execute.compile import Compiler
 from cellengine.execute.home import return_home
+from cellengine.execute.overlap import overlapped, streams_json
 from cellengine.family import SkillFamily, families, skill_name
 from cellengine.info.load import LoadedPlan, load_plan
 from cellengine.info.plan import Plan
@@ -113,12 +114,13 @@ def compile_loaded(
     if masses is not None:
         ctx = ctx.with_masses(masses)
     chosen = strategy or plan.execution
+    ctx = ctx.with_execution(chosen)
     compiler = Compiler(
         ctx.world,
         ctx.cell,
         ctx.checker,
         ctx.home,
-        chosen,  # type: ignore[arg-type]
+        "split" if chosen == "sequential" else chosen,  # type: ignore[arg-type]
         merge=merge,  # type: ignore[arg-type]
         clearance=ctx.clearance,
     )
@@ -136,6 +138,13 @@ def compile_loaded(
             return_home(compiler, ctx.home, len(plan.steps) - 1)
         program = compiler.program()
         report: dict[str, Any] = {}
+        rules = next((c.overlap for c in taken if c.overlap is not None), None)
+        if rules is not None:
+            alone = program.duration
+            program, why = overlapped(
+                program, rules, ctx.world, ctx.cell, ctx.checker.scene, ctx.clearance
+            )
+            report["streams"] = streams_json(program, alone, why)
         for candidate in taken:
             if candidate.report is not None:
                 report.update(candidate.report(program))

@@ -143,10 +143,41 @@ class CompiledSegment:
 
 
 @dataclass(frozen=True)
+class Scheduled:
+    """A compiled segment's place in its arms' streams, when the arms work at once."""
+
+    index: int  # in the program as compiled, one segment after another
+    segment: Segment
+    arms: tuple[str, ...]
+    start: float  # s from the program's start
+    end: float
+    ready: float  # when its order let it start (its arms free, what it comes after ended)
+    why: str | None  # why it starts after ``ready`` (a shared zone, the clearance); else None
+    part: tuple[str, int] | None  # (task, part) of the family's rules
+
+    @property
+    def label(self) -> str:
+        return self.segment.label
+
+    @property
+    def step(self) -> int:
+        return self.segment.step
+
+    @property
+    def wait(self) -> float:
+        return self.start - self.ready
+
+
+@dataclass(frozen=True)
 class Program:
+    """``segments``: what a driver plays, one after another. When the arms work at once
+    (execute/streams.py) they are the pieces between instants at which any arm's segment
+    starts or ends, and ``streams`` places each segment as compiled on the time axis."""
+
     joint_names: tuple[str, ...]
     segments: tuple[CompiledSegment, ...]
     events: tuple[TimedEvent, ...]
+    streams: tuple[Scheduled, ...] = ()
 
     @property
     def duration(self) -> float:

@@ -24,16 +24,21 @@ class LabFamily:
         # the allocator and the motion stack: when a plan is compiled, not when parsed
         from cellengine.skills.lab_plan import mission_json, plan_lab_steps
 
-        lab = plan_lab_steps(ctx, steps)
+        overlap = ctx.execution != "sequential"
+        lab = plan_lab_steps(ctx, steps, overlap)
 
         def report(program: Program) -> Mapping[str, Any]:
-            spans = [
-                (s.segment, s.trajectory.start_time, s.trajectory.end_time)
-                for s in program.segments
-            ]
+            if program.streams:  # the robots at once: each segment where it was placed
+                spans = [(s.part, s.start, s.end) for s in program.streams]
+            else:
+                spans = [
+                    (s.segment.facts.get("mission"), s.trajectory.start_time, s.trajectory.end_time)
+                    for s in program.segments
+                ]
             return {"mission": mission_json(lab.mission, spans)}
 
-        yield Candidate(tuple(lab.segments), report=report)
+        rules = lab.overlap(ctx.world) if overlap else None
+        yield Candidate(tuple(lab.segments), report=report, overlap=rules)
 
 
 FAMILY = LabFamily()

@@ -23,6 +23,7 @@ so no two robots are ever in the shared zone together except when they cooperate
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections import OrderedDict
 from collections.abc import Callable, Mapping, Sequence
@@ -44,9 +45,10 @@ from cellengine.allocate import (
     Zone,
     allocate,
 )
-from cellengine.allocation.options import Action
+from cellengine.allocation.options import Action, relocation_id
 from cellengine.arrays import Mat
 from cellengine.choices import candidates, known_masses, resolve
+from cellengine.concurrency import Overlap, SharedZone
 from cellengine.context import PlanningContext
 from cellengine.errors import InputError, Problem, StepError, at_step
 from cellengine.motion.collision import CollisionChecker
@@ -88,10 +90,31 @@ class LabPlan:
     segments: list[Segment]
     state: LabState
 
+    def overlap(self, world: World) -> Overlap:
+        """What lets both robots work at once (cellengine/concurrency.py): the mission's
+        precedence, its cooperations kept in order, the cell's shared zones."""
+        after = {
+            t.id: frozenset(t.after) | {relocation_id(b.name) for b in t.blocked_by}
+            for t in self.problem.tasks
+        }
+        together = {
+            (task, j)
+            for task, option in self.mission.options.items()
+            for j, part in enumerate(option.segments)
+            if part.inserted == "cooperation"
+        }
+        zones = tuple(
+            SharedZone(name, tuple(z.min), tuple(z.max), frozenset(z.robots))
+            for name, z in world.cell.zones.items()
+            if len(z.robots) > 1
+        )
+        return Overlap("mission", after, frozenset(together), zones)
 
-def plan_lab_steps(ctx: PlanningContext, steps: Sequence[Skill]) -> LabPlan:
+
+def plan_lab_steps(ctx: PlanningContext, steps: Sequence[Skill], overlap: bool = False) -> LabPlan:
     """The mission and its segments (see the module notes), with the masses measured so
-    far (``ctx.masses``) over objects.yaml's."""
+    far (``ctx.masses``) over objects.yaml's. ``overlap``: the robots will work at once, so
+    a robot goes back to its rest after its work only when it ends in a shared zone."""
     world, cell = ctx.world, ctx.cell
     known = known_masses(world, ctx.masses)
     reach = _Reach(ctx, dict)  # no container for the allocation's reach tests
@@ -107,6 +130,7 @@ def plan_lab_steps(ctx: PlanningContext, steps: Sequence[Skill]) -> LabPlan:
     except ValueError as e:
         raise InputError(Problem(str(e))) from None
     tcp = {name: ctx.tcp_home(name) for name in cell.arms}
+    kept = _kept(mission, lambda t: _object_of(by_id, t, known)) if overlap else frozenset()
     b = lm.Builder(LabState.start(world, tcp))
     reach.where = lambda: b.state.where
     for task in mission.order:
@@ -118,13 +142,60 @@ def plan_lab_steps(ctx: PlanningContext, steps: Sequence[Skill]) -> LabPlan:
             with at_step(i):
                 _clear(b, world, reach, name, _actions(mission, task), f"steps[{i}] clear {name}")
             for arm in dict.fromkeys(a.robot for a in _actions(mission, task)):
-                b.add(f"steps[{i}] clear {name}: {arm} back", [lm.transit(arm, tcp[arm])])
+                if not overlap or _in_shared(world, b.state.tcp[arm]):
+                    b.add(f"steps[{i}] clear {name}: {arm} back", [lm.transit(arm, tcp[arm])])
             continue
         i, step = by_id[task]
         with at_step(i):
-            _step(ctx, b, reach, mission, task, i, step, known, tcp)
+            _step(ctx, b, reach, mission, task, i, step, known, tcp, kept if overlap else None)
+    if overlap:
+        _all_back(b, tcp)
     b.tag = {}
     return LabPlan(problem, mission, b.segments, b.state)
+
+
+def _kept(mission: Mission, object_of: Callable[[str], str | None]) -> frozenset[Action]:
+    """The places a robot need not do when the robots work at once: those its own next
+    action picks the same object up again after, with no task between them on it."""
+    out: set[Action] = set()
+    order = list(mission.order)
+    for acts in mission.actions.values():
+        for a, nxt in itertools.pairwise(acts):
+            name = object_of(a.step)
+            if a.kind != "place" or nxt.kind != "pick" or name is None:
+                continue
+            if object_of(nxt.step) != name or a.step == nxt.step:
+                continue
+            between = order[order.index(a.step) + 1 : order.index(nxt.step)]
+            if all(object_of(t) != name for t in between):
+                out.add(a)
+    return frozenset(out)
+
+
+def _object_of(
+    by_id: Mapping[str, tuple[int, Skill]], task: str, known: Mapping[str, float]
+) -> str | None:
+    """The object a task works on (a relocation: its blocker)."""
+    if task not in by_id:
+        return task.split(":", 1)[1] if ":" in task else None
+    step = by_id[task][1]
+    obj = getattr(step, "object", None)
+    return None if obj is None else resolve(obj, known)
+
+
+def _all_back(b: lm.Builder, tcp: Mapping[str, Mat]) -> None:
+    """Every robot not at its rest goes back, as part of the last task it worked in: the
+    plan ends where it started, as when the robots work one after another."""
+    for arm, T in tcp.items():
+        if np.allclose(b.state.tcp[arm], T, atol=1e-9):
+            continue
+        last = next((s for s in reversed(b.segments) if arm in s.arms()), None)
+        if last is None:
+            continue
+        b.state = replace(b.state, step=last.step)
+        b.tag = {"mission": last.facts["mission"]}
+        head = last.label.split(":", 1)[0]
+        b.add(f"{head}: {arm} back to its rest", [lm.transit(arm, T)])
 
 
 def _step(
@@ -137,13 +208,16 @@ def _step(
     step: Skill,
     known: Mapping[str, float],
     tcp: Mapping[str, Mat],
+    kept: frozenset[Action] | None,
 ) -> None:
-    """The segments of one step's task in the mission."""
+    """The segments of one step's task in the mission; ``kept``: the robots work at once,
+    and these places are not done (the robot keeps the object for its next pick)."""
     world, cell = ctx.world, ctx.cell
     assert isinstance(step, LabSkill)  # _tasks refused any other
     b.state = replace(b.state, step=i)
     where = f"steps[{i}] {step.skill}"
-    actions = _actions(mission, task)
+    overlap = kept is not None
+    actions = [a for a in _actions(mission, task) if a not in (kept or ())]
     for k, action in enumerate(actions):
         prev = actions[k - 1] if k else None
         b.tag = {"mission": (task, _part(mission, task, action))}
@@ -155,16 +229,47 @@ def _step(
             )
         _do(b, world, cell, reach, step, action, known, where, actions)
     # as the published platform does: each robot retracts after its work, so the next
-    # task finds the shared zone clear; a turner first puts the cap down, once the
-    # holder has gone
+    # task finds the shared zone clear (working at once, only one that ends in it); a
+    # turner first puts the cap down, once the holder has gone
     turners = [a.robot for a in actions if a.kind == "turn_cap"]
     for arm in dict.fromkeys(a.robot for a in actions if a.robot not in turners):
-        b.add(f"{where}: {arm} back to its rest", [lm.transit(arm, tcp[arm])])
+        place = next((a for a in kept or () if a.step == task and a.robot == arm), None)
+        _back(b, reach, world, cell, step, arm, tcp[arm], known, where, overlap, place)
     for arm in turners:
         name = resolve(step.object, known)
         T = _cap_place(world, b, reach, arm)
         lm.put_cap_down(b, reach, world, arm, name, T, where)
-        b.add(f"{where}: {arm} back to its rest", [lm.transit(arm, tcp[arm])])
+        _back(b, reach, world, cell, step, arm, tcp[arm], known, where, overlap)
+
+
+def _back(
+    b: lm.Builder,
+    reach: _Reach,
+    world: World,
+    cell: CellModel,
+    step: LabSkill,
+    arm: str,
+    rest: Mat,
+    known: Mapping[str, float],
+    where: str,
+    overlap: bool,
+    place: Action | None = None,
+) -> None:
+    """``arm`` back to its ``rest`` after its work in a step: always one after another;
+    at once, only out of a shared zone. An arm keeping what it holds for its next pick
+    (``place``: the place it left out) goes back with it as it holds it, or, where that
+    is out of reach, puts it down after all."""
+    if overlap and not _in_shared(world, b.state.tcp[arm]):
+        return
+    held = b.state.held.get(arm)
+    if held is not None and place is not None:
+        T = np.array(b.state.tcp[arm], dtype=float)
+        T[:3, 3] = np.asarray(rest)[:3, 3]
+        if reach(arm, T, (held.name,)):
+            b.add(f"{where}: {arm} back to its rest", [lm.transit(arm, T)])
+            return
+        _do(b, world, cell, reach, step, place, known, where)
+    b.add(f"{where}: {arm} back to its rest", [lm.transit(arm, rest)])
 
 
 # ------------------------------------------------------------------------------ the problem
@@ -368,15 +473,14 @@ def _part(mission: Mission, task: str, action: Action) -> int:
 
 
 def mission_json(
-    mission: Mission, segments: Sequence[tuple[Segment, float, float]]
+    mission: Mission, segments: Sequence[tuple[Any, float, float]]
 ) -> list[dict[str, Any]]:
     """report.json's ``mission``: each part of each step (one robot's run, a handover side,
     a cooperation, an obstacle moved), its robots, its start and end in the program (s)
-    and the allocator's estimate of them; ``segments``: each compiled segment with its
-    start and end."""
+    and the allocator's estimate of them; ``segments``: each compiled segment's mission
+    part (task, index; None: none) with its start and end."""
     spans: dict[tuple[str, int], tuple[float, float]] = {}
-    for seg, t0, t1 in segments:
-        key = seg.facts.get("mission")
+    for key, t0, t1 in segments:
         if key is not None:
             k = (str(key[0]), int(key[1]))
             lo, hi = spans.get(k, (t0, t1))
@@ -546,6 +650,15 @@ def _point_reach(world: World, arm: str, reach: lm.Solver) -> Callable[[Point], 
 def _grasp(world: World, arm: str) -> lg.Grasp:
     tool = world.cell.robots[arm].tool
     return world.cell.tools[tool].grasp if tool is not None else "top"
+
+
+def _in_shared(world: World, T_cell_tcp: Mat) -> bool:
+    """Whether a TCP is in a zone more than one robot works in."""
+    p = np.asarray(T_cell_tcp)[:3, 3]
+    return any(
+        len(z.robots) > 1 and bool(np.all(p >= z.min) and np.all(p <= z.max))
+        for z in world.cell.zones.values()
+    )
 
 
 def _cooperation(world: World) -> Point:

@@ -16,7 +16,7 @@ from cellengine.info.files import real, recording
 if TYPE_CHECKING:  # the motion stack is imported when a command runs, not by `--help`
     from cellengine.pipeline import Compiled, Progress
 
-EXECUTIONS = ("split", "sync", "async")
+EXECUTIONS = ("split", "sync", "async", "sequential")
 
 
 def add_parser(sub: Any, name: str) -> None:

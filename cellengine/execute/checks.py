@@ -19,10 +19,11 @@ from cellengine.arrays import Vec
 from cellengine.execute.failure import FailedAt, Kind
 from cellengine.execute.refused import Refused
 from cellengine.motion.collision import CollisionChecker
-from cellengine.motion.gate import GateReport, Violation, check_cell_trajectory
-from cellengine.motion.robot import CellModel
-from cellengine.motion.scene import Pair
+from cellengine.motion.gate import SAMPLE_DT, GateReport, Violation, check_cell_trajectory
+from cellengine.motion.robot import CellModel, tool_parts
+from cellengine.motion.scene import CollisionScene, Pair, pair_key
 from cellengine.motion.trajectory import Trajectory
+from cellengine.program import Segment
 
 KEEP_DISTANCE_TOLERANCE = 0.001  # m: the fingertips' distance may vary by this much
 KEEP_DISTANCE_DT = 0.005  # s between the samples where it is measured
@@ -34,16 +35,31 @@ def gate(
     checker: CollisionChecker,
     clearance: float | None = None,
     near: frozenset[Pair] = frozenset(),
+    dt: float = SAMPLE_DT,
 ) -> GateReport:
     """The gate's report; Refused naming every violation when it fails (a clearance
     shortfall as it is: its message is already in plan terms)."""
-    report = check_cell_trajectory(traj, cell, checker, clearance, near)
+    report = check_cell_trajectory(traj, cell, checker, clearance, near, dt)
     if not report.ok:
         unsafe = [str(v) for v in report.violations if v.kind != "clearance"]
         short = [str(v) for v in report.violations if v.kind == "clearance"]
         failed = ["the trajectory fails the gate: " + "; ".join(unsafe)] if unsafe else []
         raise Refused("; ".join(failed + short), at=_shown(traj, report.violations))
     return report
+
+
+def near_pairs(cell: CellModel, scene: CollisionScene, segment: Segment) -> frozenset[Pair]:
+    """The scene pairs of the segment's ``near``: the arm's tool parts and the object's
+    shapes (an element of several boxes has ``name``, ``name#2``, ...)."""
+    names = [o.name for o in scene.objects]
+    out: set[Pair] = set()
+    for arm, obj in segment.near:
+        shapes = [n for n in names if n == obj or n.startswith(obj + "#")]
+        if not shapes:
+            raise ValueError(f"{segment.label}: near '{obj}', which the scene does not have")
+        parts = tool_parts(cell.arms[arm])
+        out |= {pair_key(p, s) for p in parts for s in shapes}
+    return frozenset(out)
 
 
 def _shown(traj: Trajectory, violations: Sequence[Violation]) -> FailedAt:

@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike
 
 from cellengine.arrays import Vec
 from cellengine.execute import winding
-from cellengine.execute.checks import gate, kept_distance
+from cellengine.execute.checks import gate, kept_distance, near_pairs
 from cellengine.execute.failure import FailedAt
 from cellengine.execute.following import required
 from cellengine.execute.held import Held, Holding
@@ -46,8 +46,8 @@ from cellengine.motion.clearance import least
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.gate import SAMPLE_DT, GateReport
 from cellengine.motion.ik import arm_ik
-from cellengine.motion.robot import CellModel, tool_parts
-from cellengine.motion.scene import Pair, pair_key
+from cellengine.motion.robot import CellModel
+from cellengine.motion.scene import Pair
 from cellengine.motion.trajectory import Trajectory, concatenate
 from cellengine.program import CompiledSegment, Program, Segment, TimedEvent
 from cellengine.world import World
@@ -260,17 +260,7 @@ class Compiler:
         return CompiledSegment(segment, self.strategy, trajectory, summary)
 
     def _near(self, segment: Segment) -> frozenset[Pair]:
-        """The scene pairs of the segment's ``near``: the arm's tool parts and the object's
-        shapes (an element of several boxes has ``name``, ``name#2``, ...)."""
-        names = [o.name for o in self.checker.scene.objects]
-        out: set[Pair] = set()
-        for arm, obj in segment.near:
-            shapes = [n for n in names if n == obj or n.startswith(obj + "#")]
-            if not shapes:
-                raise ValueError(f"{segment.label}: near '{obj}', which the scene does not have")
-            parts = tool_parts(self.cell.arms[arm])
-            out |= {pair_key(p, s) for p in parts for s in shapes}
-        return frozenset(out)
+        return near_pairs(self.cell, self.checker.scene, segment)
 
     def _check_branches(self, segment: Segment) -> None:
         """Refuse an arm (following a Cartesian path or standing) on an IK branch the segment

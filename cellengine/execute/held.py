@@ -115,9 +115,10 @@ class Holding:
     changed). Containers start where objects.yaml stands them (the base scene has them
     there); one grasped rides on the gripper, one let go stands where the hand put it."""
 
-    def __init__(self, world: World, scene: CollisionScene) -> None:
+    def __init__(self, world: World, scene: CollisionScene, keep: int = KEPT_STATES) -> None:
         self.world = world
         self.base = scene
+        self.keep = keep  # checkers kept
         containers = world.objects.containers
         self.state = Held(
             {},
@@ -183,7 +184,7 @@ class Holding:
         if checker is None:
             checker = CollisionChecker(self._scene(state))
         self.kept[key] = checker
-        while len(self.kept) > KEPT_STATES:
+        while len(self.kept) > self.keep:
             self.kept.popitem(last=False)
         self.state, self.checker = state, checker
 

@@ -21,7 +21,9 @@ from cellengine.skill import Skill
 class PlanFile(Frozen):
     cell: str = "cell.yaml"
     objects: str | None = None
-    execution: Literal["split", "sync", "async"] = "split"
+    # how the arms work (split, sync, async: DESIGN 3); sequential: split, with the robots of
+    # a lab cell one after another, as in the published platform
+    execution: Literal["split", "sync", "async", "sequential"] = "split"
     units: Units = Units()
     # the cell's speed, replaced for this plan; a lower TCP speed cap than the cell's
     speed: SpeedSpec | None = None

@@ -214,14 +214,16 @@ def check_cell_trajectory(
     checker: CellChecker,
     clearance: float | None = None,
     near: frozenset[Pair] = frozenset(),
+    dt: float = SAMPLE_DT,
 ) -> GateReport:
     """The gate for a whole cell: its joint order and limits, its collision checker, and the
     minimum distance between its two arms (when it has two). Given ``clearance`` (m), the
     trajectory's clearance is measured instead (the arms' distance is then its ``arms``) and a
     trajectory passing closer than it is refused; ``near``: pairs the motion works closer than
-    that on purpose, not measured."""
+    that on purpose, not measured. ``dt``: between the samples checked (a scheduler trying
+    many starts looks coarser first; what is sent is checked at the default)."""
     if clearance is not None:
-        return _with_clearance(traj, cell, checker, clearance, near)
+        return _with_clearance(traj, cell, checker, clearance, near, dt)
     arms = tuple(cell.arms)
     distance: ArmDistance | None = None
     if len(arms) == 2:
@@ -230,7 +232,7 @@ def check_cell_trajectory(
         def distance(q: Vec) -> Distance:
             return checker.distance(q, between)
 
-    return check_trajectory(traj, cell.joint_names, cell.limits, _OnPath(checker), distance)
+    return check_trajectory(traj, cell.joint_names, cell.limits, _OnPath(checker), distance, dt)
 
 
 @dataclass(frozen=True)
@@ -247,9 +249,14 @@ class _OnPath:
 
 
 def _with_clearance(
-    traj: Trajectory, cell: CellModel, checker: CellChecker, clearance: float, near: frozenset[Pair]
+    traj: Trajectory,
+    cell: CellModel,
+    checker: CellChecker,
+    clearance: float,
+    near: frozenset[Pair],
+    dt: float,
 ) -> GateReport:
-    t, q, violations = _sampled(traj, cell.joint_names, cell.limits, _OnPath(checker), SAMPLE_DT)
+    t, q, violations = _sampled(traj, cell.joint_names, cell.limits, _OnPath(checker), dt)
     measured = measure(checker.scene, t, q, near)
     found = measured
     for _ in range(MAX_LEAVING):

@@ -13,6 +13,7 @@ polynomial overshooting next to that knot. Jerk-limited producers (timing.py) sa
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
@@ -270,6 +271,47 @@ class Trajectory:
             times[-1] = self.end_time
         q, qd, qdd = self.sample(times)
         return Trajectory(self.joint_names, times, q, qd, qdd)
+
+    def refined(self, t: FloatArray) -> tuple[FloatArray, ...]:
+        """The coefficients (as ``_coef``) of this trajectory's own polynomials on the knots
+        ``t`` (increasing, within its span): the same motion, exactly, however close two
+        knots come. Hermite data at the ends of a 10 us interval, each rounded on its own,
+        would give accelerations off by 1e-6 of a limit there."""
+        if self.t.size == 1:
+            const = np.repeat(self.q, t.size - 1, axis=0)
+            return (const, *(np.zeros_like(const) for _ in range(5)))
+        mid = 0.5 * (t[:-1] + t[1:])
+        j = np.clip(np.searchsorted(self.t, mid, side="right") - 1, 0, self.t.size - 2)
+        h = self.t[j + 1] - self.t[j]
+        alpha = ((t[:-1] - self.t[j]) / h)[:, None]
+        beta = (np.diff(t) / h)[:, None]
+        c = [np.take(ck, j, axis=0) for ck in self._coef]
+        # p(alpha + beta s) expanded in powers of s
+        return tuple(
+            sum(math.comb(k, m) * c[k] * alpha ** (k - m) for k in range(m, 6)) * beta**m
+            for m in range(6)
+        )
+
+    @classmethod
+    def with_coefficients(
+        cls,
+        joint_names: Sequence[str],
+        t: FloatArray,
+        q: FloatArray,
+        qd: FloatArray,
+        qdd: FloatArray,
+        coef: Sequence[FloatArray],
+    ) -> Trajectory:
+        """A trajectory whose polynomials are ``coef`` (from :meth:`refined`), its knots'
+        values ``q, qd, qdd`` (what they give there)."""
+        out = cls(tuple(joint_names), t, q, qd, qdd)
+        frozen = tuple(np.ascontiguousarray(c, dtype=np.float64) for c in coef)
+        if len(frozen) != 6 or any(c.shape != (t.size - 1, len(joint_names)) for c in frozen):
+            raise ValueError("coef must be 6 arrays of (knots - 1, joints)")
+        for c in frozen:
+            c.flags.writeable = False
+        object.__setattr__(out, "_coef", frozen)
+        return out
 
     def shifted(self, offset: float) -> Trajectory:
         """The same motion with every time moved by `offset` seconds."""

@@ -16,6 +16,7 @@ import pytest
 import cellengine.skills.lab  # noqa: F401  (registers the lab skills)
 from cellengine.cli import main
 from cellengine.pipeline import Compiled, compile_plan
+from cellengine.program import Segment
 from tests.conftest import CELLS
 from tests.helpers import vial1_heavier_sim
 
@@ -27,6 +28,14 @@ DT = 0.01
 @cache
 def _compiled(plan: str, cell: str) -> Compiled:
     return compile_plan(LAB / f"{plan}.yaml", cell=CELL_FILES[cell])
+
+
+def _segments(c: Compiled) -> list[tuple[Segment, float, float]]:
+    """The plan's segments as compiled, each with its start and end: in both robots'
+    streams when they work at once, else the program's own."""
+    if c.program.streams:
+        return [(s.segment, s.start, s.end) for s in c.program.streams]
+    return [(s.segment, s.trajectory.start_time, s.trajectory.end_time) for s in c.program.segments]
 
 
 def _mission_arms(c: Compiled, step: str) -> set[str]:
@@ -118,12 +127,9 @@ def test_the_plan_runs_on_the_simulated_cell_and_weighs(tmp_path: Path) -> None:
 def _step_spans(c: Compiled) -> dict[int, tuple[float, float]]:
     """Each plan step's first start and last end in the program (s)."""
     spans: dict[int, tuple[float, float]] = {}
-    for s in c.program.segments:
-        lo, hi = spans.get(s.segment.step, (np.inf, -np.inf))
-        spans[s.segment.step] = (
-            min(lo, s.trajectory.start_time),
-            max(hi, s.trajectory.end_time),
-        )
+    for seg, t0, t1 in _segments(c):
+        lo, hi = spans.get(seg.step, (np.inf, -np.inf))
+        spans[seg.step] = (min(lo, t0), max(hi, t1))
     return spans
 
 
@@ -142,8 +148,8 @@ def test_experiment_3_weighs_both_unscrews_and_pours_the_heavier(cell: str) -> N
     assert c.mission is not None
     coop = [e for e in c.mission if e["inserted"] == "cooperation"]
     assert coop and {a for e in coop for a in e["arms"]} == {"robot1", "robot2"}
-    turns = [s for s in c.program.segments if "turn the cap" in s.segment.label]
-    assert len(turns) == 5 and {p.arm for s in turns for p in s.segment.paths} == {"robot2"}
+    turns = [seg for seg, _, _ in _segments(c) if "turn the cap" in seg.label]
+    assert len(turns) == 5 and {p.arm for s in turns for p in s.paths} == {"robot2"}
     # never both in the shared zone but while they cooperate on the unscrew
     shared = c.world.cell.zones["shared"]
     _, tcp, labels = _tcp_track(c)
@@ -231,7 +237,7 @@ def test_a_bimanual_carry_plan_is_a_cooperation_of_both_arms(tmp_path: Path) -> 
     assert c.mission is not None
     (entry,) = c.mission
     assert entry["inserted"] == "cooperation" and sorted(entry["arms"]) == ["left", "right"]
-    chained = [s for s in c.program.segments if s.segment.closed_chain is not None]
+    chained = [seg for seg, _, _ in _segments(c) if seg.closed_chain is not None]
     assert len(chained) == 3
 
 
