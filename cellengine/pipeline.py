@@ -11,16 +11,20 @@ from __future__ import annotations
 import itertools
 import json
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, TypeVar
 
+import numpy as np
+
+from cellengine.arrays import Vec
+from cellengine.concurrency import Overlap
 from cellengine.context import PlanningContext, build_context
 from cellengine.errors import InputError, Problem, StepError
 from cellengine.execute.candidates import compile_candidates
 from cellengine.execute.compile import Compiler
 from cellengine.execute.home import return_home
-from cellengine.execute.overlap import overlapped, streams_json
+from cellengine.execute.overlap import overlapped, resumed, streams_json
 from cellengine.family import SkillFamily, families, skill_name
 from cellengine.info.load import LoadedPlan, load_plan
 from cellengine.info.plan import Plan
@@ -43,6 +47,29 @@ class Compiled:
     # report.json entries the family adds (a lab plan's "mission": which robots do each
     # step, when)
     report: Mapping[str, Any] = field(default_factory=dict)
+    # what let the arms work at once (the program has streams): a resumed or replanned run
+    # places what is left with it again
+    overlap: Overlap | None = None
+
+    def rest(self, done: frozenset[int], running: frozenset[int], q: Vec) -> Compiled:
+        """The run from where it stopped: the segments ``done`` (of the program's streams)
+        finished, those ``running`` stopped part way, the arms at ``q``; the rest placed
+        again (execute/overlap.py). Refused when that fails the gate."""
+        if self.overlap is None or not self.program.streams:
+            raise ValueError("only a program whose arms work at once is resumed by segments")
+        ctx = self.context
+        program = resumed(
+            self.program,
+            self.overlap,
+            ctx.world,
+            ctx.cell,
+            ctx.checker.scene,
+            ctx.clearance,
+            done,
+            running,
+            np.asarray(q, dtype=float),
+        )
+        return replace(self, program=program)
 
     @property
     def world(self) -> World:
@@ -145,10 +172,12 @@ def compile_loaded(
                 program, rules, ctx.world, ctx.cell, ctx.checker.scene, ctx.clearance
             )
             report["streams"] = streams_json(program, alone, why)
+        if not program.streams:
+            rules = None
         for candidate in taken:
             if candidate.report is not None:
                 report.update(candidate.report(program))
-        return Compiled(loaded, ctx, program, chosen, report)
+        return Compiled(loaded, ctx, program, chosen, report, rules)
 
     try:
         return _in_plan(plan, search)

@@ -19,6 +19,9 @@ from cellengine.arrays import Poses
 from cellengine.motion.trajectory import Trajectory
 
 
+SAME_INSTANT = 1e-9  # s: a segment ending this near a piece's end has ended with it
+
+
 @dataclass(frozen=True)
 class GripperEvent:
     """A gripper changes mode (a name in the tool's ``jaw`` table: open, slide, grasp...)
@@ -147,13 +150,17 @@ class Scheduled:
     """A compiled segment's place in its arms' streams, when the arms work at once."""
 
     index: int  # in the program as compiled, one segment after another
-    segment: Segment
+    compiled: CompiledSegment  # as compiled (its trajectory on that program's time axis)
     arms: tuple[str, ...]
     start: float  # s from the program's start
     end: float
     ready: float  # when its order let it start (its arms free, what it comes after ended)
     why: str | None  # why it starts after ``ready`` (a shared zone, the clearance); else None
     part: tuple[str, int] | None  # (task, part) of the family's rules
+
+    @property
+    def segment(self) -> Segment:
+        return self.compiled.segment
 
     @property
     def label(self) -> str:
@@ -178,7 +185,18 @@ class Program:
     segments: tuple[CompiledSegment, ...]
     events: tuple[TimedEvent, ...]
     streams: tuple[Scheduled, ...] = ()
+    # a run resumed (or replanned) part way: the segments (``Scheduled.index``) it finished
+    # before this program's start, left out of ``streams``
+    done: frozenset[int] = frozenset()
 
     @property
     def duration(self) -> float:
         return self.segments[-1].trajectory.end_time if self.segments else 0.0
+
+    def streams_at(self, k: int) -> tuple[frozenset[int], frozenset[int]]:
+        """When the arms work at once: the segments of ``streams`` finished once piece ``k``
+        has been played (those finished before, ``done``, too) and those running then."""
+        t = self.segments[k].trajectory.end_time
+        finished = self.done | {s.index for s in self.streams if s.end <= t + SAME_INSTANT}
+        running = {s.index for s in self.streams if s.start < t - SAME_INSTANT < s.end}
+        return frozenset(finished), frozenset(running - finished)

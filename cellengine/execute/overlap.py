@@ -9,6 +9,7 @@ runs as compiled, and its report says why.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -16,10 +17,12 @@ import numpy as np
 from cellengine.concurrency import Overlap
 from cellengine.execute.held import Holding
 from cellengine.execute.refused import Refused
+from cellengine.execute.retime import timed
 from cellengine.execute.streams import SCHEDULE_DT, Piece, Streams
 from cellengine.motion.gate import SAMPLE_DT
 from cellengine.motion.robot import CellModel
 from cellengine.motion.scene import CollisionScene
+from cellengine.motion.speed import tcp_limit
 from cellengine.program import (
     Anchor,
     CompiledSegment,
@@ -32,6 +35,7 @@ from cellengine.program import (
 from cellengine.world import World
 
 KEPT_SCENES = 32  # the held states' checkers kept while replaying the streams
+REST_DT = 0.001  # s: where a stopped segment's arms are on its path, found this finely
 
 
 def overlapped(
@@ -46,22 +50,101 @@ def overlapped(
     if not program.segments:
         return program, None
     q0 = np.array(program.segments[0].trajectory.q[0])
-    refused: Refused | None = None
+    try:
+        out = _placed(program.segments, rules, world, cell, scene, clearance, q0)
+    except Refused as e:
+        return program, f"the pieces of both streams fail the gate: {e}"
+    return out, None
+
+
+def resumed(
+    program: Program,
+    rules: Overlap,
+    world: World,
+    cell: CellModel,
+    scene: CollisionScene,
+    clearance: float,
+    done: frozenset[int],
+    running: frozenset[int],
+    q: np.ndarray,
+) -> Program:
+    """What is left of an overlapped ``program`` (as compiled) once the segments ``done``
+    (indices of its ``streams``) are finished and those ``running`` were stopped part way,
+    the arms at ``q`` (a piece's end, where a recovery move brings them back to): each
+    running segment goes on from there along its path, timed again from rest (its
+    ``before`` events were done), the grippers as what was done left them, the rest placed
+    again. Refused when its pieces fail the gate."""
+    every = {s.index: s for s in program.streams}
+    segments = [every[i].compiled for i in range(len(every))]
+    q0 = np.array(q, dtype=float)
+    holding = Holding(world, scene, keep=KEPT_SCENES)
+    events = []
+    for i in done | running:
+        s, traj = every[i], every[i].compiled.trajectory
+        events += [(s.start, i, 0, e, traj.q[0]) for e in s.segment.before]
+        if i in done:
+            events += [(s.end, i, 1, e, traj.q[-1]) for e in s.segment.after]
+    for _, _, _, e, qe in sorted(events, key=lambda x: (round(x[0], 9), x[1], x[2])):
+        holding.set(e.arm, e.holds, cell.arms[e.arm].fk(qe[cell.slices[e.arm]]), e.mode)
+    for i in running:
+        segments[i] = _rest_of(segments[i], every[i].arms, q0, cell)
+    return _placed(segments, rules, world, cell, scene, clearance, q0, holding, done)
+
+
+def _rest_of(
+    cs: CompiledSegment, arms: Sequence[str], q: np.ndarray, cell: CellModel
+) -> CompiledSegment:
+    """A segment stopped with its arms at ``q``: the rest of its path from the point on it
+    nearest ``q``, timed from rest, without its ``before`` events (they were done)."""
+    traj = cs.trajectory
+    cols = np.concatenate([np.arange(cell.nq)[cell.slices[a]] for a in arms])
+    n = max(2, int(np.ceil(traj.duration / REST_DT)) + 1)
+    t = np.linspace(traj.start_time, traj.end_time, n)
+    near = int(np.argmin(np.linalg.norm(traj.sample(t)[0][:, cols] - q[cols], axis=1)))
+    rows = np.vstack([q, traj.q[traj.t > t[near] + 1e-9]])
+    others = np.setdiff1d(np.arange(cell.nq), cols)
+    rows[:, others] = q[others]  # the other arms' columns: as they stand (not used)
+    rest = timed(rows, cell.timing_limits(), cell.joint_names, tcp_limit(cell))
+    segment = replace(cs.segment, before=())
+    return CompiledSegment(segment, cs.strategy, rest, {**cs.report, "resumed": True})
+
+
+def _placed(
+    segments: Sequence[CompiledSegment],
+    rules: Overlap,
+    world: World,
+    cell: CellModel,
+    scene: CollisionScene,
+    clearance: float,
+    q0: np.ndarray,
+    holding: Holding | None = None,
+    done: frozenset[int] = frozenset(),
+) -> Program:
+    """The segments placed (but ``done``) and cut into pieces: Refused when even placed
+    checking every 1 ms, a piece fails the gate."""
+    start = None if holding is None else holding.state
+    refused = Refused("no segments")
     for dt in (SCHEDULE_DT, SAMPLE_DT):
-        holding = Holding(world, scene, keep=KEPT_SCENES)
-        streams = Streams(program.segments, rules, cell, holding, q0, clearance)
-        scheduled = streams.place_all(dt)
+        hold = holding or Holding(world, scene, keep=KEPT_SCENES)
+        if start is not None:
+            hold.restore(start)
+        streams = Streams(segments, rules, cell, hold, q0, clearance)
+        scheduled = streams.place_all(dt, done)
         try:
             pieces = streams.pieces(0.0, streams.timeline.makespan)
         except Refused as e:
             refused = e
             continue
-        return _program(program, scheduled, pieces), None
-    return program, f"the pieces of both streams fail the gate: {refused}"
+        return _program(segments, scheduled, pieces, done)
+    raise refused
 
 
-def _program(program: Program, scheduled: Sequence[Scheduled], pieces: Sequence[Piece]) -> Program:
-    compiled = program.segments
+def _program(
+    compiled: Sequence[CompiledSegment],
+    scheduled: Sequence[Scheduled],
+    pieces: Sequence[Piece],
+    done: frozenset[int],
+) -> Program:
     events: list[TimedEvent] = []
     out: list[CompiledSegment] = []
     for piece in pieces:
@@ -75,6 +158,9 @@ def _program(program: Program, scheduled: Sequence[Scheduled], pieces: Sequence[
         first = compiled[piece.slots[0].index].segment if piece.slots else None
         segment = Segment(
             step=first.step if first is not None else _step_at(scheduled, piece.lo),
+            # one segment alone in the piece: its couplings (the report shows them)
+            closed_chain=first.closed_chain if len(piece.slots) == 1 and first else None,
+            keep_distance=first.keep_distance if len(piece.slots) == 1 and first else None,
             label=" + ".join(compiled[s.index].segment.label for s in piece.slots) or "wait",
             before=before,
             after=after,
@@ -93,7 +179,8 @@ def _program(program: Program, scheduled: Sequence[Scheduled], pieces: Sequence[
                 _report(piece, compiled, starting),
             )
         )
-    return Program(program.joint_names, tuple(out), tuple(events), tuple(scheduled))
+    names = compiled[0].trajectory.joint_names
+    return Program(names, tuple(out), tuple(events), tuple(scheduled), done)
 
 
 def _step_at(scheduled: Sequence[Scheduled], t: float) -> int:

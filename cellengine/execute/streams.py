@@ -84,9 +84,13 @@ class Streams:
 
     # ---------------------------------------------------------------------------- placing
 
-    def place_all(self, dt: float = SCHEDULE_DT) -> tuple[Scheduled, ...]:
+    def place_all(
+        self, dt: float = SCHEDULE_DT, done: frozenset[int] = frozenset()
+    ) -> tuple[Scheduled, ...]:
+        """Every segment but those ``done`` already (a resumed run's)."""
         for i in range(len(self.segments)):
-            self.place(i, dt)
+            if i not in done:
+                self.place(i, dt)
         return tuple(self.scheduled)
 
     def place(self, i: int, dt: float) -> Scheduled:
@@ -112,7 +116,7 @@ class Streams:
         tl.add(i, start, arms)
         out = Scheduled(
             i,
-            seg,
+            self.segments[i],
             arms,
             start,
             tl.end(tl.slots[-1]),
