@@ -18,7 +18,6 @@ import numpy as np
 from cellengine.arrays import Poses
 from cellengine.motion.trajectory import Trajectory
 
-
 SAME_INSTANT = 1e-9  # s: a segment ending this near a piece's end has ended with it
 
 
