@@ -5,7 +5,8 @@ The journal is append-only, one JSON object per line, on disk at each entry (:cl
 ``start`` (with the run's identity: what it was compiled from, see
 :mod:`cellengine.runner.identity`; a new run into the folder starts afresh) or ``resume``,
 ``recovery`` (a move to where a segment starts), then per segment
-``sent`` and ``finished`` (with the arms' q and grippers after it), ``measured`` (a load
+``sent`` and ``finished`` (with the arms' q and grippers after it; when the arms work at
+once, ``streams``: each robot's segments finished and running then), ``measured`` (a load
 cell), ``replanned``, ``cycle`` (``run --cycles N``: the program begins again; the start
 says how many cycles), ``fault`` (what stopped the run), ``timing`` (the servo loop's), ``end``.
 A run killed at any moment leaves whole lines and at most one torn last line, which is
@@ -72,6 +73,9 @@ class Progress:
     started: bool = False  # the journal has a ``start``: progress is of its last run
     cycle: int = 1  # the cycle ``labels`` are of (run --cycles)
     cycles: int = 1  # the cycles the run was started for
+    # the arms at once: the segments (of the program's streams) finished and those running
+    # after the last segment finished (None: none finished, or one after another)
+    streams: tuple[frozenset[int], frozenset[int]] | None = None
 
     @property
     def done(self) -> int:
@@ -242,11 +246,23 @@ def _finished(entry: dict[str, Any]) -> None:
     _index(_field(entry, "segment"), "segment")
     _text(_field(entry, "label"), "label")
     _joints(_field(entry, "q"), "q")
+    if "streams" in entry:
+        _streams(entry["streams"])
     grippers = _field(entry, "grippers")
     if not isinstance(grippers, dict):
         raise _Bad(f"'grippers' must map each arm to [mode, holds], got {_shown(grippers)}")
     for arm, state in grippers.items():
         _gripper(state, f"grippers.{arm}")
+
+
+def _streams(value: Any) -> None:
+    if not isinstance(value, dict) or set(value) != {"done", "running"}:
+        raise _Bad(f"'streams' must map done and running to segment numbers, got {_shown(value)}")
+    for key in ("done", "running"):
+        if not isinstance(value[key], list):
+            raise _Bad(f"'streams.{key}' must be a list of segment numbers, got {_shown(value)}")
+        for v in value[key]:
+            _index(v, f"streams.{key}")
 
 
 def _measured(entry: dict[str, Any]) -> None:
@@ -325,14 +341,15 @@ def _progress(entries: list[dict[str, Any]]) -> Progress:
     run: dict[str, Any] | None = None
     started = False
     cycle, cycles = 1, 1
+    streams: tuple[frozenset[int], frozenset[int]] | None = None
     for e in entries:
         kind = e["entry"]
         if kind == Entry.START:  # a new run into the folder: progress is of it alone
             labels, q, grippers, measured, fault = [], None, {}, {}, None
-            run, started = e.get("run"), True
+            run, started, streams = e.get("run"), True, None
             cycle, cycles = 1, int(e.get("cycles", 1))
         if kind == Entry.CYCLE:  # the program again from its start, where the arms are
-            labels, measured, fault = [], {}, None
+            labels, measured, fault, streams = [], {}, None, None
             cycle, cycles = int(e["cycle"]), int(e["of"])
         if kind == Entry.FINISHED:
             if int(e["segment"]) != len(labels):
@@ -341,6 +358,11 @@ def _progress(entries: list[dict[str, Any]]) -> Progress:
             fault = None  # the run went on after it
             q = tuple(float(v) for v in e["q"])
             grippers = {str(a): (g[0], g[1]) for a, g in e["grippers"].items()}
+            if "streams" in e:
+                done, running = (
+                    frozenset(int(i) for i in e["streams"][k]) for k in ("done", "running")
+                )
+                streams = (done, running)
         elif kind == Entry.MEASURED:
             measured[str(e["object"])] = float(e["mass_kg"])
         elif kind == Entry.END:
@@ -349,4 +371,6 @@ def _progress(entries: list[dict[str, Any]]) -> Progress:
             fault = dict(e.get("fault") or {})
         elif kind == Entry.START:
             ended = False
-    return Progress(tuple(labels), q, grippers, measured, ended, fault, run, started, cycle, cycles)
+    return Progress(
+        tuple(labels), q, grippers, measured, ended, fault, run, started, cycle, cycles, streams
+    )

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Collection, Sequence
 from pathlib import Path
-from typing import IO, TYPE_CHECKING
+from typing import IO, TYPE_CHECKING, Any
 
 from cellengine.journal import Entry, append
 from cellengine.program import Measure
@@ -13,7 +13,7 @@ from cellengine.program import Measure
 if TYPE_CHECKING:
     from cellengine.drivers.base import Driver
     from cellengine.pipeline import Compiled
-    from cellengine.program import CompiledSegment, Segment, TimedEvent
+    from cellengine.program import Program, Segment, TimedEvent
     from cellengine.runner.live import Live
 
 
@@ -30,7 +30,8 @@ def play(
     """Send every segment from ``start``; after a segment that measures, read the load cell.
     When the masses measured (and ``measured``, read by an earlier run) change what a runtime
     choice picks, the plan is compiled again with them and the run goes on with the new
-    program from the first segment that differs (the ones before are the same), its
+    program from the first segment that differs (the ones before are the same; both robots
+    at once: what is left of both streams, placed again from where they are), its
     trajectory and report written over the first ones. ``shown``: told of each segment
     before it is sent."""
     from cellengine.drivers.play import segment_events
@@ -44,18 +45,25 @@ def play(
     while i < len(program.segments):
         if shown is not None:
             shown.segment(compiled, i)
-        _send(driver, journal, i, program.segments[i], events_of[i], compiled.cell.arms)
-        if _weigh(driver, journal, program.segments[i].segment, measured):
-            again = _recompiled(compiled, planned, measured, i + 1)
-            if again is not None:
-                compiled, program, planned = again, again.program, dict(measured)
-                events_of = segment_events(program)
-                write_plan_outputs(compiled, out)
-                append(journal, Entry.REPLANNED, reason="measured masses changed a choice")
-                _still_running(compiled, driver, out)
-                if not quiet:
-                    print("measured masses changed a runtime choice: replanned")
+        _send(driver, journal, program, i, events_of[i], compiled.cell.arms)
         i += 1
+        if not _weigh(driver, journal, program.segments[i - 1].segment, measured):
+            continue
+        again = _recompiled(compiled, planned, measured, i)
+        if again is None:
+            continue
+        planned = dict(measured)
+        write_plan_outputs(again, out)  # the whole plan as it now is
+        if program.streams:  # both robots at once: what is left, from where they are
+            done, running = program.streams_at(i - 1)
+            again = again.rest(done, running, program.segments[i - 1].trajectory.q[-1])
+            i = 0
+        compiled, program = again, again.program
+        events_of = segment_events(program)
+        append(journal, Entry.REPLANNED, reason="measured masses changed a choice")
+        _still_running(compiled, driver, out)
+        if not quiet:
+            print("measured masses changed a runtime choice: replanned")
 
 
 def _still_running(compiled: Compiled, driver: Driver, out: Path) -> None:
@@ -69,17 +77,22 @@ def _still_running(compiled: Compiled, driver: Driver, out: Path) -> None:
 def _send(
     driver: Driver,
     journal: IO[str],
+    program: Program,
     index: int,
-    segment: CompiledSegment,
     events: Sequence[TimedEvent],
     arms: Collection[str],
 ) -> None:
     """Segment ``index`` played, journaled before (sent) and after (finished, with where the
     arms and grippers are: where ``--resume`` starts from)."""
+    segment = program.segments[index]
     seg = segment.segment
     append(journal, Entry.SENT, step=seg.step, segment=index, label=seg.label)
     driver.execute(segment, events)
     grippers = {arm: list(driver.gripper(arm)) for arm in arms}
+    more: dict[str, Any] = {}
+    if program.streams:  # what --resume goes on from: each robot's segments
+        done, running = program.streams_at(index)
+        more["streams"] = {"done": sorted(done), "running": sorted(running)}
     append(
         journal,
         Entry.FINISHED,
@@ -88,6 +101,7 @@ def _send(
         label=seg.label,
         q=[round(float(v), 6) for v in driver.joint_state()],
         grippers=grippers,
+        **more,
     )
 
 
@@ -106,7 +120,8 @@ def _recompiled(
     compiled: Compiled, planned: dict[str, float], measured: dict[str, float], done: int
 ) -> Compiled | None:
     """The plan compiled again with the masses measured, if they change a runtime choice;
-    the first ``done`` segments, already run, must be the same in it."""
+    the first ``done`` segments, already run, must be the same in it (the arms at once:
+    the segments of the streams finished or running)."""
     from cellengine.pipeline import compile_loaded
 
     if not _choices_changed(compiled, planned, measured):
@@ -114,8 +129,17 @@ def _recompiled(
     again = compile_loaded(
         compiled.loaded, compiled.strategy, context=compiled.context, masses=measured
     )
-    before = [s.segment.label for s in compiled.program.segments[:done]]
-    if [s.segment.label for s in again.program.segments[:done]] != before:
+    program = compiled.program
+    if program.streams:
+        finished, running = program.streams_at(done - 1)
+        new = {s.index: s.label for s in again.program.streams}
+        old = {s.index: s.label for s in program.streams}
+        same = all(new.get(k) == old[k] for k in running | (finished & set(old)))
+        same = same and all(k in new for k in finished)
+    else:
+        before = [s.segment.label for s in program.segments[:done]]
+        same = [s.segment.label for s in again.program.segments[:done]] == before
+    if not same:
         raise RuntimeError("replanning changed segments already run")  # a bug, not input
     return again
 

@@ -15,6 +15,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
+import numpy as np
+
 from cellengine.errors import InputError, Problem, display_path, known, printable
 from cellengine.journal import JOURNAL, Entry, append, refuse_unfinished
 from cellengine.runfolder import open_append, using
@@ -94,9 +96,14 @@ def resume_run(
         left = progress.cycles - progress.cycle + 1
         confirm(driver, yes, lambda: motion_summary(compiled, left), quiet)
         start, cycle = progress.done, progress.cycle
+        first = compiled  # the rest of this cycle; the next ones are the whole program
+        if progress.streams is not None and compiled.program.streams:
+            first = _rest(compiled, progress, run_dir)
+            start = 0 if first.program.segments else len(compiled.program.segments)
+            first = first if first.program.segments else compiled
         if start == len(compiled.program.segments):  # a cycle finished: the next begins
-            start, cycle = 0, cycle + 1
-        nxt = compiled.program.segments[start].segment.label
+            start, cycle, first = 0, cycle + 1, compiled
+        nxt = first.program.segments[start].segment.label
         drop_torn_tail(journal_path)
         with open_append(journal_path) as journal, driver, resumable(_resume(compiled, run_dir)):
             if cycle != progress.cycle:
@@ -104,10 +111,18 @@ def resume_run(
                 progress = replace(progress, labels=(), measured={}, cycle=cycle)
             append(journal, Entry.RESUME, from_segment=start, label=nxt)
             _drive(
-                compiled, driver, journal, run_dir, quiet, progress, q0, (cycle, progress.cycles)
+                compiled,
+                driver,
+                journal,
+                run_dir,
+                quiet,
+                replace(progress, labels=progress.labels[:start]),
+                q0,
+                (cycle, progress.cycles),
+                first,
             )
     if not quiet:
-        done = len(compiled.program.segments) - start
+        done = len(first.program.segments) - start
         print(f"resumed at segment {start} ('{printable(nxt)}'): ran {done} more")
 
 
@@ -120,12 +135,15 @@ def _drive(
     progress: Progress | None = None,
     left: Any = None,
     cycles: tuple[int, int] = (1, 1),
+    resumed: Compiled | None = None,
 ) -> None:
     """The driver's life around the program, from the first segment ``progress`` did not
     finish (and from where the arms were ``left``), in cycle ``cycles[0]`` of ``cycles[1]``,
-    to the journal's end."""
+    to the journal's end; ``resumed``: what the first cycle plays instead (both robots at
+    once: the rest of their streams)."""
     start, measured = (0, None) if progress is None else (progress.done, progress.measured)
     first, last = cycles
+    now = resumed or compiled
 
     def go_on() -> None:
         shown = live(compiled, quiet)  # drawn while the program plays
@@ -136,14 +154,23 @@ def _drive(
                 shown.cycle(cycle, last)
                 begin = start if cycle == first else 0
                 again = measured if cycle == first else None
-                play(compiled, driver, journal, quiet, out, begin, again, shown)
+                play(
+                    now if cycle == first else compiled,
+                    driver,
+                    journal,
+                    quiet,
+                    out,
+                    begin,
+                    again,
+                    shown,
+                )
         finally:
             shown.close()  # before anything else is printed
 
     with timed(journal, driver, out, quiet, compiled):
         driver.configure()
         driver.activate()
-        move_to(compiled, driver, journal, start, left)
+        move_to(now, driver, journal, start, left)
         journaled(journal, driver, go_on)
         driver.deactivate()
     append(journal, Entry.END, duration=compiled.program.duration * (last - first + 1))
@@ -153,6 +180,35 @@ def _resume(compiled: Compiled, run_dir: Path) -> str:
     """The command that goes on with the run in ``run_dir``."""
     factor = compiled.context.speed.factor
     return resume_command(compiled.loaded, compiled.strategy, factor, run_dir)
+
+
+def _rest(compiled: Compiled, progress: Progress, run_dir: Path) -> Compiled:
+    """Both robots at once: the rest of their streams from where the journal's last
+    finished segment left them (each robot's finished and running segments, the arms)."""
+    from cellengine.execute.refused import Refused
+
+    assert progress.streams is not None and progress.q is not None
+    done, running = progress.streams
+    n = len(compiled.program.streams)
+    if len(done) >= n and progress.cycle >= progress.cycles:
+        raise InputError(Problem("every segment was finished; only the end was not journaled"))
+    if any(i >= n for i in done | running):
+        raise InputError(
+            Problem(
+                f"the journal names segment {max(done | running)} finished or running; the "
+                f"plan's streams have {n} segments",
+                str(run_dir / JOURNAL),
+            )
+        )
+    try:
+        return compiled.rest(done, running, np.asarray(progress.q, dtype=float))
+    except Refused as e:
+        raise InputError(
+            Problem(
+                f"the rest of the run cannot be placed from where it stopped: {e}",
+                str(run_dir / JOURNAL),
+            )
+        ) from None
 
 
 def _resumable(compiled: Compiled, progress: Progress, run_dir: Path) -> Compiled:
@@ -166,6 +222,8 @@ def _resumable(compiled: Compiled, progress: Progress, run_dir: Path) -> Compile
             compiled.loaded, compiled.strategy, context=compiled.context, masses=progress.measured
         )
     labels = tuple(s.segment.label for s in compiled.program.segments)
+    if progress.streams is not None and compiled.program.streams:
+        return compiled  # its rest is placed again from each robot's segments (_rest)
     if labels[: progress.done] != progress.labels:
         pairs = enumerate(zip(labels, progress.labels, strict=False))
         k = next((i for i, (a, b) in pairs if a != b), len(labels))
