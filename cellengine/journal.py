@@ -56,6 +56,10 @@ def append(journal: IO[str], kind: Entry, **fields: Any) -> None:
     os.fsync(journal.fileno())
 
 
+# the arms at once: the segments finished and running, and where the program had the arms
+StreamState = tuple[frozenset[int], frozenset[int], tuple[float, ...]]
+
+
 @dataclass(frozen=True)
 class Progress:
     """``labels``: the segments finished, in order (the next to run is ``len(labels)``);
@@ -74,8 +78,9 @@ class Progress:
     cycle: int = 1  # the cycle ``labels`` are of (run --cycles)
     cycles: int = 1  # the cycles the run was started for
     # the arms at once: the segments (of the program's streams) finished and those running
-    # after the last segment finished (None: none finished, or one after another)
-    streams: tuple[frozenset[int], frozenset[int]] | None = None
+    # where the run stopped (the last segment finished, or a fault), and where the program
+    # had the arms then (None: none finished, or one after another)
+    streams: StreamState | None = None
 
     @property
     def done(self) -> int:
@@ -256,13 +261,17 @@ def _finished(entry: dict[str, Any]) -> None:
 
 
 def _streams(value: Any) -> None:
-    if not isinstance(value, dict) or set(value) != {"done", "running"}:
-        raise _Bad(f"'streams' must map done and running to segment numbers, got {_shown(value)}")
+    if not isinstance(value, dict) or set(value) != {"done", "running", "q"}:
+        raise _Bad(
+            "'streams' must map done and running to segment numbers and q to joint values, "
+            f"got {_shown(value)}"
+        )
     for key in ("done", "running"):
         if not isinstance(value[key], list):
             raise _Bad(f"'streams.{key}' must be a list of segment numbers, got {_shown(value)}")
         for v in value[key]:
             _index(v, f"streams.{key}")
+    _joints(value["q"], "streams.q")
 
 
 def _measured(entry: dict[str, Any]) -> None:
@@ -274,6 +283,8 @@ def _measured(entry: dict[str, Any]) -> None:
 
 def _fault(entry: dict[str, Any]) -> None:
     """Where the fault stopped the arms and grippers: resume starts there."""
+    if "streams" in entry:
+        _streams(entry["streams"])
     fault = entry.get("fault")
     if fault is None:
         return
@@ -332,6 +343,11 @@ _CHECKS: dict[str, Callable[[dict[str, Any]], None]] = {
 }
 
 
+def _stream_state(value: dict[str, Any]) -> StreamState:
+    done, running = (frozenset(int(i) for i in value[k]) for k in ("done", "running"))
+    return done, running, tuple(float(v) for v in value["q"])
+
+
 def _progress(entries: list[dict[str, Any]]) -> Progress:
     labels: list[str] = []
     q: tuple[float, ...] | None = None
@@ -341,7 +357,7 @@ def _progress(entries: list[dict[str, Any]]) -> Progress:
     run: dict[str, Any] | None = None
     started = False
     cycle, cycles = 1, 1
-    streams: tuple[frozenset[int], frozenset[int]] | None = None
+    streams: StreamState | None = None
     for e in entries:
         kind = e["entry"]
         if kind == Entry.START:  # a new run into the folder: progress is of it alone
@@ -359,16 +375,15 @@ def _progress(entries: list[dict[str, Any]]) -> Progress:
             q = tuple(float(v) for v in e["q"])
             grippers = {str(a): (g[0], g[1]) for a, g in e["grippers"].items()}
             if "streams" in e:
-                done, running = (
-                    frozenset(int(i) for i in e["streams"][k]) for k in ("done", "running")
-                )
-                streams = (done, running)
+                streams = _stream_state(e["streams"])
         elif kind == Entry.MEASURED:
             measured[str(e["object"])] = float(e["mass_kg"])
         elif kind == Entry.END:
             ended = True
         elif kind == Entry.FAULT:
             fault = dict(e.get("fault") or {})
+            if "streams" in e:
+                streams = _stream_state(e["streams"])
         elif kind == Entry.START:
             ended = False
     return Progress(

@@ -15,7 +15,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from cellengine.arrays import Poses
+from cellengine.arrays import FloatArray, Poses
 from cellengine.motion.trajectory import Trajectory
 
 SAME_INSTANT = 1e-9  # s: a segment ending this near a piece's end has ended with it
@@ -192,10 +192,13 @@ class Program:
     def duration(self) -> float:
         return self.segments[-1].trajectory.end_time if self.segments else 0.0
 
-    def streams_at(self, k: int) -> tuple[frozenset[int], frozenset[int]]:
-        """When the arms work at once: the segments of ``streams`` finished once piece ``k``
-        has been played (those finished before, ``done``, too) and those running then."""
-        t = self.segments[k].trajectory.end_time
+    def streams_at(self, t: float) -> tuple[frozenset[int], frozenset[int], FloatArray]:
+        """When the arms work at once: the segments of ``streams`` finished at time ``t``
+        (those finished before, ``done``, too), those running then, and where the program
+        has the arms then."""
         finished = self.done | {s.index for s in self.streams if s.end <= t + SAME_INSTANT}
         running = {s.index for s in self.streams if s.start < t - SAME_INSTANT < s.end}
-        return frozenset(finished), frozenset(running - finished)
+        ends = [s.trajectory.end_time for s in self.segments]
+        k = min(int(np.searchsorted(ends, t - SAME_INSTANT)), len(ends) - 1)
+        q = np.asarray(self.segments[k].trajectory.sample(t)[0], dtype=float)
+        return frozenset(finished), frozenset(running - finished), q

@@ -68,6 +68,9 @@ class DriverFault(DriverError):
 
     def __init__(self, kind: str, fault: Fault) -> None:
         self.fault = fault
+        # both robots at once: where their streams were at the fault (the runner fills it
+        # in; the journal's fault entry keeps it for --resume)
+        self.streams: dict[str, Any] | None = None
         super().__init__(Problem(fault.message, f"{kind} driver"))
 
 

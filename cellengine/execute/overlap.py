@@ -18,11 +18,14 @@ from cellengine.concurrency import Overlap
 from cellengine.execute.held import Holding
 from cellengine.execute.refused import Refused
 from cellengine.execute.retime import timed
-from cellengine.execute.streams import SCHEDULE_DT, Piece, Streams
+from cellengine.execute.streams import SAME, SCHEDULE_DT, Piece, Streams
+from cellengine.execute.timeline_arms import Slot
+from cellengine.motion.clearance import least
 from cellengine.motion.gate import SAMPLE_DT
 from cellengine.motion.robot import CellModel
 from cellengine.motion.scene import CollisionScene
 from cellengine.motion.speed import tcp_limit
+from cellengine.motion.trajectory import joined
 from cellengine.program import (
     Anchor,
     CompiledSegment,
@@ -145,68 +148,89 @@ def _program(
     pieces: Sequence[Piece],
     done: frozenset[int],
 ) -> Program:
+    """The pieces as what a driver plays: those joined by a segment running across their
+    boundary as one (a driver that stops the arms between the segments it is sent must not
+    stop one mid-motion), each with the events, notes and facts of the segments in it."""
     events: list[TimedEvent] = []
     out: list[CompiledSegment] = []
-    for piece in pieces:
-        starting = [s for s in piece.slots if abs(s.start - piece.lo) < 1e-9]
-        ending = [s for s in scheduled if abs(s.end - piece.hi) < 1e-9]
-        before = tuple(e for s in starting for e in compiled[s.index].segment.before)
-        after = tuple(e for s in ending for e in compiled[s.index].segment.after)
-        events += [TimedEvent(piece.lo, e) for e in before]
-        events += [TimedEvent(piece.hi, e) for e in after]
-        notes = tuple(a for s in ending for a in compiled[s.index].segment.annotations)
-        first = compiled[piece.slots[0].index].segment if piece.slots else None
+    for window in _windows(pieces):
+        lo, hi = window[0].lo, window[-1].hi
+        slots = sorted({s for p in window for s in p.slots}, key=lambda s: s.index)
+        starting = [s for s in slots if lo - SAME <= s.start < hi - SAME]
+        ending = [e for e in scheduled if lo + SAME < e.end <= hi + SAME]
+        for s in starting:
+            events += [TimedEvent(s.start, e) for e in compiled[s.index].segment.before]
+        for x in ending:
+            events += [TimedEvent(x.end, e) for e in compiled[x.index].segment.after]
+        first = [compiled[s.index].segment for s in starting if s.start <= lo + SAME]
+        last = [compiled[x.index].segment for x in ending if x.end >= hi - SAME]
+        segs = [compiled[s.index].segment for s in slots]
+        notes = [a for x in ending for a in compiled[x.index].segment.annotations]
+        one = segs[0] if len(segs) == 1 else None
         segment = Segment(
-            step=first.step if first is not None else _step_at(scheduled, piece.lo),
-            # one segment alone in the piece: its couplings (the report shows them)
-            closed_chain=first.closed_chain if len(piece.slots) == 1 and first else None,
-            keep_distance=first.keep_distance if len(piece.slots) == 1 and first else None,
-            label=" + ".join(compiled[s.index].segment.label for s in piece.slots) or "wait",
-            before=before,
-            after=after,
+            step=segs[0].step if segs else _step_at(scheduled, lo),
+            label=" + ".join(dict.fromkeys(seg.label for seg in segs)) or "wait",
+            # one segment alone in it: its couplings (the report shows them)
+            closed_chain=one.closed_chain if one else None,
+            keep_distance=one.keep_distance if one else None,
+            before=tuple(e for seg in first for e in seg.before),
+            after=tuple(e for seg in last for e in seg.after),
             annotations=tuple(a for a in notes if isinstance(a, Measure | Anchor)),
-            # what the segments ending with it promise, and which segments run in it
+            # what the segments ending in it promise, and which segments run in it
             facts={
-                **{k: v for s in ending for k, v in compiled[s.index].segment.facts.items()},
-                "segments": [s.index for s in piece.slots],
+                **{k: v for x in ending for k, v in compiled[x.index].segment.facts.items()},
+                "segments": [s.index for s in slots],
             },
         )
-        out.append(
-            CompiledSegment(
-                segment,
-                compiled[0].strategy,
-                piece.trajectory,
-                _report(piece, compiled, starting),
-            )
-        )
+        trajectory = joined([p.trajectory for p in window])
+        report = _report(window, compiled, slots, starting)
+        out.append(CompiledSegment(segment, compiled[0].strategy, trajectory, report))
     names = compiled[0].trajectory.joint_names
+    events.sort(key=lambda e: e.time)
     return Program(names, tuple(out), tuple(events), tuple(scheduled), done)
 
 
+def _windows(pieces: Sequence[Piece]) -> list[list[Piece]]:
+    """The pieces in runs joined by a segment running across their boundary."""
+    out: list[list[Piece]] = []
+    for piece in pieces:
+        if out and set(out[-1][-1].slots) & set(piece.slots):
+            out[-1].append(piece)
+        else:
+            out.append([piece])
+    return out
+
+
 def _step_at(scheduled: Sequence[Scheduled], t: float) -> int:
-    return next((s.step for s in scheduled if s.start >= t - 1e-9), scheduled[-1].step)
+    return next((s.step for s in scheduled if s.start >= t - SAME), scheduled[-1].step)
 
 
 def _report(
-    piece: Piece, compiled: Sequence[CompiledSegment], starting: Sequence[Any]
+    window: Sequence[Piece],
+    compiled: Sequence[CompiledSegment],
+    slots: Sequence[Slot],
+    starting: Sequence[Slot],
 ) -> dict[str, Any]:
-    """What report.json says of a piece: the gate's figures of it, and the planning time
-    of the segments starting in it (each counted once)."""
-    r = piece.report
-    moving = {p.arm: p.kind for s in piece.slots for p in compiled[s.index].segment.paths}
+    """What report.json says of what is played as one: the gate's figures of its pieces,
+    and the planning time of the segments starting in it (each counted once)."""
+    reports = [p.report for p in window]
+    distances = [r for r in reports if r.min_arm_distance is not None]
+    closest = min(distances, key=lambda r: r.min_arm_distance or 0.0, default=None)
+    clearances = [r.clearance for r in reports if r.clearance is not None]
     return {
-        "arms": moving,
-        "segments": [s.index for s in piece.slots],
+        "arms": {p.arm: p.kind for s in slots for p in compiled[s.index].segment.paths},
+        "segments": [s.index for s in slots],
+        "pieces": len(window),
         "planning_time_s": sum(
             float(compiled[s.index].report.get("planning_time_s", 0.0)) for s in starting
         ),
-        "start_s": piece.lo,
-        "duration_s": piece.hi - piece.lo,
-        "min_arm_distance_m": r.min_arm_distance,
-        "closest_pair": list(r.closest_pair or ()) or None,
-        "clearance": r.clearance.figures() if r.clearance is not None else None,
+        "start_s": window[0].lo,
+        "duration_s": window[-1].hi - window[0].lo,
+        "min_arm_distance_m": None if closest is None else closest.min_arm_distance,
+        "closest_pair": None if closest is None else list(closest.closest_pair or ()) or None,
+        "clearance": least(clearances).figures() if clearances else None,
         "checks_passed": True,  # a piece the gate refuses is not in the program
-        "checks": {"gate": True, "gate_samples": r.samples},
+        "checks": {"gate": True, "gate_samples": sum(r.samples for r in reports)},
     }
 
 

@@ -132,6 +132,8 @@ class Streams:
         tl = self.timeline
         part = self.parts[i]
         ends = [tl.free(a) for a in arms]
+        if _measures(self.segments[i].segment):  # read at rest: nothing else running
+            ends.append(tl.makespan)
         for s, placed in zip(tl.slots, self.scheduled, strict=True):
             j = s.index
             other = self.parts[j]

@@ -13,6 +13,7 @@ polynomial overshooting next to that knot. Jerk-limited producers (timing.py) sa
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -393,6 +394,30 @@ def concatenate(parts: Sequence[Trajectory]) -> Trajectory:
         np.concatenate(qds),
         np.concatenate(qdds),
     )
+
+
+def joined(parts: Sequence[Trajectory]) -> Trajectory:
+    """Trajectories that follow one another on one time axis (each begins where and when
+    the one before ends) as one, their polynomials kept as they are (not rebuilt from
+    the knots: see :meth:`Trajectory.refined`)."""
+    if not parts:
+        raise ValueError("joined needs at least one trajectory")
+    many = [p for p in parts if p.t.size > 1]
+    if len(many) <= 1:
+        return many[0] if many else parts[0]
+    for a, b in itertools.pairwise(many):
+        if abs(a.end_time - b.start_time) > 1e-9 or a.joint_names != b.joint_names:
+            raise ValueError(
+                f"joined: a part ends at {a.end_time!r} s, the next begins at {b.start_time!r}"
+            )
+    first = many[0]
+    t = np.concatenate([first.t, *(p.t[1:] for p in many[1:])])
+    q, qd, qdd = (
+        np.concatenate([getattr(first, k), *(getattr(p, k)[1:] for p in many[1:])])
+        for k in ("q", "qd", "qdd")
+    )
+    coef = [np.concatenate([p._coef[m] for p in many]) for m in range(6)]
+    return Trajectory.with_coefficients(first.joint_names, t, q, qd, qdd, coef)
 
 
 def _check_junction(

@@ -62,5 +62,6 @@ def journaled(journal: IO[str], driver: Driver, play: Callable[[], None]) -> Non
         )
         stopped = record.to_json() if record is not None else {}
         stopped.pop("entry", None)
-        append(journal, Entry.FAULT, fault={**e.fault.to_json(), **stopped})
+        more = {} if e.streams is None else {"streams": e.streams}
+        append(journal, Entry.FAULT, fault={**e.fault.to_json(), **stopped}, **more)
         raise

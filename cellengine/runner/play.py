@@ -7,6 +7,7 @@ from collections.abc import Collection, Sequence
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
+from cellengine.drivers.fault import DriverFault
 from cellengine.journal import Entry, append
 from cellengine.program import Measure
 
@@ -55,8 +56,8 @@ def play(
         planned = dict(measured)
         write_plan_outputs(again, out)  # the whole plan as it now is
         if program.streams:  # both robots at once: what is left, from where they are
-            done, running = program.streams_at(i - 1)
-            again = again.rest(done, running, program.segments[i - 1].trajectory.q[-1])
+            t = program.segments[i - 1].trajectory.end_time
+            again = again.rest(*program.streams_at(t))
             i = 0
         compiled, program = again, again.program
         events_of = segment_events(program)
@@ -87,12 +88,16 @@ def _send(
     segment = program.segments[index]
     seg = segment.segment
     append(journal, Entry.SENT, step=seg.step, segment=index, label=seg.label)
-    driver.execute(segment, events)
+    try:
+        driver.execute(segment, events)
+    except DriverFault as e:
+        if program.streams and e.fault.time is not None:  # the fault entry says it too
+            e.streams = streams_entry(program, e.fault.time)
+        raise
     grippers = {arm: list(driver.gripper(arm)) for arm in arms}
     more: dict[str, Any] = {}
     if program.streams:  # what --resume goes on from: each robot's segments
-        done, running = program.streams_at(index)
-        more["streams"] = {"done": sorted(done), "running": sorted(running)}
+        more["streams"] = streams_entry(program, segment.trajectory.end_time)
     append(
         journal,
         Entry.FINISHED,
@@ -103,6 +108,17 @@ def _send(
         grippers=grippers,
         **more,
     )
+
+
+def streams_entry(program: Program, t: float) -> dict[str, Any]:
+    """Both robots at once: the segments of their streams finished and running at program
+    time ``t``, and where the program has the arms then (what ``--resume`` goes on from)."""
+    done, running, q = program.streams_at(t)
+    return {
+        "done": sorted(done),
+        "running": sorted(running),
+        "q": [round(float(v), 9) for v in q],
+    }
 
 
 def _weigh(driver: Driver, journal: IO[str], seg: Segment, measured: dict[str, float]) -> bool:
@@ -131,7 +147,7 @@ def _recompiled(
     )
     program = compiled.program
     if program.streams:
-        finished, running = program.streams_at(done - 1)
+        finished, running, _ = program.streams_at(program.segments[done - 1].trajectory.end_time)
         new = {s.index: s.label for s in again.program.streams}
         old = {s.index: s.label for s in program.streams}
         same = all(new.get(k) == old[k] for k in running | (finished & set(old)))

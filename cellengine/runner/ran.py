@@ -109,15 +109,20 @@ def runtime_choices(compiled: Compiled, measured: dict[str, float]) -> list[dict
 
 def _segments(out: Path, compiled: Compiled) -> int:
     """The program's segments: the last one written to the folder's report (a replanned run's
-    program is not ``compiled``'s)."""
+    program is not ``compiled``'s); both robots at once: the segments of their streams."""
     from cellengine.report.write import REPORT_JSON
 
+    program = compiled.program
     try:
-        return int(
-            json.loads((out / REPORT_JSON).read_text(encoding="utf-8"))["totals"]["segments"]
-        )
-    except (OSError, ValueError, KeyError, TypeError):
-        return len(compiled.program.segments)
+        report = json.loads((out / REPORT_JSON).read_text(encoding="utf-8"))
+        streams = report.get("streams") or {}
+        if streams.get("at_once"):
+            return len({s["segment"] for lane in streams["lanes"].values() for s in lane})
+        return int(report["totals"]["segments"])
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        if program.streams:
+            return len(program.streams) + len(program.done)
+        return len(program.segments)
 
 
 def _this_run(journal: Path) -> list[dict[str, Any]]:
@@ -140,11 +145,13 @@ def _this_run(journal: Path) -> list[dict[str, Any]]:
 
 
 def _finished(entries: list[dict[str, Any]]) -> int:
-    """Segments finished in order (a resumed or replanned run may finish one again)."""
+    """Segments finished in order (a resumed or replanned run may finish one again); both
+    robots at once: the segments of their streams finished."""
     done = 0
     for e in entries:
         if e["entry"] == Entry.FINISHED and isinstance(e.get("segment"), int):
-            done = e["segment"] + 1
+            streams = e.get("streams")
+            done = len(streams["done"]) if isinstance(streams, dict) else e["segment"] + 1
     return done
 
 

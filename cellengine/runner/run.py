@@ -187,8 +187,8 @@ def _rest(compiled: Compiled, progress: Progress, run_dir: Path) -> Compiled:
     finished segment left them (each robot's finished and running segments, the arms)."""
     from cellengine.execute.refused import Refused
 
-    assert progress.streams is not None and progress.q is not None
-    done, running = progress.streams
+    assert progress.streams is not None
+    done, running, q = progress.streams
     n = len(compiled.program.streams)
     if len(done) >= n and progress.cycle >= progress.cycles:
         raise InputError(Problem("every segment was finished; only the end was not journaled"))
@@ -201,7 +201,7 @@ def _rest(compiled: Compiled, progress: Progress, run_dir: Path) -> Compiled:
             )
         )
     try:
-        return compiled.rest(done, running, np.asarray(progress.q, dtype=float))
+        return compiled.rest(done, running, np.asarray(q, dtype=float))
     except Refused as e:
         raise InputError(
             Problem(
