@@ -157,6 +157,27 @@ def test_a_lab_mission_is_drawn_as_lanes_per_robot(tmp_path: Path) -> None:
     assert "weigh (handover)" in right and "cap (cooperation)" in right
 
 
+def test_both_robots_at_once_are_drawn_as_lanes_with_their_waits(tmp_path: Path) -> None:
+    """A lab plan with both robots at once: a lane per robot of its segments where they
+    ran, and each wait the streams inserted drawn before its segment, saying why."""
+    from cellengine.pipeline import compile_plan, write_plan_outputs
+    from tests.conftest import CELLS
+
+    c = compile_plan(CELLS / "lab_bench" / "plan_relocate.yaml")
+    paths = write_plan_outputs(c, tmp_path / "run")
+    dom = run_chromium(paths["html"].as_uri(), tmp_path / "profile", "--dump-dom").stdout
+    assert 'data-status="ok"' in dom
+    lanes = re.findall(r'<div class="lane thin" data-stream="(\w+)">(.*?)</div></div>', dom)
+    assert sorted(arm for arm, _ in lanes) == ["robot1", "robot2"]
+    for arm, body in lanes:
+        mine = [s for s in c.program.streams if arm in s.arms]
+        assert body.count('class="bar"') == len(mine)
+    waits = re.findall(r'class="bar wait" title="([^"]*)"', dom)
+    (wait,) = [s for s in c.program.streams if s.why is not None]
+    assert len(waits) == 1 and "shared zone" in html_lib.unescape(waits[0])
+    assert f"waited {wait.wait:.2f} s before {wait.label}" in html_lib.unescape(waits[0])
+
+
 INTERACT = """
 <script>
 (function () {

@@ -115,6 +115,27 @@ function buildTimeline() {
       }
     }
   }
+  if (RE.streams && RE.streams.at_once) {
+    // both robots at once: each robot's segments where they ran, and every wait the
+    // streams inserted before one (hatched, from when its order let it start)
+    for (const [arm, items] of Object.entries(RE.streams.lanes)) {
+      const sl = lane('thin', 'At once: ' + arm);
+      sl.dataset.stream = arm;
+      for (const s of items) {
+        if (s.wait_s > 0) {
+          const w = { start: s.start - s.wait_s, end: s.start };
+          const why = 'waited ' + fmt(s.wait_s, 2) + ' s before ' + s.label + ': ' +
+            (s.waited_for || 'its order');
+          const b = el('div', { class: 'bar wait', title: why, style: 'left:' + pct(w.start) +
+            ';width:' + Math.max(0.15, s.wait_s / DUR * 100) + '%' });
+          sl.append(b);
+        }
+        const short = s.label.split(': ').slice(1).join(': ') || s.label;
+        bar(sl, s, armColor[arm] || '#64748b', short, s.label + ': ' + fmt(s.start, 2) +
+          ' to ' + fmt(s.end, 2) + ' s', []);
+      }
+    }
+  }
   const segs = lane('thin', 'Segments');
   const key = segs.previousSibling;
   for (const [name, color] of Object.entries(STRATEGY_COLORS)) {
