@@ -184,3 +184,22 @@ def test_streams_json_lanes_and_waits() -> None:
     assert out["one_after_another_s"] > out["duration_s"]
     (wait,) = [w for w in out["waits"] if w["wait_s"] > 1.0]
     assert "shared zone" in wait["why"]
+
+
+@pytest.mark.parametrize("cell", sorted(CELL_FILES))
+def test_a_handover_taker_that_would_come_before_the_giver_let_go_is_refused(cell: str) -> None:
+    """plan_weigh_handover with the mission's order taken away (each segment a task of its
+    own): robot1's way to the handover could start at once. The shared zone refuses it
+    until robot2 has put the vial down and gone, and its grasp waits for the vial."""
+    program, rules, (world, model, scene, clearance) = _before_streams("plan_weigh_handover", cell)
+    q0 = np.array(program.segments[0].trajectory.q[0])
+    streams = Streams(program.segments, rules, model, Holding(world, scene), q0, clearance)
+    streams.parts = [None if p is None else (f"own{i}", 0) for i, p in enumerate(streams.parts)]
+    placed = streams.place_all()
+    put = next(s for s in placed if s.arms == ("robot2",) and "put down vial3" in s.label)
+    back = next(s for s in placed if s.arms == ("robot2",) and "back to its rest" in s.label)
+    come = next(s for s in placed if s.arms == ("robot1",))
+    grasp = next(s for s in placed if s.arms == ("robot1",) and "grasp vial3" in s.label)
+    assert come.ready == 0.0 and come.start >= put.end
+    assert come.why is not None and "shared zone 'shared'" in come.why
+    assert come.start >= back.start - 1e-9 and grasp.start >= put.end
