@@ -135,8 +135,9 @@ def run(args: argparse.Namespace) -> int:
             print(printable(replaced), file=sys.stderr)
         paths = write_plan_outputs(compiled, args.out)
     summary = {
-        "segments": len(compiled.program.segments),
+        "segments": len(compiled.program.streams) or len(compiled.program.segments),
         "duration": compiled.program.duration,
+        "in_turn": in_turn(compiled),
         "strategy": compiled.strategy,
         "warnings": [w.warning() for w in compiled.world.warnings],
     }
@@ -149,6 +150,17 @@ def run(args: argparse.Namespace) -> int:
 
 # the files `plan` writes (cellengine.pipeline, cellengine.report.write), kept in the cache
 OUTPUTS = ("trajectory.json", "report.json", "report.html")
+
+
+def in_turn(compiled: Compiled) -> float | None:
+    """Both robots at once: the same segments' cycle one after another (s); else None."""
+    streams = compiled.report.get("streams") or {}
+    return float(streams["one_after_another_s"]) if streams.get("at_once") else None
+
+
+def at_once(in_turn: float | None) -> str:
+    """What a summary line says of both robots at once, if they are."""
+    return "" if in_turn is None else f" with both robots at once ({in_turn:.2f} s in turn)"
 
 
 def _request(args: argparse.Namespace) -> dict[str, object]:
@@ -184,7 +196,7 @@ def _from_cache(args: argparse.Namespace, hit: Hit) -> int:
 def _said(args: argparse.Namespace, summary: dict[str, Any], html: Path, how: str = "") -> None:
     if not args.quiet:
         print(
-            f"compiled {summary['segments']} segments, "
-            f"{summary['duration']:.2f} s of motion ({summary['strategy']}){how}"
+            f"compiled {summary['segments']} segments, {summary['duration']:.2f} s of motion"
+            f"{at_once(summary.get('in_turn'))} ({summary['strategy']}){how}"
         )
         print(f"report: {display_path(html)}")

@@ -62,9 +62,13 @@ def run_plan(
             _drive(compiled, driver, journal, out, quiet, cycles=(1, cycles))
     if not quiet:
         times = f" x {cycles} cycles" if cycles > 1 else ""
+        from cellengine.commands.plan import at_once, in_turn
+
+        program = compiled.program
         print(
-            f"ran {len(compiled.program.segments)} segments{times}, "
-            f"{compiled.program.duration:.2f} s of motion ({compiled.strategy})"
+            f"ran {len(program.streams) or len(program.segments)} segments{times}, "
+            f"{program.duration:.2f} s of motion{at_once(in_turn(compiled))} "
+            f"({compiled.strategy})"
         )
         print(f"report: {display_path(paths['html'])}")
 
