@@ -3,6 +3,9 @@
 One emulated controller per loopback address, all in this process: the dashboard server
 (29999), the script port (30003) and RTDE (30004) that ur-rtde's clients talk to, and a
 simulated arm. See cellengine/emulate/ for what is emulated and how.
+
+`cellengine emulate grbl [--count N]`: emulated GRBL 1.1 controllers (the lab bench's
+cartesian axes) on pseudo-terminals (commands/emulate_grbl.py).
 """
 
 from __future__ import annotations
@@ -17,14 +20,24 @@ from cellengine.errors import Problem, UsageError
 
 
 def add_parser(sub: Any, name: str) -> None:
-    p = sub.add_parser(
+    from cellengine.commands.emulate_grbl import add_grbl
+
+    top = sub.add_parser(
         name,
-        help="emulate UR controllers on loopback addresses (for tests)",
+        help="emulate robot controllers for tests: ur (on loopback addresses), grbl (on "
+        "pseudo-terminals)",
+        description="Emulate robot controllers in this process, for tests of the real "
+        "drivers. Prints a line with 'ready' when they accept connections; stops on SIGTERM.",
+    )
+    kinds = top.add_subparsers(dest="robot", required=True, metavar="{ur,grbl}")
+    p = kinds.add_parser(
+        "ur",
+        help="Universal Robots controllers, one per loopback address",
         description="Emulate Universal Robots controllers, one per address, in this process: "
         "dashboard (29999), script port (30003), RTDE (30004) and a simulated arm. Prints a "
         "line with 'ready' when every controller accepts connections; stops on SIGTERM.",
     )
-    p.add_argument("robot", choices=["ur"], help="the controller to emulate")
+    add_grbl(kinds)
     p.add_argument(
         "--host",
         action="append",
