@@ -34,6 +34,8 @@ FaultKind = Literal[
     "interrupted",
     "internal",
     "load_cell",
+    "alarm",  # a GRBL controller's ALARM:N (a limit switch, a soft limit, ...)
+    "controller_error",  # a GRBL controller answered a line error:N
 ]
 
 

@@ -55,7 +55,7 @@ class Status:
     planner_free: int | None
     rx_free: int | None
     pins: str
-    time: float  # time.monotonic() when it arrived
+    time: float  # time.perf_counter() when it arrived
 
 
 def parse_status(text: str, at: float) -> Status:
@@ -128,6 +128,10 @@ class GrblLink:
     def hold(self) -> None:
         """Feed hold (!): a controlled stop, the queue kept."""
         self._write(b"!")
+
+    def resume(self) -> None:
+        """Cycle start (~): what a feed hold stopped or kept from starting goes."""
+        self._write(b"~")
 
     def ask_status(self) -> None:
         self._write(b"?")
@@ -207,7 +211,7 @@ class GrblLink:
     def _take(self, data: bytes) -> None:
         lines = (self._partial + data).split(b"\n")
         self._partial = lines.pop()
-        now = time.monotonic()
+        now = time.perf_counter()
         for raw in lines:
             text = raw.decode("ascii", errors="replace").strip()
             if not text:

@@ -1,6 +1,7 @@
 """Drivers by the name a cell file gives them (``driver: {kind: sim}``): a plain dict.
 
 The UR driver joins as ``"ur_rtde"``; its vendor library is imported only when it is used.
+The lab bench's GRBL controllers join as ``"lab"`` (pyserial imported when it configures).
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ from typing import Any
 
 from cellengine.drivers.base import Driver
 from cellengine.drivers.fault import DriverRefused
+from cellengine.drivers.lab import LabBenchDriver
 from cellengine.drivers.sim import SimDriver
 from cellengine.drivers.ur_rtde import UrDriver
 from cellengine.errors import known
@@ -17,7 +19,7 @@ from cellengine.info.cell import Cell
 from cellengine.info.objects import Objects
 
 # the UR driver imports its vendor library only when it configures
-DRIVERS: dict[str, type[Driver]] = {"sim": SimDriver, "ur_rtde": UrDriver}
+DRIVERS: dict[str, type[Driver]] = {"sim": SimDriver, "ur_rtde": UrDriver, "lab": LabBenchDriver}
 
 
 def make_driver(

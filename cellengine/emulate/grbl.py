@@ -7,7 +7,8 @@ Emulated as GRBL 1.1 behaves (gnea/grbl wiki, "Grbl v1.1 Interface" and "Command
 - a 128-byte serial receive buffer: a host that sends more than it holds loses bytes (the
   emulator counts them: ``overflows``), which is what character counting prevents;
 - real-time commands taken out of the stream as they arrive: ``?`` (status report), ``!``
-  (feed hold), ``~`` (cycle start), 0x18 (soft reset);
+  (feed hold; when idle, the lines that follow are planned and wait), ``~`` (cycle start),
+  0x18 (soft reset);
 - lines executed when the 15-block planner has room: G-code (G0, G1, G4, G90, G91, G21, F,
   axis words X Y Z A) answered ``ok`` or ``error:N``; ``$$`` (settings), ``$N=V``, ``$I``,
   ``$H`` (homing, answered when done), ``$X`` (unlock);
@@ -80,6 +81,7 @@ class Grbl:
     speed: float = 0.0  # mm/s along the current block
     overflows: int = 0  # bytes lost to a full receive buffer
     log: list[str] = field(default_factory=list)  # every line executed, for tests
+    realtime: list[str] = field(default_factory=list)  # every !, ~ and reset (as ^X) taken
     feed: float = 0.0  # the modal feed rate (mm/min)
     relative: bool = False
     homing_left: float = 0.0  # s of homing still to go
@@ -99,12 +101,17 @@ class Grbl:
             if byte == ord("?"):
                 self.output += self.status().encode() + b"\r\n"
             elif byte == ord("!"):
+                self.realtime.append("!")
                 if self.state == "Run":
                     self.state = "Hold:1"
+                elif self.state == "Idle":  # held before it starts: lines queue, wait for ~
+                    self.state = "Hold:0"
             elif byte == ord("~"):
+                self.realtime.append("~")
                 if self.state.startswith("Hold"):
                     self.state = "Run" if self.planner else "Idle"
             elif byte == RESET:
+                self.realtime.append("^X")
                 self.reset()
             elif len(self.rx) >= RX_BUFFER - 1:
                 self.overflows += 1
@@ -222,6 +229,8 @@ class Grbl:
                 return "error:20"
         if motion == "G4":
             self.planner.append(Block(list(self._end()), list(self._end()), 0.0, dwell or 0.0))
+            if self.state == "Idle":
+                self.state = "Run"  # busy until the dwell is over
             return "ok"
         if not moved:
             return "ok"

@@ -240,7 +240,44 @@ class UrRtdeDriver(Frozen):
     gripper_io: dict[Name, tuple[Annotated[int, Field(ge=0, le=7)], ...]] = {}
 
 
-DriverSpec = Annotated[SimDriver | UrRtdeDriver, Field(discriminator="kind")]
+class GrblAxis(Frozen):
+    """One joint of a cartesian robot as one GRBL axis: GRBL's machine position (mm; a
+    rotary axis in degrees) = ``offset`` + ``sign`` x the joint's value (mm or deg)."""
+
+    letter: Literal["X", "Y", "Z", "A"]
+    sign: Literal[-1, 1] = 1
+    offset: float = Field(0.0, allow_inf_nan=False)  # GRBL's units (mm, deg)
+
+
+class GrblRobot(Frozen):
+    """A cartesian robot's GRBL controller (an Arduino on USB serial)."""
+
+    port: str = Field(min_length=1)  # e.g. /dev/ttyACM0
+    baud: int = Field(115200, gt=0)
+    axes: dict[Name, GrblAxis] = Field(min_length=1)  # the robot's joints (URDF names)
+    # activate runs GRBL's homing cycle ($H); else an alarm at activation is refused unless
+    # unlock says to clear it ($X)
+    home: bool = False
+    unlock: bool = False
+
+
+class LabDriver(Frozen):
+    """The lab bench's hardware: each cartesian robot's axes on its own GRBL controller."""
+
+    kind: Literal["lab"]
+    robots: dict[Name, GrblRobot] = Field(min_length=1)
+    # largest distance (length unit) of an axis from the plan before both robots stop; a
+    # rotary axis' (angle unit)
+    tracking_tolerance: Length = Field(0.003, gt=0)
+    tracking_tolerance_rotary: Angle = Field(0.05, gt=0)
+    # largest distance of an axis from a segment's first point at its start
+    start_tolerance: Length = Field(0.0005, gt=0)
+    # the run moves the robots to the plan's start on its own only from this near
+    start_move_limit: Length = Field(0.05, gt=0)
+    status_hz: float = Field(20.0, ge=10.0, le=100.0)  # status reports asked for per second
+
+
+DriverSpec = Annotated[SimDriver | UrRtdeDriver | LabDriver, Field(discriminator="kind")]
 
 
 class Cell(Frozen):

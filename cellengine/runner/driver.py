@@ -11,6 +11,8 @@ from cellengine.errors import UsageError
 
 if TYPE_CHECKING:  # the drivers and the motion stack are imported when a run starts
     from cellengine.drivers.base import Driver
+    from cellengine.drivers.lab import JointSpec
+    from cellengine.motion.robot import CellModel
     from cellengine.pipeline import Compiled
 
 
@@ -36,12 +38,34 @@ def open_driver(
     world, cell = compiled.world, compiled.cell
     joints = {name: arm.joint_names for name, arm in cell.arms.items()}
     sim: dict[str, Any] = {}
+    if (options.kind or world.cell.driver.kind) == "lab":  # settings checked against these
+        sim = {"specs": joint_specs(cell)}
     if (options.kind or world.cell.driver.kind) == "sim":
         start = compiled.program.segments[0].trajectory.q[0] if q0 is None else q0
         sim = {"realtime": options.realtime, "q0": start}
         if grippers is not None:
             sim["grippers"] = grippers
     return make_driver(world.cell, joints, objects=world.objects, kind=options.kind, **sim)
+
+
+def joint_specs(cell: CellModel) -> dict[str, JointSpec]:
+    """Each joint's kind, range and timing limits, by the cell's joint name."""
+    from cellengine.drivers.lab import JointSpec
+
+    lim = cell.timing_limits()
+    out: dict[str, JointSpec] = {}
+    for arm in cell.arms.values():
+        for j, joint in enumerate(list(arm.model.joints)[1:]):
+            name = arm.joint_names[j]
+            i = cell.joint_names.index(name)
+            out[name] = JointSpec(
+                joint.shortname().startswith("JointModelP"),
+                float(lim.lower[i]),
+                float(lim.upper[i]),
+                float(lim.velocity[i]),
+                float(lim.acceleration[i]),
+            )
+    return out
 
 
 def confirm(driver: Driver, yes: bool, about: Callable[[], str], quiet: bool = False) -> None:

@@ -1,0 +1,293 @@
+"""The lab bench's hardware (``driver: {kind: lab}``): each cartesian robot's axes on its own
+GRBL 1.1 controller over USB serial (grbl_link.py), both played from one clock
+(lab_stream.py).
+
+- configure: every controller answers with its banner (version 1.1), its status, and
+  settings that can play the cell: each axis' maximum rate ($110...) and acceleration
+  ($120...) at least the joint's limits, its travel ($130...) at least the joint's range,
+  the steps per unit ($100...) stated; else refused, naming the setting.
+- activate: a homing cycle ($H) when the cell says ``home``; a controller in alarm is
+  refused unless the cell says ``unlock`` ($X).
+- deactivate: a feed hold and a reset on every controller; finalize closes the ports.
+
+Grippers and load cells are not on this driver yet: a segment with a gripper event is
+refused before anything moves.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from cellengine.arrays import FloatArray
+from cellengine.drivers.base import Driver, GripperState
+from cellengine.drivers.fault import DriverFault, DriverRefused, Fault
+from cellengine.drivers.gcode import AxisMap
+from cellengine.drivers.grbl_link import GrblError, GrblLink, GrblLost
+from cellengine.drivers.lab_stream import play
+from cellengine.drivers.record import Played
+from cellengine.info.cell import Cell, LabDriver
+from cellengine.info.objects import Objects
+from cellengine.program import CompiledSegment, TimedEvent
+
+HOME_TIMEOUT = 60.0  # s for a homing cycle
+STATUS_WAIT = 0.5  # s for a status report asked for
+
+
+@dataclass(frozen=True)
+class JointSpec:
+    """What the driver checks a controller's settings against (SI: m or rad)."""
+
+    prismatic: bool
+    lower: float
+    upper: float
+    velocity: float
+    acceleration: float
+
+
+class LabBenchDriver(Driver):
+    kind = "lab"
+
+    def __init__(
+        self,
+        cell: Cell,
+        joints: Mapping[str, Sequence[str]],
+        *,
+        objects: Objects | None = None,
+        specs: Mapping[str, JointSpec] | None = None,
+        serials: Mapping[str, Any] | None = None,
+    ) -> None:
+        if not isinstance(cell.driver, LabDriver):
+            raise DriverRefused("lab", f"the cell's driver is '{cell.driver.kind}', not lab")
+        self.config: LabDriver = cell.driver
+        super().__init__(cell, joints, objects=objects, start_tolerance=self.config.start_tolerance)
+        self.start_move_limit = self.config.start_move_limit
+        self.specs = dict(specs or {})
+        self._serials = dict(serials or {})  # robot -> an open pyserial-like port (tests)
+        self.addresses = {r: g.port for r, g in self.config.robots.items()}
+        self.links: dict[str, GrblLink] = {}
+        self.axes = self._axes(joints)
+        self.versions: dict[str, str] = {}
+        self.accel: dict[str, list[float]] = {}  # each robot's axes' $120... (units/s^2)
+        self.hold_latencies: list[float] = []  # s from a fault's detection to the holds
+        self._q = np.full(len(self.joint_names), np.nan)
+
+    def _axes(self, joints: Mapping[str, Sequence[str]]) -> dict[str, list[AxisMap]]:
+        """Each robot's joints as its controller's axes (the cell file's ``axes``)."""
+        out: dict[str, list[AxisMap]] = {}
+        for robot, grbl in self.config.robots.items():
+            if robot not in joints:
+                raise DriverRefused(self.kind, f"robot '{robot}' is not one of the cell's")
+            names = list(joints[robot])
+            mine = []
+            for joint, axis in grbl.axes.items():
+                full = next((n for n in names if n == joint or n.endswith("_" + joint)), None)
+                if full is None:
+                    raise DriverRefused(
+                        self.kind,
+                        f"robots.{robot}.axes: '{joint}' is not a joint of '{robot}' "
+                        f"({', '.join(names)})",
+                    )
+                index = self.joint_names.index(full)
+                spec = self.specs.get(full)
+                prismatic = spec.prismatic if spec is not None else axis.letter != "A"
+                scale = 1000.0 if prismatic else 180.0 / math.pi
+                mine.append(AxisMap(index, axis.letter, axis.sign, axis.offset, scale))
+            out[robot] = mine
+        return out
+
+    # -- lifecycle hooks --------------------------------------------------------------------
+
+    def _on_configure(self) -> None:
+        try:
+            for robot, grbl in self.config.robots.items():
+                link = GrblLink(grbl.port, grbl.baud, self._serials.get(robot))
+                self.links[robot] = link
+                self.versions[robot] = link.open()
+                if not self.versions[robot].startswith("1.1"):
+                    raise DriverRefused(
+                        self.kind,
+                        f"robot '{robot}' at {grbl.port}: GRBL {self.versions[robot]}; "
+                        "this driver speaks GRBL 1.1",
+                    )
+                settings = link.settings()
+                self._check_settings(robot, settings)
+                self.accel[robot] = [
+                    settings.get(120 + "XYZA".index(a.letter), float("inf"))
+                    for a in self.axes[robot]
+                ]
+            self._q = self._read_joints()
+        except (GrblError, DriverRefused) as e:
+            self._close()
+            if isinstance(e, DriverRefused):
+                raise
+            raise DriverRefused(self.kind, str(e)) from None
+
+    def _check_settings(self, robot: str, settings: Mapping[int, float]) -> None:
+        for a in self.axes[robot]:
+            k = "XYZA".index(a.letter)
+            spec = self.specs.get(self.joint_names[a.joint])
+            if spec is None:
+                continue
+            need = {
+                110 + k: (spec.velocity * a.scale * 60.0, "maximum rate", "/min"),
+                120 + k: (spec.acceleration * a.scale, "acceleration", "/s^2"),
+            }
+            if a.letter != "A":
+                need[130 + k] = ((spec.upper - spec.lower) * a.scale, "travel", "")
+            unit = "mm" if a.letter != "A" else "deg"
+            for number, (least, what, per) in need.items():
+                have = settings.get(number)
+                if have is None or have < least - 1e-6:
+                    raise DriverRefused(
+                        self.kind,
+                        f"robot '{robot}' at {self.addresses[robot]}: ${number} ({what} of "
+                        f"axis {a.letter}) is {have} {unit}{per}; the cell's "
+                        f"'{self.joint_names[a.joint]}' needs at least {least:.6g} {unit}{per}",
+                    )
+
+    def _on_activate(self) -> None:
+        for robot, link in self.links.items():
+            grbl = self.config.robots[robot]
+            state = self._status(robot).state
+            if grbl.home:
+                self._command(robot, "$H", HOME_TIMEOUT)
+            elif state == "Alarm":
+                if not grbl.unlock:
+                    raise DriverRefused(
+                        self.kind,
+                        f"robot '{robot}' at {link.port} is in alarm: home it (robots.{robot}"
+                        f".home: true) or, where its position is known, unlock it "
+                        f"(robots.{robot}.unlock: true)",
+                    )
+                self._command(robot, "$X", 2.0)
+        self._q = self._read_joints()
+
+    def _on_deactivate(self) -> None:
+        self._stop_all()
+
+    def _on_finalize(self) -> None:
+        self._close()
+
+    def _on_recover(self) -> None:
+        try:
+            for robot in self.links:
+                link = self.links[robot]
+                link.alarm, link.errors = None, []
+                if self._status(robot).state == "Alarm":
+                    raise DriverRefused(self.kind, f"robot '{robot}' is still in alarm")
+        except GrblLost as e:
+            raise DriverRefused(self.kind, str(e)) from None
+
+    def _on_fault(self) -> None:
+        self._stop_all()
+
+    # -- execution --------------------------------------------------------------------------
+
+    def _on_execute(self, segment: CompiledSegment, events: tuple[TimedEvent, ...]) -> Played:
+        if events:
+            e = events[0].event
+            raise DriverRefused(
+                self.kind,
+                f"segment '{segment.segment.label}': arm '{e.arm}' gripper '{e.mode}': the lab "
+                "driver has no grippers yet",
+            )
+        traj = segment.trajectory
+        out = play(
+            traj,
+            self.links,
+            self.axes,
+            self.accel,
+            self._q,
+            (self.config.tracking_tolerance, self.config.tracking_tolerance_rotary),
+            self.config.status_hz,
+            self.joint_names,
+        )
+        if out.hold_latency is not None:
+            self.hold_latencies.append(out.hold_latency)
+        if out.measured:
+            self._q = out.measured[-1].copy()
+        if out.fault is None:
+            self._q = self._read_joints()
+        t = np.array(out.times) if out.times else np.array([traj.start_time])
+        measured = np.array(out.measured) if out.measured else traj.q[:1].copy()
+        return Played(
+            segment.segment.step,
+            segment.segment.label,
+            self.joint_names,
+            t,
+            traj.sample(t)[0],
+            measured,
+            (),
+            out.fault,
+            None,
+        )
+
+    def timing(self) -> dict[str, Any] | None:
+        if not self.hold_latencies:
+            return None
+        return {"hold_latency_ms": [round(1000.0 * v, 3) for v in self.hold_latencies]}
+
+    # -- reading ----------------------------------------------------------------------------
+
+    def _read_joints(self) -> FloatArray:
+        q = np.array(self._q, dtype=float)
+        for robot in self.links:
+            mpos = self._status(robot).mpos
+            for a in self.axes[robot]:
+                q[a.joint] = a.joint_value(mpos["XYZA".index(a.letter)])
+        self._q = q
+        return q
+
+    def _read_gripper(self, arm: str) -> GripperState:
+        return GripperState(None, None)
+
+    def _last_known(self) -> tuple[FloatArray, dict[str, GripperState]]:
+        return np.array(self._q), {arm: GripperState(None, None) for arm in self.layout.arms}
+
+    # -- internals --------------------------------------------------------------------------
+
+    def _status(self, robot: str) -> Any:
+        link = self.links[robot]
+        asked = time.perf_counter()
+        link.ask_status()
+        deadline = asked + STATUS_WAIT
+        while link.last is None or link.last.time < asked:
+            link.poll(0.005)
+            if time.perf_counter() > deadline:
+                raise DriverFault(
+                    self.kind,
+                    Fault(
+                        "connection",
+                        f"robot '{robot}' at {link.port} did not answer a status request "
+                        f"within {STATUS_WAIT:g} s",
+                        robot,
+                    ),
+                )
+        return link.last
+
+    def _command(self, robot: str, line: str, timeout: float) -> None:
+        try:
+            self.links[robot].command(line, timeout)
+        except GrblError as e:
+            raise DriverRefused(self.kind, str(e)) from None
+
+    def _stop_all(self) -> None:
+        """A feed hold then a soft reset on every controller; best effort."""
+        for link in self.links.values():
+            with contextlib.suppress(GrblError):
+                link.hold()
+        for link in self.links.values():
+            with contextlib.suppress(GrblError):
+                link.reset()
+
+    def _close(self) -> None:
+        for link in self.links.values():
+            link.close()
+        self.links.clear()
