@@ -5,7 +5,7 @@ One emulated controller per loopback address, all in this process: the dashboard
 simulated arm. See cellengine/emulate/ for what is emulated and how.
 
 `cellengine emulate grbl [--count N]`: emulated GRBL 1.1 controllers (the lab bench's
-cartesian axes) on pseudo-terminals (commands/emulate_grbl.py).
+cartesian axes) on pseudo-terminals (commands/emulate_serial.py).
 """
 
 from __future__ import annotations
@@ -20,16 +20,16 @@ from cellengine.errors import Problem, UsageError
 
 
 def add_parser(sub: Any, name: str) -> None:
-    from cellengine.commands.emulate_grbl import add_grbl
+    from cellengine.commands.emulate_serial import add_serial
 
     top = sub.add_parser(
         name,
-        help="emulate robot controllers for tests: ur (on loopback addresses), grbl (on "
-        "pseudo-terminals)",
+        help="emulate robot controllers for tests: ur (on loopback addresses), grbl and "
+        "loadcell (on pseudo-terminals)",
         description="Emulate robot controllers in this process, for tests of the real "
         "drivers. Prints a line with 'ready' when they accept connections; stops on SIGTERM.",
     )
-    kinds = top.add_subparsers(dest="robot", required=True, metavar="{ur,grbl}")
+    kinds = top.add_subparsers(dest="robot", required=True, metavar="{ur,grbl,loadcell}")
     p = kinds.add_parser(
         "ur",
         help="Universal Robots controllers, one per loopback address",
@@ -37,7 +37,7 @@ def add_parser(sub: Any, name: str) -> None:
         "dashboard (29999), script port (30003), RTDE (30004) and a simulated arm. Prints a "
         "line with 'ready' when every controller accepts connections; stops on SIGTERM.",
     )
-    add_grbl(kinds)
+    add_serial(kinds)
     p.add_argument(
         "--host",
         action="append",

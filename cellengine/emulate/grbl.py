@@ -86,6 +86,19 @@ class Grbl:
     relative: bool = False
     homing_left: float = 0.0  # s of homing still to go
     pins: str = ""  # limit switches triggered (status Pn:)
+    next_error: bool = False  # the next line is answered error:24 (a fault injected)
+    faults: tuple[str, ...] = ("alarm1", "error")
+    talks_first: bool = False
+
+    def fault(self, kind: str) -> None:
+        """An injected fault: ``alarm1`` (a hard limit switch), ``error`` (the next line
+        is answered error:24)."""
+        if kind == "alarm1":
+            self.trip(1, pins="X")
+        elif kind == "error":
+            self.next_error = True
+        else:
+            raise ValueError(f"unknown GRBL fault '{kind}'; known: {', '.join(self.faults)}")
 
     def __post_init__(self) -> None:
         if self.settings.get(22, 0):
@@ -162,6 +175,10 @@ class Grbl:
             line = self.rx[:end].decode(errors="replace").strip().upper().replace(" ", "")
             del self.rx[: end + 1]
             self.log.append(line)
+            if self.next_error:
+                self.next_error = False
+                self.output += b"error:24\r\n"
+                continue
             answer = self._line(line)
             if answer is not None:
                 self.output += answer.encode() + b"\r\n"

@@ -11,7 +11,7 @@ import pytest
 
 from cellengine.drivers.grbl_link import GrblError, GrblLink, GrblLost
 from cellengine.emulate.grbl import Grbl
-from cellengine.emulate.grbl_pty import Port, open_port, serve
+from cellengine.emulate.serial_pty import Port, open_port, serve
 
 
 @pytest.fixture

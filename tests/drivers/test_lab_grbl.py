@@ -19,7 +19,7 @@ import cellengine.skills.lab  # noqa: F401  (registers the lab skills)
 from cellengine.drivers.fault import DriverFault, DriverRefused
 from cellengine.drivers.lab import LabBenchDriver
 from cellengine.emulate.grbl import DEFAULTS, Grbl
-from cellengine.emulate.grbl_pty import Port, open_port, serve
+from cellengine.emulate.serial_pty import Port, open_port, serve
 from cellengine.info.load import load_plan
 from cellengine.pipeline import Compiled, compile_plan
 from cellengine.runner.driver import joint_specs

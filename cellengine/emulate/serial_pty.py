@@ -1,10 +1,11 @@
-"""Emulated GRBL controllers on pseudo-terminals (`cellengine emulate grbl`): each a
-:class:`~cellengine.emulate.grbl.Grbl` behind a pty whose slave path a host opens as it would
-an Arduino's /dev/ttyACM0. One loop serves them all on the wall clock, every millisecond.
+"""Emulated serial devices on pseudo-terminals (`cellengine emulate grbl|loadcell`): each a
+:class:`Device` (a GRBL controller, a load cell) behind a pty whose slave path a host opens
+as it would an Arduino's /dev/ttyACM0. One loop serves them all on the wall clock, every
+millisecond.
 
-Faults for tests (``--fault I@T:KIND``, controller I at T s after the first byte it got):
-``alarm1`` (a hard limit switch), ``lost`` (the port goes away: the pty is closed),
-``error`` (the next line is answered ``error:24``)."""
+Faults for tests (``--fault I@T:KIND``, device I at T s after it was first written to, or
+after it started for a device that talks first): ``lost`` (the port goes away: the pty is
+closed) for any device, and the device's own (:attr:`Device.faults`)."""
 
 from __future__ import annotations
 
@@ -14,31 +15,42 @@ import select
 import time
 import tty
 from dataclasses import dataclass, field
-from typing import IO
-
-from cellengine.emulate.grbl import Grbl
+from typing import IO, Any, Protocol
 
 TICK = 0.001  # s between the emulator's steps
-FAULTS = ("alarm1", "lost", "error")
+
+
+class Device(Protocol):
+    output: bytearray  # what it sends the host, taken by the loop
+    log: list[str]  # every line it executed or printed, for tests and --log
+    faults: tuple[str, ...]  # the faults it takes besides 'lost'
+    talks_first: bool  # it sends without being written to (a load cell's readings)
+
+    def receive(self, data: bytes) -> None: ...
+    def advance(self, dt: float) -> None: ...
+    def fault(self, kind: str) -> None: ...
 
 
 @dataclass
 class Port:
-    grbl: Grbl
+    device: Device
     master: int
     slave: int
     path: str
     faults: list[tuple[float, str]] = field(default_factory=list)
-    started: float | None = None  # wall time of the first byte received
+    started: float | None = None  # wall time faults count from
     closed: bool = False
-    next_error: bool = False
+
+    @property
+    def grbl(self) -> Any:
+        return self.device
 
 
-def open_port(grbl: Grbl) -> Port:
+def open_port(device: Device) -> Port:
     master, slave = os.openpty()
     tty.setraw(slave)  # no echo, no line editing: bytes as a USB serial port passes them
     os.set_blocking(master, False)
-    return Port(grbl, master, slave, os.ttyname(slave))
+    return Port(device, master, slave, os.ttyname(slave))
 
 
 def serve(ports: list[Port], stop: list[bool], log: IO[str] | None = None) -> None:
@@ -46,6 +58,9 @@ def serve(ports: list[Port], stop: list[bool], log: IO[str] | None = None) -> No
     controller, time, line) to ``log``."""
     last = time.monotonic()
     logged = [0] * len(ports)
+    for p in ports:
+        if p.device.talks_first:
+            p.started = last
     while not stop[0]:
         live = [p for p in ports if not p.closed]
         readable, _, _ = select.select([p.master for p in live], [], [], TICK)
@@ -58,12 +73,12 @@ def serve(ports: list[Port], stop: list[bool], log: IO[str] | None = None) -> No
             _faults(p, now)
             if p.closed:
                 continue
-            p.grbl.advance(now - last)
+            p.device.advance(now - last)
             _write(p)
             if log is not None:
-                for line in p.grbl.log[logged[i] :]:
-                    log.write(json.dumps({"controller": i, "time": now, "line": line}) + "\n")
-                logged[i] = len(p.grbl.log)
+                for line in p.device.log[logged[i] :]:
+                    log.write(json.dumps({"device": i, "time": now, "line": line}) + "\n")
+                logged[i] = len(p.device.log)
                 log.flush()
         last = now
 
@@ -77,23 +92,17 @@ def _read(p: Port, now: float) -> None:
         return
     if data and p.started is None:
         p.started = now
-    if p.next_error and b"\n" in data:
-        p.next_error = False
-        head, _, rest = data.partition(b"\n")
-        p.grbl.log.append(head.decode(errors="replace").strip())
-        p.grbl.output += b"error:24\r\n"
-        data = rest
-    p.grbl.receive(data)
+    p.device.receive(data)
 
 
 def _write(p: Port) -> None:
-    if not p.grbl.output:
+    if not p.device.output:
         return
     try:
-        n = os.write(p.master, bytes(p.grbl.output))
+        n = os.write(p.master, bytes(p.device.output))
     except BlockingIOError:
         return
-    del p.grbl.output[:n]
+    del p.device.output[:n]
 
 
 def _faults(p: Port, now: float) -> None:
@@ -102,16 +111,13 @@ def _faults(p: Port, now: float) -> None:
     due = [f for f in p.faults if now - p.started >= f[0]]
     for f in due:
         p.faults.remove(f)
-        kind = f[1]
-        if kind == "alarm1":
-            p.grbl.trip(1, pins="X")
-        elif kind == "error":
-            p.next_error = True
-        elif kind == "lost":
+        if f[1] == "lost":
             os.close(p.master)
             os.close(p.slave)
             p.closed = True
+        else:
+            p.device.fault(f[1])
 
 
-def ready_line(ports: list[Port]) -> str:
-    return "cellengine emulate grbl: ready: " + " ".join(p.path for p in ports)
+def ready_line(what: str, ports: list[Port]) -> str:
+    return f"cellengine emulate {what}: ready: " + " ".join(p.path for p in ports)

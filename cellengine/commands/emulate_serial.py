@@ -1,0 +1,131 @@
+"""`cellengine emulate grbl [--count N] [--set I:N=V] [--fault I@T:KIND] [--log FILE]`:
+emulated GRBL 1.1 controllers on pseudo-terminals, for tests of the lab driver; and
+`cellengine emulate loadcell [--load G] [--zero G] [--noise G] [--fault 0@T:KIND]`: an
+emulated serial load cell.
+
+Each prints ``cellengine emulate KIND: ready: PTY [PTY ...]`` (the paths a host opens as
+it would /dev/ttyACM0) and serves them until SIGTERM. See cellengine/emulate/grbl.py and
+loadcell.py for what is emulated.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import signal
+import sys
+from pathlib import Path
+from typing import Any
+
+from cellengine.errors import Problem, UsageError
+
+
+def add_serial(kinds: Any) -> None:
+    p = kinds.add_parser(
+        "grbl",
+        help="GRBL 1.1 controllers on pseudo-terminals",
+        description="Emulate GRBL 1.1 controllers (a cartesian robot's axes on an Arduino) "
+        "on pseudo-terminals: character-counted streaming, a 15-block planner with "
+        "acceleration, status reports, feed hold, reset, alarms, homing. Prints 'ready' and "
+        "the terminals' paths; stops on SIGTERM.",
+    )
+    p.add_argument("--count", type=int, default=1, help="how many controllers (default 1)")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="I:N=V",
+        help="controller I's setting $N (e.g. 0:$110=3000 or 0:110=3000)",
+    )
+    p.add_argument(
+        "--fault",
+        action="append",
+        default=[],
+        metavar="I@T:KIND",
+        help="controller I, T s after the first byte it got: alarm1 (a hard limit), lost "
+        "(the port goes away), error (the next line answered error:24)",
+    )
+    p.add_argument("--log", type=Path, help="append every line executed here (JSON lines)")
+    p.set_defaults(run=run)
+    c = kinds.add_parser(
+        "loadcell",
+        help="a serial load cell (HX711 on an Arduino) on a pseudo-terminal",
+        description="Emulate a serial load cell printing one reading (g) a line, 10 a "
+        "second, with noise. Prints 'ready' and the terminal's path; stops on SIGTERM.",
+    )
+    c.add_argument("--load", type=float, default=0.0, help="g on the cell (default 0)")
+    c.add_argument("--zero", type=float, default=3.7, help="g it reads empty (default 3.7)")
+    c.add_argument("--noise", type=float, default=0.2, help="g standard deviation (0.2)")
+    c.add_argument("--seed", type=int, default=0, help="the noise's seed (default 0)")
+    c.add_argument(
+        "--fault",
+        action="append",
+        default=[],
+        metavar="0@T:KIND",
+        help="T s after it starts: silence, garbage, lost",
+    )
+    c.add_argument("--log", type=Path, help="append every line it printed here (JSON lines)")
+    c.set_defaults(run=run_loadcell)
+
+
+def _usage(message: str) -> UsageError:
+    return UsageError(Problem(message, "cellengine emulate grbl"))
+
+
+def run(args: argparse.Namespace) -> int:
+    from cellengine.emulate.grbl import Grbl
+    from cellengine.emulate.serial_pty import open_port
+
+    if not 1 <= args.count <= 8:
+        raise _usage(f"--count {args.count}: from 1 to 8 controllers")
+    ports = [open_port(Grbl()) for _ in range(args.count)]
+    for spec in args.set:
+        m = re.fullmatch(r"(\d+):\$?(\d+)=([-+]?\d*\.?\d+)", spec)
+        if m is None or int(m[1]) >= args.count:
+            raise _usage(f"--set '{spec}': not I:N=V for a controller I below {args.count}")
+        ports[int(m[1])].grbl.settings[int(m[2])] = float(m[3])
+    for spec in args.fault:
+        (fault,) = _faults([spec], args.count, ("lost", *Grbl().faults))
+        ports[int(spec.split("@", 1)[0])].faults.append(fault)
+    return _serve("grbl", ports, args.log)
+
+
+def run_loadcell(args: argparse.Namespace) -> int:
+    from cellengine.emulate.loadcell import LoadCellEmulator
+    from cellengine.emulate.serial_pty import open_port
+
+    device = LoadCellEmulator(args.load, args.zero, args.noise, args.seed)
+    port = open_port(device)
+    port.faults += _faults(args.fault, 1, ("lost", *device.faults))
+    return _serve("loadcell", [port], args.log)
+
+
+def _faults(specs: list[str], count: int, kinds: tuple[str, ...]) -> list[tuple[float, str]]:
+    out = []
+    for spec in specs:
+        m = re.fullmatch(r"(\d+)@(\d*\.?\d+):(\w+)", spec)
+        if m is None or int(m[1]) >= count or m[3] not in kinds:
+            raise _usage(
+                f"--fault '{spec}': not I@T:KIND for a device I below {count} and KIND one "
+                f"of {', '.join(kinds)}"
+            )
+        out.append((float(m[2]), m[3]))
+    return out
+
+
+def _serve(what: str, ports: list[Any], log_path: Path | None) -> int:
+    from cellengine.emulate.serial_pty import ready_line, serve
+
+    stop = [False]
+    signal.signal(signal.SIGTERM, lambda *_: stop.__setitem__(0, True))
+    print(ready_line(what, ports), flush=True)
+    log = None if log_path is None else log_path.open("a", encoding="utf-8")
+    try:
+        serve(ports, stop, log)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        if log is not None:
+            log.close()
+    print(f"cellengine emulate {what}: stopped", file=sys.stderr)
+    return 0
