@@ -24,12 +24,12 @@ def add_parser(sub: Any, name: str) -> None:
 
     top = sub.add_parser(
         name,
-        help="emulate robot controllers for tests: ur (on loopback addresses), grbl and "
-        "loadcell (on pseudo-terminals)",
+        help="emulate robot controllers for tests: ur (on loopback addresses), grbl, "
+        "loadcell and dynamixel (on pseudo-terminals)",
         description="Emulate robot controllers in this process, for tests of the real "
         "drivers. Prints a line with 'ready' when they accept connections; stops on SIGTERM.",
     )
-    kinds = top.add_subparsers(dest="robot", required=True, metavar="{ur,grbl,loadcell}")
+    kinds = top.add_subparsers(dest="robot", required=True, metavar="{ur,grbl,loadcell,dynamixel}")
     p = kinds.add_parser(
         "ur",
         help="Universal Robots controllers, one per loopback address",

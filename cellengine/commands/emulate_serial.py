@@ -66,6 +66,22 @@ def add_serial(kinds: Any) -> None:
     )
     c.add_argument("--log", type=Path, help="append every line it printed here (JSON lines)")
     c.set_defaults(run=run_loadcell)
+    d = kinds.add_parser(
+        "dynamixel",
+        help="a Dynamixel bus (Protocol 2.0, XL430-W250 servos) on a pseudo-terminal",
+        description="Emulate a Dynamixel bus with XL430-W250 servos: ping, read, write, "
+        "sync write, CRC-16. Prints 'ready' and the terminal's path; stops on SIGTERM.",
+    )
+    d.add_argument("--id", type=int, action="append", default=[], help="a servo's id (1..)")
+    d.add_argument(
+        "--fault",
+        action="append",
+        default=[],
+        metavar="0@T:KIND",
+        help="T s after it is first written to: stuck, overload, lost",
+    )
+    d.add_argument("--log", type=Path, help="append every packet it took here (JSON lines)")
+    d.set_defaults(run=run_dynamixel)
 
 
 def _usage(message: str) -> UsageError:
@@ -98,6 +114,19 @@ def run_loadcell(args: argparse.Namespace) -> int:
     port = open_port(device)
     port.faults += _faults(args.fault, 1, ("lost", *device.faults))
     return _serve("loadcell", [port], args.log)
+
+
+def run_dynamixel(args: argparse.Namespace) -> int:
+    from cellengine.emulate.dynamixel import DynamixelBus, Servo
+    from cellengine.emulate.serial_pty import open_port
+
+    ids = args.id or [1]
+    if any(not 0 <= i <= 252 for i in ids) or len(set(ids)) != len(ids):
+        raise _usage(f"--id {ids}: distinct ids from 0 to 252")
+    bus = DynamixelBus({i: Servo(i) for i in ids})
+    port = open_port(bus)
+    port.faults += _faults(args.fault, 1, ("lost", *bus.faults))
+    return _serve("dynamixel", [port], args.log)
 
 
 def _faults(specs: list[str], count: int, kinds: tuple[str, ...]) -> list[tuple[float, str]]:
