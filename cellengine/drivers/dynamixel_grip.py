@@ -100,12 +100,17 @@ class Gripper:
             f"goal {goal}, load {load / 10:.1f} %)"
         )
 
+    @property
+    def bus(self) -> Any:
+        """The (port, packet handler) the bus' other grippers share."""
+        return self._bus
+
     def torque_off(self) -> None:
         with contextlib.suppress(GripperError):
             self._write(1, TORQUE, 0)
 
     def close(self) -> None:
-        if self._bus is not None:
+        if self._bus is not None and self._bus[0].is_open:
             self._bus[0].closePort()
 
     # -------------------------------------------------------------------------- packets

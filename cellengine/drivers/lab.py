@@ -10,8 +10,9 @@ GRBL 1.1 controller over USB serial (grbl_link.py), both played from one clock
   refused unless the cell says ``unlock`` ($X).
 - deactivate: a feed hold and a reset on every controller; finalize closes the ports.
 
-Grippers and load cells are not on this driver yet: a segment with a gripper event is
-refused before anything moves.
+Each robot's gripper is a Dynamixel servo (dynamixel_grip.py; grippers on one bus share its
+port), its gripper events set on the axes' clock (lab_grippers.py); a robot's load cell is
+a serial one (loadcell.py), tared when the driver activates (the grippers empty).
 """
 
 from __future__ import annotations
@@ -27,11 +28,14 @@ import numpy as np
 
 from cellengine.arrays import FloatArray
 from cellengine.drivers.base import Driver, GripperState
+from cellengine.drivers.dynamixel_grip import Gripper, GripperError
 from cellengine.drivers.fault import DriverFault, DriverRefused, Fault
 from cellengine.drivers.gcode import AxisMap
 from cellengine.drivers.grbl_link import GrblError, GrblLink, GrblLost
-from cellengine.drivers.lab_stream import play
-from cellengine.drivers.record import Played
+from cellengine.drivers.lab_grippers import Grippers
+from cellengine.drivers.lab_stream import STOPPED, play
+from cellengine.drivers.loadcell import LoadCell, LoadCellError
+from cellengine.drivers.record import AppliedEvent, Played
 from cellengine.info.cell import Cell, LabDriver
 from cellengine.info.objects import Objects
 from cellengine.program import CompiledSegment, TimedEvent
@@ -77,6 +81,8 @@ class LabBenchDriver(Driver):
         self.accel: dict[str, list[float]] = {}  # each robot's axes' $120... (units/s^2)
         self.hold_latencies: list[float] = []  # s from a fault's detection to the holds
         self._q = np.full(len(self.joint_names), np.nan)
+        self.grippers = Grippers({}, {})
+        self.load_cells: dict[str, LoadCell] = {}
 
     def _axes(self, joints: Mapping[str, Sequence[str]]) -> dict[str, list[AxisMap]]:
         """Each robot's joints as its controller's axes (the cell file's ``axes``)."""
@@ -122,12 +128,42 @@ class LabBenchDriver(Driver):
                     settings.get(120 + "XYZA".index(a.letter), float("inf"))
                     for a in self.axes[robot]
                 ]
+            self._open_tools()
             self._q = self._read_joints()
-        except (GrblError, DriverRefused) as e:
+        except (GrblError, GripperError, LoadCellError, DriverRefused) as e:
             self._close()
             if isinstance(e, DriverRefused):
                 raise
             raise DriverRefused(self.kind, str(e)) from None
+
+    def _open_tools(self) -> None:
+        """Each robot's gripper (one port per bus) and load cell."""
+        buses: dict[str, Any] = {}
+        grippers: dict[str, Gripper] = {}
+        holding: dict[str, tuple[str, ...]] = {}
+        for robot, grbl in self.config.robots.items():
+            spec = grbl.gripper
+            if spec is not None:
+                g = Gripper(
+                    spec.port,
+                    spec.id,
+                    spec.positions,
+                    baud=spec.baud,
+                    load=spec.load,
+                    timeout=spec.timeout,
+                    bus=buses.get(spec.port),
+                )
+                g.open()
+                buses[spec.port] = g.bus
+                grippers[robot], holding[robot] = g, spec.holding
+            cell = grbl.load_cell
+            if cell is not None:
+                lc = LoadCell(
+                    cell.port, cell.baud, cell.unit, cell.readings, cell.settle, cell.timeout
+                )
+                lc.open()
+                self.load_cells[robot] = lc
+        self.grippers = Grippers(grippers, holding)
 
     def _check_settings(self, robot: str, settings: Mapping[int, float]) -> None:
         for a in self.axes[robot]:
@@ -168,6 +204,11 @@ class LabBenchDriver(Driver):
                     )
                 self._command(robot, "$X", 2.0)
         self._q = self._read_joints()
+        for robot, lc in self.load_cells.items():  # the grippers are empty: their zero
+            try:
+                lc.zero()
+            except LoadCellError as e:
+                raise DriverRefused(self.kind, f"load cell of '{robot}': {e}") from None
 
     def _on_deactivate(self) -> None:
         self._stop_all()
@@ -191,13 +232,15 @@ class LabBenchDriver(Driver):
     # -- execution --------------------------------------------------------------------------
 
     def _on_execute(self, segment: CompiledSegment, events: tuple[TimedEvent, ...]) -> Played:
-        if events:
-            e = events[0].event
-            raise DriverRefused(
-                self.kind,
-                f"segment '{segment.segment.label}': arm '{e.arm}' gripper '{e.mode}': the lab "
-                "driver has no grippers yet",
-            )
+        for ev in events:
+            if ev.event.arm not in self.grippers.grippers:
+                raise DriverRefused(
+                    self.kind,
+                    f"segment '{segment.segment.label}': arm '{ev.event.arm}' has no gripper "
+                    f"in the cell's driver (robots.{ev.event.arm}.gripper) to set to "
+                    f"'{ev.event.mode}'",
+                )
+        self.grippers.start(events)
         traj = segment.trajectory
         out = play(
             traj,
@@ -208,6 +251,7 @@ class LabBenchDriver(Driver):
             (self.config.tracking_tolerance, self.config.tracking_tolerance_rotary),
             self.config.status_hz,
             self.joint_names,
+            self.grippers,
         )
         if out.hold_latency is not None:
             self.hold_latencies.append(out.hold_latency)
@@ -224,7 +268,10 @@ class LabBenchDriver(Driver):
             t,
             traj.sample(t)[0],
             measured,
-            (),
+            tuple(
+                AppliedEvent(e.time, e.event.arm, e.event.mode, e.event.holds, out.fault is None)
+                for e in events
+            ),
             out.fault,
             None,
         )
@@ -246,10 +293,21 @@ class LabBenchDriver(Driver):
         return q
 
     def _read_gripper(self, arm: str) -> GripperState:
-        return GripperState(None, None)
+        return self.grippers.states.get(arm, GripperState(None, None))
 
     def _last_known(self) -> tuple[FloatArray, dict[str, GripperState]]:
-        return np.array(self._q), {arm: GripperState(None, None) for arm in self.layout.arms}
+        return np.array(self._q), {arm: self._read_gripper(arm) for arm in self.layout.arms}
+
+    def _read_mass(self, arm: str) -> float:
+        lc = self.load_cells.get(arm)
+        if lc is None:
+            raise DriverRefused(self.kind, f"arm '{arm}' has no load cell in the cell's driver")
+        try:
+            return lc.weigh()
+        except LoadCellError as e:
+            raise DriverFault(
+                self.kind, Fault("load_cell", f"load cell of '{arm}': {e}; {STOPPED}", arm)
+            ) from None
 
     # -- internals --------------------------------------------------------------------------
 
@@ -291,3 +349,10 @@ class LabBenchDriver(Driver):
         for link in self.links.values():
             link.close()
         self.links.clear()
+        for g in self.grippers.grippers.values():
+            g.torque_off()
+            g.close()
+        for lc in self.load_cells.values():
+            lc.close()
+        self.grippers = Grippers({}, {})
+        self.load_cells = {}

@@ -19,6 +19,7 @@ import contextlib
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import numpy as np
 
@@ -34,6 +35,14 @@ OVERRUN = 1.5  # a segment may take this many times its duration (plus 2 s) befo
 LAG = 0.25  # s a robot may trail the plan's time (five blocks)
 PRIME_WAIT = 1.0  # s at most for the controllers to take the first blocks before the start
 LAG_SAMPLES = 26  # the plan's moments it is compared with, over LAG
+
+
+class Side(Protocol):
+    def at(self, t: float) -> Fault | None:
+        """Do what is due at program time ``t``; the fault if something failed."""
+
+    def busy(self) -> bool:
+        """Whether something it started has not finished."""
 
 
 @dataclass
@@ -65,7 +74,10 @@ def play(
     tolerance: tuple[float, float],
     status_hz: float,
     joint_names: Sequence[str],
+    side: Side | None = None,
 ) -> Outcome:
+    """Play ``traj`` (see the module notes); ``side``: what else is done on the same clock
+    (the grippers), asked at every turn of the loop."""
     streams = [Stream(r, links[r], axes[r], blocks(traj, axes[r], accel.get(r))) for r in links]
     out = Outcome()
     q = np.array(q_now, dtype=float)
@@ -94,13 +106,15 @@ def play(
         except GrblLost as e:
             out.fault = Fault("connection", f"{e}; {STOPPED}", time=t)
         fault = out.fault or _check(streams, traj, q, out, tolerance, joint_names, wall0)
+        if fault is None and side is not None:
+            fault = side.at(t)
         if fault is None and now > deadline:
             fault = Fault("overrun", f"the segment ran past {deadline - wall0:.1f} s; {STOPPED}")
         if fault is not None:
             out.fault = fault
             out.hold_latency = _hold(streams)
             return out
-        if _done(streams, traj, t):
+        if _done(streams, traj, t) and (side is None or not side.busy()):
             return out
         time.sleep(0.001)
 

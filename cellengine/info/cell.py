@@ -249,8 +249,32 @@ class GrblAxis(Frozen):
     offset: float = Field(0.0, allow_inf_nan=False)  # GRBL's units (mm, deg)
 
 
+class DynamixelGripper(Frozen):
+    """A gripper turned by a Dynamixel XL430 (Protocol 2.0, a U2D2 on USB)."""
+
+    port: str = Field(min_length=1)  # grippers on one bus share it
+    baud: int = Field(57600, gt=0)
+    id: int = Field(ge=0, le=252)
+    positions: dict[Name, int] = Field(min_length=1)  # jaw mode -> goal position (ticks)
+    holding: tuple[Name, ...] = ("grasp",)  # modes that close on something
+    load: int = Field(200, ge=0, le=1000)  # 0.1 %: what a holding mode holds with at least
+    timeout: float = Field(2.0, gt=0)  # s for a mode to take
+
+
+class SerialLoadCell(Frozen):
+    """A load cell whose Arduino prints one reading a line on USB serial."""
+
+    port: str = Field(min_length=1)
+    baud: int = Field(9600, gt=0)
+    unit: Literal["mg", "g", "kg"] = "g"  # of the readings without one
+    readings: int = Field(5, ge=1, le=100)  # a weighing is their median
+    settle: float = Field(0.5, ge=0)  # s after the arm stops before reading
+    timeout: float = Field(2.0, gt=0)  # s without a reading is a fault
+
+
 class GrblRobot(Frozen):
-    """A cartesian robot's GRBL controller (an Arduino on USB serial)."""
+    """A cartesian robot's GRBL controller (an Arduino on USB serial), its gripper and its
+    load cell."""
 
     port: str = Field(min_length=1)  # e.g. /dev/ttyACM0
     baud: int = Field(115200, gt=0)
@@ -259,6 +283,8 @@ class GrblRobot(Frozen):
     # unlock says to clear it ($X)
     home: bool = False
     unlock: bool = False
+    gripper: DynamixelGripper | None = None
+    load_cell: SerialLoadCell | None = None
 
 
 class LabDriver(Frozen):
