@@ -106,7 +106,8 @@ class Gripper:
         return self._bus
 
     def torque_off(self) -> None:
-        with contextlib.suppress(GripperError):
+        """Best effort: the port may be gone."""
+        with contextlib.suppress(Exception):
             self._write(1, TORQUE, 0)
 
     def close(self) -> None:

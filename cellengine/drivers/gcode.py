@@ -21,6 +21,8 @@ from cellengine.motion.trajectory import Trajectory
 BLOCK_DT = 0.05  # s of trajectory per block: 20 blocks/s, ~0.9 s in GRBL's buffers
 STILL = 1e-3  # machine units (mm, deg): a block shorter than this is a dwell
 DIGITS = 3  # GRBL's 0.001 mm
+JUNCTION_DEVIATION = 0.01  # mm, GRBL's default $11
+SPLITS = 3  # a block at a bend halved at most this many times (to 6 ms)
 
 
 @dataclass(frozen=True)
@@ -52,18 +54,21 @@ def blocks(
     traj: Trajectory,
     axes: Sequence[AxisMap],
     accel: Sequence[float] | None = None,
+    deviation: float = JUNCTION_DEVIATION,
     dt: float = BLOCK_DT,
 ) -> list[Block]:
     """One robot's blocks over ``traj`` (its axes' columns); ``accel``: each axis'
-    acceleration in GRBL (units/s^2, its $120...), for the feeds (see :func:`feed`)."""
-    n = max(1, math.ceil(traj.duration / dt - 1e-9))
-    times = np.linspace(traj.start_time, traj.end_time, n + 1)
+    acceleration in GRBL (units/s^2, its $120...), ``deviation``: its junction deviation
+    ($11, mm), for the feeds (see :func:`feed`)."""
+    limits = np.array(accel if accel is not None else [math.inf] * len(axes), dtype=float)
+    times = _cuts(traj, axes, limits, deviation, dt)
+    n = len(times) - 1
     q, qd, _ = traj.sample(times)
     M = np.column_stack([np.round(a.machine(q), DIGITS) for a in axes])
     # the robot's speed at each cut (machine units/s)
-    V = np.linalg.norm(np.column_stack([a.sign * a.scale * qd[:, a.joint] for a in axes]), axis=1)
-    limits = np.array(accel if accel is not None else [math.inf] * len(axes), dtype=float)
+    V = _speeds(qd, axes)
     entry = 0.0  # GRBL's speed where the block begins (it starts from rest)
+    units = [_unit(M[k + 1] - M[k]) for k in range(n)]
     out: list[Block] = []
     for k in range(n):
         t0, t1 = float(times[k]), float(times[k + 1])
@@ -75,13 +80,83 @@ def blocks(
             out.append(Block(t0, t1, f"G4P{t1 - t0:.3f}", target))
             entry = 0.0
             continue
-        unit = np.abs(M[k + 1] - M[k]) / d
-        a = float(min(limits[i] / u for i, u in enumerate(unit) if u > 1e-12))
-        f = feed(d, t1 - t0, min(entry, float(V[k])), float(V[k + 1]), a)
+        a = _accel(units[k], limits)
+        # GRBL's speeds at the block's corners: what the plan has there, no more than its
+        # junction deviation lets it turn at
+        nxt = units[k + 1] if k + 1 < n else None
+        exit_speed = float(V[k + 1])
+        if nxt is not None:
+            exit_speed = min(
+                exit_speed, junction(units[k], nxt, min(a, _accel(nxt, limits)), deviation)
+            )
+        f = feed(d, t1 - t0, min(entry, float(V[k])), exit_speed, a)
         words = "".join(f"{x.letter}{v:.{DIGITS}f}" for x, v in zip(axes, target, strict=True))
         out.append(Block(t0, t1, f"G1{words}F{f * 60.0:.1f}", target))
-        entry = min(f, float(V[k + 1]))
+        entry = min(f, exit_speed)
     return out
+
+
+def _cuts(
+    traj: Trajectory, axes: Sequence[AxisMap], limits: Vec, deviation: float, dt: float
+) -> Vec:
+    """Where the trajectory is cut into blocks: every ``dt``, and, where the path bends
+    more at a cut than GRBL may turn at the plan's speed there (its junction deviation),
+    the blocks on either side halved, up to SPLITS times: shorter chords of a curve turn
+    less at each junction."""
+    n = max(1, math.ceil(traj.duration / dt - 1e-9))
+    times = np.linspace(traj.start_time, traj.end_time, n + 1)
+    for _ in range(SPLITS):
+        q, qd, _ = traj.sample(times)
+        M = np.column_stack([a.machine(q) for a in axes])
+        V = np.linalg.norm(
+            np.column_stack([a.sign * a.scale * qd[:, a.joint] for a in axes]), axis=1
+        )
+        units = [_unit(M[k + 1] - M[k]) for k in range(len(times) - 1)]
+        split = set()
+        for k in range(1, len(times) - 1):
+            a, b = units[k - 1], units[k]
+            if a is None or b is None:
+                continue
+            if junction(a, b, min(_accel(a, limits), _accel(b, limits)), deviation) < V[k]:
+                split |= {k - 1, k}
+        if not split:
+            break
+        mids = [0.5 * (times[k] + times[k + 1]) for k in sorted(split)]
+        times = np.sort(np.concatenate([times, mids]))
+    return times
+
+
+def _speeds(qd: Vec, axes: Sequence[AxisMap]) -> Vec:
+    """The robot's speed (machine units/s) at each row of joint velocities ``qd``."""
+    speeds: Vec = np.linalg.norm(
+        np.column_stack([a.sign * a.scale * qd[:, a.joint] for a in axes]), axis=1
+    )
+    return speeds
+
+
+def _unit(v: Vec) -> Vec | None:
+    n = float(np.linalg.norm(v))
+    return None if n < STILL else np.asarray(v) / n
+
+
+def _accel(unit: Vec | None, limits: Vec) -> float:
+    if unit is None:
+        return math.inf
+    return float(min(limits[i] / abs(u) for i, u in enumerate(unit) if abs(u) > 1e-12))
+
+
+def junction(a: Vec | None, b: Vec | None, accel: float, deviation: float) -> float:
+    """GRBL's speed limit where block ``a`` turns into ``b`` (their unit vectors), from its
+    junction deviation: 0 at a reversal or a stop, unlimited straight on."""
+    if a is None or b is None:
+        return 0.0
+    cos = -float(np.dot(a, b))  # GRBL's convention: -1 straight on
+    if cos > 0.999999:
+        return 0.0
+    if cos < -0.999999 or not math.isfinite(accel):
+        return math.inf
+    sin_half = math.sqrt(0.5 * (1.0 - cos))
+    return math.sqrt(accel * deviation * sin_half / (1.0 - sin_half))
 
 
 def feed(d: float, dt: float, entry: float, exit: float, accel: float) -> float:

@@ -351,6 +351,7 @@ class LabBenchDriver(Driver):
         self.links.clear()
         for g in self.grippers.grippers.values():
             g.torque_off()
+        for g in self.grippers.grippers.values():  # a bus' port once (closing is idempotent)
             g.close()
         for lc in self.load_cells.values():
             lc.close()

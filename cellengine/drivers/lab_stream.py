@@ -190,8 +190,9 @@ def _check(
         out.times.append(t)
         out.measured.append(q.copy())
         # GRBL keeps to the plan's time only as well as its planner can (it has no clock):
-        # on track if it is where the plan was at some moment of the last LAG s
-        window = np.linspace(max(traj.start_time, t - LAG), t, LAG_SAMPLES)
+        # on track if it is where the plan is at some moment within LAG s of now
+        lo, hi = max(traj.start_time, t - LAG), min(traj.end_time, t + LAG)
+        window = np.linspace(lo, max(lo, hi), LAG_SAMPLES)
         planned = traj.sample(window)[0]
         cols = [a.joint for a in s.axes]
         most = np.array([tolerance[1] if a.letter == "A" else tolerance[0] for a in s.axes])
@@ -203,7 +204,7 @@ def _check(
             return Fault(
                 "tracking",
                 f"robot '{s.robot}' joint '{name}' is {off[best, k]:.4f} from the plan at "
-                f"t = {t:.3f} s (the nearest in the last {LAG:g} s; tolerance {most[k]:g}); "
+                f"t = {t:.3f} s (the nearest within {LAG:g} s; tolerance {most[k]:g}); "
                 f"{STOPPED}",
                 s.robot,
                 name,

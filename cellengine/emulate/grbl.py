@@ -30,7 +30,7 @@ import re
 from collections import deque
 from dataclasses import dataclass, field
 
-RX_BUFFER = 128  # bytes: the Arduino's serial receive buffer
+RX_BUFFER = 128  # bytes: the serial receive buffer (1.1's ring holds all 128)
 PLANNER_BLOCKS = 15
 AXES = ("X", "Y", "Z", "A")
 BANNER = b"\r\nGrbl 1.1h ['$' for help]\r\n"
@@ -126,7 +126,7 @@ class Grbl:
             elif byte == RESET:
                 self.realtime.append("^X")
                 self.reset()
-            elif len(self.rx) >= RX_BUFFER - 1:
+            elif len(self.rx) >= RX_BUFFER:
                 self.overflows += 1
             else:
                 self.rx.append(byte)
@@ -138,7 +138,7 @@ class Grbl:
         free = PLANNER_BLOCKS - len(self.planner)
         pins = f"|Pn:{self.pins}" if self.pins else ""
         return (
-            f"<{self.state}|MPos:{pos}|Bf:{free},{RX_BUFFER - 1 - len(self.rx)}"
+            f"<{self.state}|MPos:{pos}|Bf:{free},{RX_BUFFER - len(self.rx)}"
             f"|FS:{self.speed * 60.0:.0f},0{pins}>"
         )
 
