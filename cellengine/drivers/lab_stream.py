@@ -105,11 +105,13 @@ def play(
                 s.link.poll()
         except GrblLost as e:
             out.fault = Fault("connection", f"{e}; {STOPPED}", time=t)
-        fault = out.fault or _check(streams, traj, q, out, tolerance, joint_names, wall0)
+        fault = out.fault or _check(streams, traj, q, out, tolerance, joint_names, wall0, t)
         if fault is None and side is not None:
             fault = side.at(t)
         if fault is None and now > deadline:
-            fault = Fault("overrun", f"the segment ran past {deadline - wall0:.1f} s; {STOPPED}")
+            fault = Fault(
+                "overrun", f"the segment ran past {deadline - wall0:.1f} s; {STOPPED}", time=t
+            )
         if fault is not None:
             out.fault = fault
             out.hold_latency = _hold(streams)
@@ -159,8 +161,10 @@ def _check(
     tolerance: tuple[float, float],
     joint_names: Sequence[str],
     wall0: float,
+    now: float,
 ) -> Fault | None:
-    """The first fault in what the controllers said; each new status recorded."""
+    """The first fault in what the controllers said (at program time ``now``); each new
+    status recorded."""
     for s in streams:
         link = s.link
         if link.alarm is not None:
@@ -169,6 +173,7 @@ def _check(
                 "alarm",
                 f"robot '{s.robot}' ({link.port}): ALARM:{link.alarm} ({what}); {STOPPED}",
                 s.robot,
+                time=now,
                 value=link.alarm,
             )
         if link.errors:
@@ -178,6 +183,7 @@ def _check(
                 f"robot '{s.robot}' ({link.port}) answered '{line}' with error:{code} "
                 f"({ERRORS.get(code, '')}); {STOPPED}",
                 s.robot,
+                time=now,
                 value=code,
             )
         status = link.last

@@ -292,10 +292,12 @@ class LabDriver(Frozen):
 
     kind: Literal["lab"]
     robots: dict[Name, GrblRobot] = Field(min_length=1)
-    # largest distance (length unit) of an axis from the plan before both robots stop; a
-    # rotary axis' (angle unit)
-    tracking_tolerance: Length = Field(0.003, gt=0)
-    tracking_tolerance_rotary: Angle = Field(0.05, gt=0)
+    # largest distance (length unit) of an axis from the plan (at any moment within 0.25 s)
+    # before both robots stop; a rotary axis' (angle unit). GRBL reports where it has
+    # stepped to, not an encoder's reading: this catches a controller off the plan's time
+    # (a feed override, a hold), not a stalled motor
+    tracking_tolerance: Length = Field(0.01, gt=0)
+    tracking_tolerance_rotary: Angle = Field(0.1, gt=0)
     # largest distance of an axis from a segment's first point at its start
     start_tolerance: Length = Field(0.0005, gt=0)
     # the run moves the robots to the plan's start on its own only from this near

@@ -50,3 +50,41 @@ def test_the_weigh_handover_plan_runs_on_the_emulated_bench(tmp_path: Path) -> N
         writes = [line for line in bench.bus.device.log if "instruction 0x03" in line]
         assert {line.split()[1] for line in writes} == {"1", "2"}
         assert bench.physics.grasps == 1
+
+
+def test_an_alarm_mid_overlap_holds_both_and_resume_completes(tmp_path: Path) -> None:
+    """plan_relocate: robot1's limit switch trips while both robots move (robot2 back to its
+    rest, robot1 on its way to vial4). Both controllers get a feed hold, the run exits 3
+    with the fault and each robot's segments journaled; once unlocked ($X: the cell says
+    unlock), --resume goes on from where each robot stopped and ends."""
+    plan = "plan_relocate.yaml"
+    c = compile_plan(CELLS / "lab_bench" / plan)
+    both = next(s for s in c.program.segments if {"robot1", "robot2"} <= set(s.report["arms"]))
+    t_fault = float(np.mean([both.trajectory.start_time, both.trajectory.end_time]))
+    with emulated_bench(tmp_path, c.program.segments[0].trajectory.q[0], []) as bench:
+        cell = bench.folder / "cell.yaml"
+        cell.write_text(cell.read_text().replace("axes: {z:", "unlock: true, axes: {z:"))
+        bench.grbl[0].faults.append((t_fault, "alarm1"))
+        run = tmp_path / "run"
+        cmd = [sys.executable, "-m", "cellengine.cli", "run", str(bench.folder / plan)]
+
+        def cli(*args: str) -> subprocess.CompletedProcess[str]:
+            full = [*cmd, *args, "--yes", "-q"]
+            return subprocess.run(full, cwd=ROOT, capture_output=True, text=True, timeout=300)
+
+        stopped = cli("--out", str(run))
+        assert stopped.returncode == 3, stopped.stderr[-3000:]
+        assert (
+            "robot 'robot1'" in stopped.stderr and "ALARM:1 (hard limit triggered" in stopped.stderr
+        )
+        journal = [json.loads(line) for line in (run / "journal.jsonl").read_text().splitlines()]
+        fault = next(e for e in journal if e["entry"] == "fault")
+        assert fault["fault"]["kind"] == "alarm" and fault["streams"]["running"]
+        for port in bench.grbl:  # held, then reset, both
+            assert port.device.realtime[-2:] == ["!", "^X"]
+        resumed = cli("--resume", str(run))
+        assert resumed.returncode == 0, resumed.stderr[-3000:]
+        journal = [json.loads(line) for line in (run / "journal.jsonl").read_text().splitlines()]
+        assert journal[-1]["entry"] == "end"
+        last = [e for e in journal if e["entry"] == "finished"][-1]
+        assert set(last["streams"]["done"]) == {s.index for s in c.program.streams}
