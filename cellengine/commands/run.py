@@ -13,7 +13,7 @@ from cellengine.errors import EXIT_OK, UsageError, known
 
 # The drivers' names (cellengine/drivers/registry.py DRIVERS, which a test keeps equal): here so
 # that `--driver foo` is a usage error before anything compiles, without importing the drivers
-DRIVER_KINDS = ("sim", "ur_rtde")
+DRIVER_KINDS = ("sim", "ur_rtde", "lab")
 
 
 def add_parser(sub: Any, name: str) -> None:

@@ -27,6 +27,6 @@ def test_unknown_driver_is_a_usage_error_before_compiling(
     assert e.value.code == 2
     err = capsys.readouterr().err.splitlines()
     assert err[-1] == (
-        "cellengine run: error: argument --driver: unknown driver 'foo'; known: sim, ur_rtde"
+        "cellengine run: error: argument --driver: unknown driver 'foo'; known: lab, sim, ur_rtde"
     )
     assert not out.exists()  # nothing compiled, nothing written
