@@ -83,6 +83,9 @@ class LabBenchDriver(Driver):
         self._q = np.full(len(self.joint_names), np.nan)
         self.grippers = Grippers({}, {})
         self.load_cells: dict[str, LoadCell] = {}
+        # per segment played: its duration (s), the blocks sent after the start and the
+        # least time one went before its planned start (s): the streaming's margin
+        self.streamed: list[tuple[float, int, float]] = []
 
     def _axes(self, joints: Mapping[str, Sequence[str]]) -> dict[str, list[AxisMap]]:
         """Each robot's joints as its controller's axes (the cell file's ``axes``)."""
@@ -255,6 +258,8 @@ class LabBenchDriver(Driver):
         )
         if out.hold_latency is not None:
             self.hold_latencies.append(out.hold_latency)
+        if out.leads:
+            self.streamed.append((traj.duration, out.blocks, min(out.leads)))
         if out.measured:
             self._q = out.measured[-1].copy()
         if out.fault is None:
@@ -277,9 +282,7 @@ class LabBenchDriver(Driver):
         )
 
     def timing(self) -> dict[str, Any] | None:
-        if not self.hold_latencies:
-            return None
-        return {"hold_latency_ms": [round(1000.0 * v, 3) for v in self.hold_latencies]}
+        return None  # no servo loop: GRBL plans its own motion (see streamed)
 
     # -- reading ----------------------------------------------------------------------------
 

@@ -63,6 +63,9 @@ class Outcome:
     measured: list[np.ndarray] = field(default_factory=list)  # the cell's q then
     fault: Fault | None = None
     hold_latency: float | None = None  # s from detection to the last feed hold written
+    # each block sent after the start: how long before its planned start it went (s)
+    leads: list[float] = field(default_factory=list)
+    blocks: int = 0  # blocks sent, every controller
 
 
 def play(
@@ -96,7 +99,7 @@ def play(
         t = traj.start_time + (now - wall0)
         try:
             for s in streams:
-                _feed(s, t)
+                _feed(s, t, out)
             if now >= next_status:
                 for s in streams:
                     s.link.ask_status()
@@ -144,13 +147,16 @@ def _primed(s: Stream, t0: float) -> bool:
     return not s.link.fits(s.blocks[s.sent].line)  # its buffers are full
 
 
-def _feed(s: Stream, t: float) -> None:
+def _feed(s: Stream, t: float, out: Outcome | None = None) -> None:
     while s.sent < len(s.blocks):
         b = s.blocks[s.sent]
         if b.start > t + LOOKAHEAD or not s.link.fits(b.line):
             return
         s.link.stream(b.line)
         s.sent += 1
+        if out is not None:
+            out.leads.append(b.start - t)
+            out.blocks += 1
 
 
 def _check(

@@ -321,9 +321,10 @@ def test_same_inputs_same_record() -> None:
 
 
 def test_registry_and_make_driver() -> None:
+    from cellengine.drivers.lab import LabBenchDriver
     from cellengine.drivers.ur_rtde import UrDriver
 
-    assert {"sim": SimDriver, "ur_rtde": UrDriver} == DRIVERS
+    assert {"sim": SimDriver, "ur_rtde": UrDriver, "lab": LabBenchDriver} == DRIVERS
     d = make_driver(cell(), JOINTS, objects=objects(), lag=0.01, realtime=False)
     assert isinstance(d, SimDriver) and d.state is State.UNCONFIGURED
     assert d.joint_names == NAMES and d.arms.gain < 1.0
@@ -334,7 +335,7 @@ def test_make_driver_names_a_missing_driver() -> None:
     ur = cell(kind="ur_rtde", arms={"left": "127.0.0.2", "right": "127.0.0.3"})
     with pytest.raises(DriverRefused) as info:
         make_driver(ur, JOINTS, kind="kuka")
-    assert str(info.value) == "kuka driver: no driver 'kuka' is available; known: sim, ur_rtde"
+    assert str(info.value) == "kuka driver: no driver 'kuka' is available; known: lab, sim, ur_rtde"
     assert isinstance(make_driver(ur, JOINTS, kind="sim"), SimDriver)
 
 
