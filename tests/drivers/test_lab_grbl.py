@@ -137,3 +137,24 @@ def test_an_alarm_on_one_controller_holds_both(bench: tuple[Path, list[Port]]) -
         time.sleep(0.01)
     # reset when opened; held while primed, started; held at the alarm, then reset
     assert held[:4] == ["^X", "!", "~", "!"] and "^X" in held[4:]
+
+
+def test_a_controller_in_alarm_is_refused_unless_the_cell_homes_or_unlocks_it(
+    bench: tuple[Path, list[Port]],
+) -> None:
+    folder, ports = bench
+    for p in ports:  # as after power-up with homing on: ALARM until $H or $X
+        p.device.state, p.device.settings[22] = "Alarm", 1.0
+    driver = _driver(folder)
+    driver.configure()
+    with pytest.raises(DriverRefused, match=r"robot 'robot1' at .* is in alarm: home it"):
+        driver.activate()
+    driver.finalize()
+    cell = folder / "cell.yaml"
+    cell.write_text(cell.read_text().replace("axes: {z:", "home: true, axes: {z:"))
+    driver = _driver(folder)
+    driver.configure()
+    driver.activate()  # $H on both: homed to GRBL's machine zero
+    assert [p.device.log.count("$H") for p in ports] == [1, 1]
+    assert np.allclose(driver.joint_state(), 0.0, atol=1e-9)
+    driver.finalize()
