@@ -4,7 +4,6 @@ stopping short with load, and the failures a real gripper has."""
 
 from __future__ import annotations
 
-import threading
 import time
 from collections.abc import Iterator
 
@@ -12,20 +11,16 @@ import pytest
 
 from cellengine.drivers.dynamixel_grip import Gripper, GripperError
 from cellengine.emulate.dynamixel import DynamixelBus, Servo, crc16, packet
-from cellengine.emulate.serial_pty import Port, open_port, serve
+from cellengine.emulate.serial_pty import Port
+from tests.drivers.ptys import served
 
 POSITIONS = {"open": 2600, "grasp": 1500, "slide": 2200}
 
 
 @pytest.fixture
 def bus() -> Iterator[Port]:
-    p = open_port(DynamixelBus({1: Servo(1), 2: Servo(2)}))
-    stop = [False]
-    thread = threading.Thread(target=serve, args=([p], stop), daemon=True)
-    thread.start()
-    yield p
-    stop[0] = True
-    thread.join(timeout=2)
+    with served(DynamixelBus({1: Servo(1), 2: Servo(2)})) as (p,):
+        yield p
 
 
 def _settle(g: Gripper) -> None:

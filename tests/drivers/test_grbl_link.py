@@ -3,7 +3,6 @@ pseudo-terminal, served in a thread on the wall clock as `cellengine emulate grb
 
 from __future__ import annotations
 
-import threading
 import time
 from collections.abc import Iterator
 
@@ -11,18 +10,14 @@ import pytest
 
 from cellengine.drivers.grbl_link import GrblError, GrblLink, GrblLost
 from cellengine.emulate.grbl import Grbl
-from cellengine.emulate.serial_pty import Port, open_port, serve
+from cellengine.emulate.serial_pty import Port
+from tests.drivers.ptys import served
 
 
 @pytest.fixture
 def port() -> Iterator[Port]:
-    p = open_port(Grbl())
-    stop = [False]
-    thread = threading.Thread(target=serve, args=([p], stop), daemon=True)
-    thread.start()
-    yield p
-    stop[0] = True
-    thread.join(timeout=2)
+    with served(Grbl()) as (p,):
+        yield p
 
 
 def _idle(link: GrblLink, timeout: float = 20.0) -> None:

@@ -3,25 +3,20 @@ the median of fresh readings, and garbage, silence and a lost port as clear erro
 
 from __future__ import annotations
 
-import threading
 from collections.abc import Iterator
 
 import pytest
 
 from cellengine.drivers.loadcell import LoadCell, LoadCellError
 from cellengine.emulate.loadcell import LoadCellEmulator
-from cellengine.emulate.serial_pty import Port, open_port, serve
+from cellengine.emulate.serial_pty import Port
+from tests.drivers.ptys import served
 
 
 @pytest.fixture
 def port() -> Iterator[Port]:
-    p = open_port(LoadCellEmulator(zero=3.7, noise=0.2, seed=1))
-    stop = [False]
-    thread = threading.Thread(target=serve, args=([p], stop), daemon=True)
-    thread.start()
-    yield p
-    stop[0] = True
-    thread.join(timeout=2)
+    with served(LoadCellEmulator(zero=3.7, noise=0.2, seed=1)) as (p,):
+        yield p
 
 
 def test_tare_then_weigh_a_vial(port: Port) -> None:
