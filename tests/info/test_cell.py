@@ -89,7 +89,7 @@ def test_unknown_key_and_bad_values(write) -> None:
     assert errors(write, text) == [
         ":17:5: tools.gripper: unknown key 'finger_widht'; known: finger_thickness, "
         "finger_width, fingers, grasp, jaw, kind, load_cell, mass, mesh, shape, tcp",
-        ":21:16: driver.kind: unknown kind 'simulated'; known: sim, ur_rtde",
+        ":21:16: driver.kind: unknown kind 'simulated'; known: lab, sim, ur_rtde",
     ]
 
 
