@@ -22,7 +22,7 @@ BLOCK_DT = 0.05  # s of trajectory per block: 20 blocks/s, ~0.9 s in GRBL's buff
 STILL = 1e-3  # machine units (mm, deg): a block shorter than this is a dwell
 DIGITS = 3  # GRBL's 0.001 mm
 JUNCTION_DEVIATION = 0.01  # mm, GRBL's default $11
-SPLITS = 3  # a block at a bend halved at most this many times (to 6 ms)
+SPLITS = 2  # a block at a bend halved at most this many times (to 12.5 ms)
 
 
 @dataclass(frozen=True)
