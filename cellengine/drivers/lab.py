@@ -144,8 +144,28 @@ class LabBenchDriver(Driver):
         buses: dict[str, Any] = {}
         grippers: dict[str, Gripper] = {}
         holding: dict[str, tuple[str, ...]] = {}
+        try:
+            self._open_each(buses, grippers, holding)
+        finally:  # what opened is closed with the rest should anything fail
+            self.grippers = Grippers(grippers, holding)
+
+    def _open_each(
+        self,
+        buses: dict[str, Any],
+        grippers: dict[str, Gripper],
+        holding: dict[str, tuple[str, ...]],
+    ) -> None:
         for robot, grbl in self.config.robots.items():
             spec = grbl.gripper
+            tool = self.layout.tools.get(robot)
+            if spec is not None and tool is not None:
+                missing = sorted(set(tool.jaw) - set(spec.positions))
+                if missing:
+                    raise DriverRefused(
+                        self.kind,
+                        f"robots.{robot}.gripper.positions has no position for jaw mode(s) "
+                        f"{', '.join(missing)} of its tool",
+                    )
             if spec is not None:
                 g = Gripper(
                     spec.port,
@@ -156,17 +176,16 @@ class LabBenchDriver(Driver):
                     timeout=spec.timeout,
                     bus=buses.get(spec.port),
                 )
+                grippers[robot], holding[robot] = g, spec.holding
                 g.open()
                 buses[spec.port] = g.bus
-                grippers[robot], holding[robot] = g, spec.holding
             cell = grbl.load_cell
             if cell is not None:
                 lc = LoadCell(
                     cell.port, cell.baud, cell.unit, cell.readings, cell.settle, cell.timeout
                 )
-                lc.open()
                 self.load_cells[robot] = lc
-        self.grippers = Grippers(grippers, holding)
+                lc.open()
 
     def _check_settings(self, robot: str, settings: Mapping[int, float]) -> None:
         for a in self.axes[robot]:

@@ -158,3 +158,20 @@ def test_a_controller_in_alarm_is_refused_unless_the_cell_homes_or_unlocks_it(
     assert [p.device.log.count("$H") for p in ports] == [1, 1]
     assert np.allclose(driver.joint_state(), 0.0, atol=1e-9)
     driver.finalize()
+
+
+def test_a_gripper_without_a_position_for_a_jaw_mode_is_refused_at_configure(
+    bench: tuple[Path, list[Port]],
+) -> None:
+    folder, _ = bench
+    cell = folder / "cell.yaml"
+    grip = "gripper: {port: /dev/null, id: 1, positions: {open: 2600}}, axes: {z:"
+    cell.write_text(cell.read_text().replace("axes: {z:", grip, 1))
+    driver = _driver(folder)
+    with pytest.raises(DriverRefused) as e:
+        driver.configure()
+    assert str(e.value) == (
+        "lab driver: robots.robot1.gripper.positions has no position for jaw mode(s) grasp "
+        "of its tool"
+    )
+    assert driver.links == {}
