@@ -57,14 +57,7 @@ def add_serial(kinds: Any) -> None:
     c.add_argument("--zero", type=float, default=3.7, help="g it reads empty (default 3.7)")
     c.add_argument("--noise", type=float, default=0.2, help="g standard deviation (0.2)")
     c.add_argument("--seed", type=int, default=0, help="the noise's seed (default 0)")
-    c.add_argument(
-        "--fault",
-        action="append",
-        default=[],
-        metavar="0@T:KIND",
-        help="T s after it starts: silence, garbage, lost",
-    )
-    c.add_argument("--log", type=Path, help="append every line it printed here (JSON lines)")
+    _fault_and_log(c, "T s after it starts: silence, garbage, lost", "line it printed")
     c.set_defaults(run=run_loadcell)
     d = kinds.add_parser(
         "dynamixel",
@@ -73,19 +66,18 @@ def add_serial(kinds: Any) -> None:
         "sync write, CRC-16. Prints 'ready' and the terminal's path; stops on SIGTERM.",
     )
     d.add_argument("--id", type=int, action="append", default=[], help="a servo's id (1..)")
-    d.add_argument(
-        "--fault",
-        action="append",
-        default=[],
-        metavar="0@T:KIND",
-        help="T s after it is first written to: stuck, overload, lost",
-    )
-    d.add_argument("--log", type=Path, help="append every packet it took here (JSON lines)")
+    _fault_and_log(d, "T s after it is first written to: stuck, overload, lost", "packet it took")
     d.set_defaults(run=run_dynamixel)
 
 
-def _usage(message: str) -> UsageError:
-    return UsageError(Problem(message, "cellengine emulate grbl"))
+def _fault_and_log(p: Any, faults: str, logged: str) -> None:
+    """A one-device emulator's --fault and --log."""
+    p.add_argument("--fault", action="append", default=[], metavar="0@T:KIND", help=faults)
+    p.add_argument("--log", type=Path, help=f"append every {logged} here (JSON lines)")
+
+
+def _usage(message: str, kind: str = "grbl") -> UsageError:
+    return UsageError(Problem(message, f"cellengine emulate {kind}"))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -94,12 +86,13 @@ def run(args: argparse.Namespace) -> int:
 
     if not 1 <= args.count <= 8:
         raise _usage(f"--count {args.count}: from 1 to 8 controllers")
-    ports = [open_port(Grbl()) for _ in range(args.count)]
+    grbls = [Grbl() for _ in range(args.count)]
+    ports = [open_port(g) for g in grbls]
     for spec in args.set:
         m = re.fullmatch(r"(\d+):\$?(\d+)=([-+]?\d*\.?\d+)", spec)
         if m is None or int(m[1]) >= args.count:
             raise _usage(f"--set '{spec}': not I:N=V for a controller I below {args.count}")
-        ports[int(m[1])].grbl.settings[int(m[2])] = float(m[3])
+        grbls[int(m[1])].settings[int(m[2])] = float(m[3])
     for spec in args.fault:
         (fault,) = _faults([spec], args.count, ("lost", *Grbl().faults))
         ports[int(spec.split("@", 1)[0])].faults.append(fault)
@@ -112,7 +105,7 @@ def run_loadcell(args: argparse.Namespace) -> int:
 
     device = LoadCellEmulator(args.load, args.zero, args.noise, args.seed)
     port = open_port(device)
-    port.faults += _faults(args.fault, 1, ("lost", *device.faults))
+    port.faults += _faults(args.fault, 1, ("lost", *device.faults), "loadcell")
     return _serve("loadcell", [port], args.log)
 
 
@@ -122,21 +115,24 @@ def run_dynamixel(args: argparse.Namespace) -> int:
 
     ids = args.id or [1]
     if any(not 0 <= i <= 252 for i in ids) or len(set(ids)) != len(ids):
-        raise _usage(f"--id {ids}: distinct ids from 0 to 252")
+        raise _usage(f"--id {ids}: distinct ids from 0 to 252", "dynamixel")
     bus = DynamixelBus({i: Servo(i) for i in ids})
     port = open_port(bus)
-    port.faults += _faults(args.fault, 1, ("lost", *bus.faults))
+    port.faults += _faults(args.fault, 1, ("lost", *bus.faults), "dynamixel")
     return _serve("dynamixel", [port], args.log)
 
 
-def _faults(specs: list[str], count: int, kinds: tuple[str, ...]) -> list[tuple[float, str]]:
+def _faults(
+    specs: list[str], count: int, kinds: tuple[str, ...], what: str = "grbl"
+) -> list[tuple[float, str]]:
     out = []
     for spec in specs:
         m = re.fullmatch(r"(\d+)@(\d*\.?\d+):(\w+)", spec)
         if m is None or int(m[1]) >= count or m[3] not in kinds:
             raise _usage(
                 f"--fault '{spec}': not I@T:KIND for a device I below {count} and KIND one "
-                f"of {', '.join(kinds)}"
+                f"of {', '.join(kinds)}",
+                what,
             )
         out.append((float(m[2]), m[3]))
     return out

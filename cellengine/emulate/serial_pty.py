@@ -15,7 +15,7 @@ import select
 import time
 import tty
 from dataclasses import dataclass, field
-from typing import IO, Any, Protocol
+from typing import IO, Protocol
 
 TICK = 0.001  # s between the emulator's steps
 
@@ -40,10 +40,6 @@ class Port:
     faults: list[tuple[float, str]] = field(default_factory=list)
     started: float | None = None  # wall time faults count from
     closed: bool = False
-
-    @property
-    def grbl(self) -> Any:
-        return self.device
 
 
 def open_port(device: Device) -> Port:

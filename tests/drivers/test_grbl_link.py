@@ -58,8 +58,8 @@ def test_streaming_by_character_counting_never_overflows(port: Port) -> None:
             assert sum(n for n, _ in link.pending) <= 128
         link.poll(0.002)
     _idle(link)
-    assert port.grbl.overflows == 0 and link.errors == []
-    assert port.grbl.log[-len(lines) :] == lines
+    assert port.device.overflows == 0 and link.errors == []
+    assert port.device.log[-len(lines) :] == lines
     assert link.last is not None and link.last.mpos[:2] == (-100.0, -50.0)
 
 
@@ -78,7 +78,7 @@ def test_an_alarm_is_kept_and_a_lost_port_raises(port: Port) -> None:
     link = GrblLink(port.path)
     link.open()
     link.command("$X")
-    port.grbl.trip(1, pins="X")
+    port.device.trip(1, pins="X")
     link.poll(0.2)
     assert link.alarm == 1 and not link.pending
     port.faults.append((0.0, "lost"))

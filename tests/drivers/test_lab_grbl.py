@@ -83,7 +83,7 @@ def test_a_controller_too_slow_for_the_cell_is_refused_naming_the_setting(
     bench: tuple[Path, list[Port]],
 ) -> None:
     folder, ports = bench
-    ports[1].grbl.settings[121] = 500.0  # robot2's Y axis: its y joint needs 600 mm/s^2
+    ports[1].device.settings[121] = 500.0  # robot2's Y axis: its y joint needs 600 mm/s^2
     driver = _driver(folder)
     with pytest.raises(DriverRefused) as e:
         driver.configure()
@@ -108,10 +108,10 @@ def test_a_segment_streams_to_both_controllers_and_ends_where_it_should(
         assert played.completed and len(played.t) >= segment.trajectory.duration * 10
         end = segment.trajectory.q[-1]
         assert np.allclose(driver.joint_state(), end, atol=1e-6 + 1e-3)
-    assert all(p.grbl.overflows == 0 for p in ports)
-    moves = [line for line in ports[1].grbl.log if line.startswith("G1")]
+    assert all(p.device.overflows == 0 for p in ports)
+    moves = [line for line in ports[1].device.log if line.startswith("G1")]
     assert len(moves) >= segment.trajectory.duration / 0.05 - 2
-    assert not any(line.startswith("G1") for line in ports[0].grbl.log)  # robot1 dwells
+    assert not any(line.startswith("G1") for line in ports[0].device.log)  # robot1 dwells
 
 
 def test_an_alarm_on_one_controller_holds_both(bench: tuple[Path, list[Port]]) -> None:
@@ -131,7 +131,7 @@ def test_an_alarm_on_one_controller_holds_both(bench: tuple[Path, list[Port]]) -
     (latency,) = driver.hold_latencies
     assert latency < 0.02
     driver.finalize()
-    held = ports[0].grbl.realtime
+    held = ports[0].device.realtime
     deadline = time.monotonic() + 2.0
     while "^X" not in held[4:] and time.monotonic() < deadline:
         time.sleep(0.01)

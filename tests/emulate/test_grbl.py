@@ -120,3 +120,17 @@ def test_the_receive_buffer_overflows_when_a_host_does_not_count() -> None:
     assert g.overflows == len(data) - len(g.rx) - sum(
         len(f"G1X-{k}.000F600\n") for k in range(1, 16)
     )
+
+
+def test_the_serial_emulators_name_themselves_in_usage_errors(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    from cellengine.cli import main
+
+    assert main(["emulate", "dynamixel", "--fault", "0@1:bogus"]) == 2
+    assert capsys.readouterr().err.strip() == (
+        "cellengine emulate dynamixel: --fault '0@1:bogus': not I@T:KIND for a device I below "
+        "1 and KIND one of lost, stuck, overload"
+    )
+    assert main(["emulate", "grbl", "--set", "3:110=1"]) == 2
+    assert "cellengine emulate grbl: --set '3:110=1'" in capsys.readouterr().err
