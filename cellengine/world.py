@@ -65,6 +65,12 @@ class World:
         p, e, k = self.resolve(ref)
         return p.T_cell_platform @ e.T_platform_element @ k.T_element_keypoint
 
+    def standing(self, c: Container) -> Mat:
+        """T_cell_base of a container where it stands at the start (its ``at``, given)."""
+        if c.at is None:
+            raise ValueError("the container has no `at`")
+        return self.pose(c.at) if isinstance(c.at, str) else c.at.matrix()
+
     def element(self, ref: str) -> Element:
         parts = ref.split(".")
         if len(parts) != 2:

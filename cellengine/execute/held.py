@@ -123,7 +123,7 @@ class Holding:
         self.state = Held(
             {},
             {},
-            {n: _rows(world.pose(c.at)) for n, c in containers.items() if c.at is not None},
+            {n: _rows(world.standing(c)) for n, c in containers.items() if c.at is not None},
         )
         self.checker = CollisionChecker(scene)
         # the checkers of the latest KEPT_STATES held states, the latest last (a checker is

@@ -8,8 +8,9 @@ from typing import Annotated, Literal
 
 from pydantic import Field, StringConstraints, field_validator, model_validator
 
-from cellengine import geometry
 from cellengine.arrays import Mat
+from cellengine.info.camera import Camera
+from cellengine.info.pose import Pose
 from cellengine.info.speed import SpeedSpec
 from cellengine.info.units import Angle, Frozen, Length, Mass, Units, Vec3Angle, Vec3Length
 
@@ -25,14 +26,6 @@ MAX_ROBOTS = 8
 # m: the least distance between the arms, and from an arm to what it is not meant to touch
 DEFAULT_CLEARANCE = 0.010
 DEFAULT_WORK_CLEARANCE = 0.005
-
-
-class Pose(Frozen):
-    xyz: Vec3Length = (0.0, 0.0, 0.0)
-    rpy: Vec3Angle = (0.0, 0.0, 0.0)  # URDF: R = Rz(yaw) Ry(pitch) Rx(roll)
-
-    def matrix(self) -> Mat:
-        return geometry.pose(self.xyz, self.rpy)
 
 
 class UrdfModel(Frozen):
@@ -317,6 +310,7 @@ class Cell(Frozen):
     obstacles: dict[Name, Obstacle] = {}
     zones: dict[Name, Zone] = {}
     driver: DriverSpec = SimDriver(kind="sim")
+    camera: Camera | None = None  # locates objects by their ArUco markers
     # every compiled segment keeps the arms this far apart, and from what they do not touch
     # on purpose (the gate refuses a segment passing closer); 0: measured and reported only
     clearance: Length = Field(DEFAULT_CLEARANCE, ge=0)

@@ -261,7 +261,7 @@ def _check_objects(world: World, doc: YamlDoc) -> list[Problem]:
     """Where each container stands must be a keypoint of the cell."""
     out: list[Problem] = []
     for name, c in world.objects.containers.items():
-        if c.at is None:
+        if not isinstance(c.at, str):
             continue
         try:
             world.resolve(c.at)

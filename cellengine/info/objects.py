@@ -6,7 +6,9 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
+from cellengine.info.camera import MarkerId
 from cellengine.info.cell import Name
+from cellengine.info.pose import Pose
 from cellengine.info.units import Frozen, Length, Mass, Number, Units
 
 
@@ -38,9 +40,12 @@ class Container(Frozen):
     height: Length | None = Field(None, gt=0)
     mass: Mass | None = Field(None, ge=0)
     cap: Cap | None = None
-    # where it stands at the start: a keypoint (platform.element[.keypoint]) at the centre
-    # of its base, z up
-    at: str | None = None
+    # where it stands at the start, the centre of its base, z up: a keypoint
+    # (platform.element[.keypoint]) or a pose in the cell frame (`cellengine locate` writes
+    # one where it finds a container away from every keypoint)
+    at: str | Pose | None = None
+    # the ArUco marker on its top (cell.yaml's camera dictionary)
+    marker: MarkerId | None = None
 
     @model_validator(mode="after")
     def _sized(self) -> Container:
@@ -71,3 +76,13 @@ class Objects(Frozen):
 
     def names(self) -> list[str]:
         return [*self.cables, *self.containers]
+
+    @model_validator(mode="after")
+    def _markers_once(self) -> Objects:
+        seen: dict[int, str] = {}
+        for name, c in self.containers.items():
+            if c.marker is not None and c.marker in seen:
+                raise ValueError(f"marker {c.marker} is on both {seen[c.marker]} and {name}")
+            if c.marker is not None:
+                seen[c.marker] = name
+        return self

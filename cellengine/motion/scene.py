@@ -541,7 +541,7 @@ def environment(world: World) -> tuple[list[StaticShape], list[str]]:
         out.append(StaticShape(oname, obstacle.pose.matrix(), shape, shape, True))
     for cname, c in world.objects.containers.items():
         if c.at is not None:
-            out.append(standing_container(world, cname, world.pose(c.at)))
+            out.append(standing_container(world, cname, world.standing(c)))
     return out, notes
 
 

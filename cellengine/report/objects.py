@@ -39,7 +39,7 @@ def containers(
             continue
         if tcp is None and any(e.event.holds == name for e in ordered):
             tcp = _tcp_poses(cell, q)
-        poses = _poses(name, world.pose(c.at), ordered, times, tcp or {})
+        poses = _poses(name, world.standing(c), ordered, times, tcp or {})
         out.extend(_shapes(name, c, poses))
     return out
 
