@@ -25,6 +25,7 @@ COMMANDS = {
     "schema": "schema",
     "import": "import_remodel",
     "emulate": "emulate",
+    "locate": "locate",
 }
 
 

@@ -50,6 +50,9 @@ class Compiled:
     # what let the arms work at once (the program has streams): a resumed or replanned run
     # places what is left with it again
     overlap: Overlap | None = None
+    # the containers' `at` as the camera found them (`run --locate`), in objects.yaml's terms:
+    # set over the file for this program, journaled with the run, set again on resuming it
+    located: Mapping[str, Any] | None = None
 
     def rest(self, done: frozenset[int], running: frozenset[int], q: Vec) -> Compiled:
         """The run from where it stopped: the segments ``done`` (of the program's streams)

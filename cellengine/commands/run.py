@@ -5,11 +5,19 @@
 from __future__ import annotations
 
 import argparse
+import json
+import os
+import sys
+from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from cellengine.commands.plan import add_common, compile_from_args, compile_reporting
 from cellengine.errors import EXIT_OK, UsageError, known
+
+if TYPE_CHECKING:
+    from cellengine.pipeline import Compiled
 
 # The drivers' names (cellengine/drivers/registry.py DRIVERS, which a test keeps equal): here so
 # that `--driver foo` is a usage error before anything compiles, without importing the drivers
@@ -46,6 +54,13 @@ def add_parser(sub: Any, name: str) -> None:
         metavar="N",
         help="play the plan N times in a row (it must end where it starts: return_home: true)",
     )
+    p.add_argument(
+        "--locate",
+        type=Path,
+        metavar="IMAGE",
+        help="before planning, locate the containers in this picture from the cell's camera "
+        "(as `cellengine locate`) and plan with them where they were found",
+    )
     p.set_defaults(run=run)
 
 
@@ -72,8 +87,61 @@ def run(args: argparse.Namespace) -> int:
     options = DriverOptions(kind=args.driver, realtime=args.realtime)
     if args.resume is not None and args.cycles != 1:
         raise UsageError.at("--cycles with --resume: a resumed run goes on with its own", None)
+    if args.resume is not None and args.locate is not None:
+        raise UsageError.at(
+            "--locate with --resume: a resumed run keeps the places located at its start", None
+        )
     if args.resume is not None:  # compiled only if the run has something left to do
-        resume_run(args.resume, lambda: compile_from_args(args), options, args.yes, args.quiet)
+        resume_run(
+            args.resume,
+            lambda: at_places(args, journaled_places(args.resume), compile_from_args),
+            options,
+            args.yes,
+            args.quiet,
+        )
     else:
-        run_plan(compile_reporting(args), args.out, options, args.yes, args.quiet, args.cycles)
+        places = located_places(args) if args.locate is not None else None
+        compiled = at_places(args, places, compile_reporting)
+        run_plan(compiled, args.out, options, args.yes, args.quiet, args.cycles)
     return EXIT_OK
+
+
+def located_places(args: argparse.Namespace) -> dict[str, Any]:
+    """The containers' `at` where the camera finds them in ``--locate``'s picture; what it
+    found printed (to stderr: stdout is the run's)."""
+    from cellengine.info.load import load_plan
+    from cellengine.locate.session import at_settings, located, table
+
+    if not os.path.lexists(args.plan):
+        raise UsageError.at("no such plan file", args.plan)
+    world = load_plan(args.plan, cell=args.cell).world
+    found = located(world, args.locate, None)
+    if not args.quiet:
+        print("\n".join(table(world, found)), file=sys.stderr)
+    return at_settings(world, found)
+
+
+def journaled_places(run_dir: Path) -> dict[str, Any] | None:
+    """The places a run located at its start (its journaled identity's), if it did."""
+    from cellengine.journal import JOURNAL, read_progress
+
+    run = read_progress(run_dir / JOURNAL).run or {}
+    located = run.get("located")
+    return json.loads(located) if isinstance(located, str) else None
+
+
+def at_places(
+    args: argparse.Namespace,
+    places: dict[str, Any] | None,
+    compile_with: Callable[[argparse.Namespace], Compiled],
+) -> Compiled:
+    """The plan compiled with the containers' `at` set to ``places`` (none: as the files
+    say)."""
+    from cellengine.info.settings import settings
+
+    if not places:
+        return compile_with(args)
+    values = [("objects", ("containers", name, "at"), v) for name, v in places.items()]
+    with settings(values):
+        compiled = compile_with(args)
+    return replace(compiled, located=places)

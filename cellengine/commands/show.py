@@ -110,7 +110,7 @@ def reach_summary(reach: dict[str, tuple[str, ...]], arms: list[str]) -> str:
     return f"{len(reach)} keypoints" + (": " + ", ".join(parts) if parts else "")
 
 
-def write_text(path: Path, text: str) -> None:
+def write_text(path: Path, text: str, what: str = "the cell page") -> None:
     """``path``'s new content, whole or not at all: a temporary file beside it, renamed over
     it (which replaces a link rather than writing through it)."""
     folder = path.parent
@@ -125,4 +125,4 @@ def write_text(path: Path, text: str) -> None:
             os.unlink(tmp)
             raise
     except OSError as e:
-        raise InputError.at(f"cannot write the cell page: {e.strerror}", path) from None
+        raise InputError.at(f"cannot write {what}: {e.strerror}", path) from None

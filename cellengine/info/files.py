@@ -22,6 +22,7 @@ MAX_BYTES = {
     "csv": 8 << 20,
     "urdf": 16 << 20,
     "mesh": 64 << 20,
+    "image": 64 << 20,  # a camera's picture (PNG, JPEG, ...)
 }
 
 # Opening a FIFO for reading waits for a writer; without blocking it opens, and is refused.

@@ -32,8 +32,6 @@ def world_corners(camera: Camera, marker: int) -> FloatArray:
 
 
 def camera_pose(camera: Camera, seen: Corners) -> CameraPose:
-    import cv2
-
     used = tuple(sorted(m for m in camera.world if m in seen))
     missing = sorted(set(camera.world) - set(used))
     if len(used) < camera.world_seen:
@@ -41,6 +39,15 @@ def camera_pose(camera: Camera, seen: Corners) -> CameraPose:
             f"{len(used)} of the world markers seen ({_ids(used) or 'none'}); the camera's "
             f"pose needs {camera.world_seen} (world_seen); not seen: {_ids(missing)}"
         )
+    pose = _solved(camera, seen, used)
+    if pose.rms > camera.reprojection:
+        raise PoseError(_disagreeing(camera, seen, pose))
+    return pose
+
+
+def _solved(camera: Camera, seen: Corners, used: tuple[int, ...]) -> CameraPose:
+    import cv2
+
     obj = np.vstack([world_corners(camera, m) for m in used])
     img = np.vstack([seen[m] for m in used])
     K, D = matrix(camera), distortion(camera)
@@ -55,21 +62,41 @@ def camera_pose(camera: Camera, seen: Corners) -> CameraPose:
     T_camera_cell = np.eye(4)
     T_camera_cell[:3, :3] = cv2.Rodrigues(rvec)[0]
     T_camera_cell[:3, 3] = tvec.ravel()
-    pose = CameraPose(
+    return CameraPose(
         np.linalg.inv(T_camera_cell),
         used,
         float(np.sqrt(np.mean(off**2))),
         (used[worst], float(per_marker[worst])),
     )
-    if pose.rms > camera.reprojection:
-        raise PoseError(
-            f"the world markers do not agree with cell.yaml: their corners are "
-            f"{pose.rms:.1f} px (RMS) from where the best camera pose puts them, more than "
-            f"camera.reprojection ({camera.reprojection:g} px); the farthest is world marker "
-            f"{pose.worst[0]} ({pose.worst[1]:.1f} px): check its place in cell.yaml, or "
-            "whether it has moved"
-        )
-    return pose
+
+
+def _disagreeing(camera: Camera, seen: Corners, pose: CameraPose) -> str:
+    """Why the world markers give no pose: the one marker whose place disagrees with the
+    others' (they agree without it; how far it is from cell.yaml's place), else all."""
+    head = (
+        f"the world markers do not agree with cell.yaml: their corners are {pose.rms:.1f} px "
+        f"(RMS) from where the best camera pose puts them, more than camera.reprojection "
+        f"({camera.reprojection:g} px)"
+    )
+    if len(pose.used) - 1 >= max(camera.world_seen, 3):
+        tries = {m: _solved(camera, seen, tuple(k for k in pose.used if k != m)) for m in pose.used}
+        m, others = min(tries.items(), key=lambda kv: kv[1].rms)
+        if others.rms <= camera.reprojection:
+            from cellengine.locate.plane import centre_and_yaw, on_plane
+
+            z = float(camera.world[m].matrix()[2, 3])
+            centre, _ = centre_and_yaw(on_plane(camera, others, seen[m], z))
+            place = camera.world[m].matrix()[:3, 3]
+            moved = float(np.linalg.norm(centre[:2] - place[:2])) * 1000.0
+            return (
+                f"{head}: world marker {m} is {moved:.1f} mm from its place in cell.yaml "
+                f"(the others agree within {others.rms:.1f} px); put it back, or correct "
+                f"camera.world.{m}"
+            )
+    return (
+        f"{head}; the farthest is world marker {pose.worst[0]} ({pose.worst[1]:.1f} px): "
+        "check the world markers' places in cell.yaml, or whether they have moved"
+    )
 
 
 def _ids(ids: list[int] | tuple[int, ...]) -> str:

@@ -6,6 +6,7 @@ first segments (split, sync and async compile to the same segment labels)."""
 from __future__ import annotations
 
 import hashlib
+import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -25,6 +26,8 @@ def run_identity(compiled: Compiled) -> dict[str, str]:
         paths["objects"] = plan.file.parent / plan.objects
     out = {role: _digest(path) for role, path in paths.items()}
     out = {**out, "execution": compiled.strategy, "version": __version__}
+    if compiled.located:
+        out["located"] = json.dumps(compiled.located, sort_keys=True)
     factor = compiled.context.speed.factor
     return out if factor == 1.0 else {**out, "speed": f"{factor:g}"}
 
@@ -36,6 +39,8 @@ def differences(journaled: dict[str, Any], now: dict[str, str]) -> list[str]:
         out.append(f"the execution was {journaled.get('execution')}, now {now['execution']}")
     if journaled.get("speed", "1") != now.get("speed", "1"):
         out.append(f"--speed was {journaled.get('speed', '1')}, now {now.get('speed', '1')}")
+    if journaled.get("located") != now.get("located"):
+        out.append("the containers' places located by the camera (--locate) differ")
     if journaled.get("version") != now["version"]:
         out.append(f"cellengine was {journaled.get('version')}, now {now['version']}")
     return out
