@@ -308,7 +308,7 @@ def _tasks(ctx: PlanningContext, steps: Sequence[Skill]) -> list[Task]:
         if isinstance(ref, str)
     }
     where: dict[str, Point] = {
-        n: _point(world.pose(c.at)[:3, 3])
+        n: _point(world.standing(c)[:3, 3])
         for n, c in world.objects.containers.items()
         if c.at is not None
     }

@@ -53,7 +53,7 @@ class LabState:
     def start(cls, world: World, tcp: Mapping[str, Mat]) -> LabState:
         """Every container where objects.yaml stands it, capped if it has a cap."""
         where = {
-            name: _frozen(world.pose(c.at))
+            name: _frozen(world.standing(c))
             for name, c in world.objects.containers.items()
             if c.at is not None
         }

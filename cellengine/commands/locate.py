@@ -67,7 +67,9 @@ def write_copy(objects: Path, values: dict[str, str], out: Path) -> None:
     try:
         new = rewritten(text, load_yaml(objects), values)
     except ValueError as e:
-        raise InputError.at(f"cannot rewrite `at` here ({e}); write it as one line", objects)
+        raise InputError.at(
+            f"cannot rewrite `at` here ({e}); write it on one line", objects
+        ) from None
     with tempfile.TemporaryDirectory() as tmp:
         check = Path(tmp) / objects.name
         check.write_text(new, encoding="utf-8")

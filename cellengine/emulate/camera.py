@@ -194,9 +194,7 @@ def distorted(camera: Camera, x: FloatArray, y: FloatArray) -> tuple[FloatArray,
     )
 
 
-def _undistorted(
-    camera: Camera, xd: FloatArray, yd: FloatArray
-) -> tuple[FloatArray, FloatArray]:
+def _undistorted(camera: Camera, xd: FloatArray, yd: FloatArray) -> tuple[FloatArray, FloatArray]:
     """The rays the lens puts at (xd, yd), by Newton's method on :func:`distorted`, to 1e-11
     of a normalized unit (1e-8 px)."""
     k1, k2, p1, p2, k3 = (*camera.distortion, 0.0)[:5]

@@ -63,7 +63,7 @@ def _solved(camera: Camera, seen: Corners, used: tuple[int, ...]) -> CameraPose:
     T_camera_cell[:3, :3] = cv2.Rodrigues(rvec)[0]
     T_camera_cell[:3, 3] = tvec.ravel()
     return CameraPose(
-        np.linalg.inv(T_camera_cell),
+        np.asarray(np.linalg.inv(T_camera_cell), dtype=float),
         used,
         float(np.sqrt(np.mean(off**2))),
         (used[worst], float(per_marker[worst])),

@@ -14,7 +14,6 @@ from cellengine.errors import InputError
 from cellengine.info.camera import Camera
 from cellengine.info.files import read_capped
 
-
 # pixels a picture may decode to (a 64 MB PNG can claim far more): 8K is 33 M
 MAX_PIXELS = 100_000_000
 

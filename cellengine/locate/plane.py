@@ -21,7 +21,8 @@ def on_plane(camera: Camera, pose: CameraPose, corners: FloatArray, z: float) ->
     if np.any(rays[:, 2] >= 0.0) or origin[2] <= z:
         raise ValueError(f"the plane z = {z * 1000:.1f} mm is not below the camera")
     s = (z - origin[2]) / rays[:, 2]
-    return origin + s[:, None] * rays
+    out: FloatArray = origin + s[:, None] * rays
+    return out
 
 
 def centre_and_yaw(points: FloatArray) -> tuple[FloatArray, float]:

@@ -77,4 +77,3 @@ def _length(row: str, col: int, lines: list[str], line: int) -> int:
             stop = i
             break
     return len(row[col:stop].rstrip())
-

@@ -77,13 +77,9 @@ def table(world: World, found: Located) -> list[str]:
     ]
     if found.found:
         width = max(len("object"), *(len(printable(f.name)) for f in found.found))
-        lines.append(
-            f"{'object':<{width}}  marker     x mm     y mm     z mm  yaw deg  stands at"
-        )
+        lines.append(f"{'object':<{width}}  marker     x mm     y mm     z mm  yaw deg  stands at")
         for f in found.found:
-            where = (
-                f"{f.keypoint} ({f.off * 1000:.1f} mm off)" if f.keypoint else "the table"
-            )
+            where = f"{f.keypoint} ({f.off * 1000:.1f} mm off)" if f.keypoint else "the table"
             lines.append(
                 f"{printable(f.name):<{width}}  {f.marker:>6}  "
                 + "  ".join(f"{v * 1000.0:7.1f}" for v in f.xyz)
@@ -106,9 +102,10 @@ def table(world: World, found: Located) -> list[str]:
 
 
 def as_json(found: Located) -> dict[str, Any]:
+    T = found.pose.T_cell_camera
     return {
         "camera": {
-            "T_cell_camera": [[round(float(v), 9) for v in row] for row in found.pose.T_cell_camera],
+            "T_cell_camera": [[round(float(v), 9) for v in row] for row in T],
             "world_markers": list(found.pose.used),
             "rms_px": round(found.pose.rms, 4),
         },

@@ -87,8 +87,7 @@ def test_too_few_world_markers_give_no_pose() -> None:
     with pytest.raises(PoseError) as e:
         locate(world, camera, image)
     assert str(e.value) == (
-        "2 of the world markers seen (0, 2); the camera's pose needs 3 (world_seen); "
-        "not seen: 1, 3"
+        "2 of the world markers seen (0, 2); the camera's pose needs 3 (world_seen); not seen: 1, 3"
     )
 
 

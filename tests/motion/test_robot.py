@@ -18,8 +18,8 @@ import pytest
 from cellengine import geometry as g
 from cellengine.errors import InputError
 from cellengine.info.cell import Robot, Tool
-from cellengine.info.pose import Pose
 from cellengine.info.load import load_world
+from cellengine.info.pose import Pose
 from cellengine.motion.robot import (
     UR_ACCELERATION,
     Arm,
