@@ -30,7 +30,14 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from cellengine import geometry  # noqa: E402
-from cellengine.emulate.camera import Shot, looking_down, render, solids, world_markers  # noqa: E402
+from cellengine.emulate.camera import (  # noqa: E402
+    Lens,
+    Shot,
+    looking_down,
+    render,
+    solids,
+    world_markers,
+)
 from cellengine.info.load import load_world  # noqa: E402
 from cellengine.locate.extrinsics import PoseError  # noqa: E402
 from cellengine.locate.objects import locate  # noqa: E402
@@ -96,9 +103,11 @@ def run(images: int, seed: int) -> dict[str, Any]:
     camera = world.cell.camera
     assert camera is not None
     rng = np.random.default_rng(seed)
+    lens = Lens.of(camera)
     errors: list[float] = []
     edge: list[float] = []  # objects over 350 mm from the camera's axis
     hidden = missed = failed_pose = strangers = 0
+    bands = {"under_450mm": [0, 0], "450mm_and_over": [0, 0]}  # found, shown (not hidden)
     seconds: list[float] = []
     for i in range(images):
         placed = scene(world, rng)
@@ -112,7 +121,7 @@ def run(images: int, seed: int) -> dict[str, Any]:
             vignetting=rng.uniform(0.1, 0.3),
             seed=seed * 100_000 + i,
         )
-        image = render(camera, shot)
+        image = render(camera, shot, lens)
         start = time.perf_counter()
         try:
             located = locate(world, camera, image)
@@ -121,6 +130,12 @@ def run(images: int, seed: int) -> dict[str, Any]:
             continue
         seconds.append(time.perf_counter() - start)
         strangers += len(located.strangers)
+        for name in placed:
+            if name in located.unseen and _hidden(world, placed, name, T_cam):
+                continue
+            band = bands[_band(placed[name], T_cam)]
+            band[1] += 1
+            band[0] += name not in located.unseen
         for f in located.found:
             c = world.container(f.name)
             top = placed[f.name][:3, 3] + [0.0, 0.0, c.full_height or 0.0]
@@ -147,7 +162,13 @@ def run(images: int, seed: int) -> dict[str, Any]:
         "edge_median_mm": float(np.median(edge)) if edge else None,
         "edge_worst_mm": float(max(edge)) if edge else None,
         "locate_ms_median": 1000.0 * float(np.median(seconds)),
+        "found_by_distance_from_axis": {k: f"{v[0]}/{v[1]}" for k, v in bands.items()},
     }
+
+
+def _band(T: np.ndarray, T_cam: np.ndarray) -> str:
+    """Which band of horizontal distance from the camera's axis an object stands in."""
+    return "under_450mm" if math.dist(T[:2, 3], T_cam[:2, 3]) < 0.45 else "450mm_and_over"
 
 
 def _hidden(world: World, placed: dict[str, np.ndarray], name: str, T_cam: np.ndarray) -> int:

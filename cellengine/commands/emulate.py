@@ -6,6 +6,9 @@ simulated arm. See cellengine/emulate/ for what is emulated and how.
 
 `cellengine emulate grbl [--count N]`: emulated GRBL 1.1 controllers (the lab bench's
 cartesian axes) on pseudo-terminals (commands/emulate_serial.py).
+
+`cellengine emulate camera CELL --out FILE`: a picture of the bench from the cell's camera
+(commands/emulate_camera.py).
 """
 
 from __future__ import annotations
@@ -20,16 +23,19 @@ from cellengine.errors import Problem, UsageError
 
 
 def add_parser(sub: Any, name: str) -> None:
+    from cellengine.commands.emulate_camera import add_camera
     from cellengine.commands.emulate_serial import add_serial
 
     top = sub.add_parser(
         name,
         help="emulate robot controllers for tests: ur (on loopback addresses), grbl, "
-        "loadcell and dynamixel (on pseudo-terminals)",
+        "loadcell and dynamixel (on pseudo-terminals); camera (a picture of the bench)",
         description="Emulate robot controllers in this process, for tests of the real "
         "drivers. Prints a line with 'ready' when they accept connections; stops on SIGTERM.",
     )
-    kinds = top.add_subparsers(dest="robot", required=True, metavar="{ur,grbl,loadcell,dynamixel}")
+    kinds = top.add_subparsers(
+        dest="robot", required=True, metavar="{ur,grbl,loadcell,dynamixel,camera}"
+    )
     p = kinds.add_parser(
         "ur",
         help="Universal Robots controllers, one per loopback address",
@@ -38,6 +44,7 @@ def add_parser(sub: Any, name: str) -> None:
         "line with 'ready' when every controller accepts connections; stops on SIGTERM.",
     )
     add_serial(kinds)
+    add_camera(kinds)
     p.add_argument(
         "--host",
         action="append",

@@ -85,7 +85,7 @@ def _disagreeing(camera: Camera, seen: Corners, pose: CameraPose) -> str:
             from cellengine.locate.plane import centre_and_yaw, on_plane
 
             z = float(camera.world[m].matrix()[2, 3])
-            centre, _ = centre_and_yaw(on_plane(camera, others, seen[m], z))
+            centre, _ = centre_and_yaw(on_plane(camera, others.T_cell_camera, seen[m], z))
             place = camera.world[m].matrix()[:3, 3]
             moved = float(np.linalg.norm(centre[:2] - place[:2])) * 1000.0
             return (

@@ -63,7 +63,7 @@ def _found(
     keypoints = world.keypoints()
     base = world.standing(c)[2, 3] if c.at is not None else camera.table
     for _ in range(3):
-        centre, yaw = centre_and_yaw(on_plane(camera, pose, corners, base + height))
+        centre, yaw = centre_and_yaw(on_plane(camera, pose.T_cell_camera, corners, base + height))
         at = base
         near = {k: d for k, d in _distances(keypoints, centre).items() if d <= camera.snap}
         keypoint = min(near, key=lambda k: (keypoints[k][2, 3], near[k])) if near else None

@@ -7,15 +7,14 @@ import math
 
 import numpy as np
 
-from cellengine.arrays import FloatArray
+from cellengine.arrays import FloatArray, Mat
 from cellengine.info.camera import Camera
-from cellengine.locate.extrinsics import CameraPose
 from cellengine.locate.lens import normalized
 
 
-def on_plane(camera: Camera, pose: CameraPose, corners: FloatArray, z: float) -> FloatArray:
-    """The corners (4 x 2 px) on the plane z (cell frame, m): 4 x 3."""
-    T = pose.T_cell_camera
+def on_plane(camera: Camera, T: Mat, corners: FloatArray, z: float) -> FloatArray:
+    """The corners (4 x 2 px) on the plane z (cell frame, m): 4 x 3, seen by the camera
+    at T (T_cell_camera)."""
     rays = normalized(camera, corners) @ T[:3, :3].T
     origin = T[:3, 3]
     if np.any(rays[:, 2] >= 0.0) or origin[2] <= z:

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import math
+from functools import cache
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from cellengine import geometry
-from cellengine.emulate.camera import Shot, looking_down, render, solids, world_markers
+from cellengine.emulate.camera import Lens, Shot, looking_down, render, solids, world_markers
 from cellengine.info.load import load_world
 from cellengine.world import World
 
@@ -20,6 +21,14 @@ T_CAMERA = looking_down(0.762, 0.641, 0.905, math.pi / 2 + math.radians(2.0))
 
 def bench_world() -> World:
     return load_world(CELL / "cell.yaml", CELL / "objects.yaml")
+
+
+@cache
+def bench_lens() -> Lens:
+    """The bench camera's lens, built once for the tests (a second each)."""
+    camera = bench_world().cell.camera
+    assert camera is not None
+    return Lens.of(camera)
 
 
 def moved(world: World) -> dict[str, np.ndarray]:
@@ -33,4 +42,5 @@ def picture(world: World, places: dict[str, np.ndarray], **spoil: Any) -> Any:
     camera = world.cell.camera
     assert camera is not None
     markers = spoil.pop("markers", world_markers(camera))
-    return render(camera, Shot(T_CAMERA, markers, solids(world, places), seed=7, **spoil))
+    shot = Shot(T_CAMERA, markers, solids(world, places), seed=7, **spoil)
+    return render(camera, shot, bench_lens())
