@@ -32,9 +32,9 @@ def detect(camera: Camera, image: Any) -> tuple[Corners, list[int]]:
     params.perspectiveRemovePixelPerCell = 8
     params.perspectiveRemoveIgnoredMarginPerCell = 0.3
     params.errorCorrectionRate = 1.0
-    # corners from lines fitted to the marker's edges: on markers of 15-20 px, the corner
-    # detector's refinement (SUBPIX) is biased by the blur (0.7 px RMS against 0.15 mm of
-    # the camera's pose, measured on bench/bench_locate.py's images)
+    # corners from lines fitted to the marker's edges: on markers of 15-20 px the corner
+    # detector's refinement (SUBPIX) put the camera 0.4-0.9 mm off its place, this 0.02 mm
+    # (one picture of bench/bench_locate.py's kind, sharp and blurred)
     params.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_CONTOUR
     detector = cv2.aruco.ArucoDetector(dictionary(camera), params)
     corners, ids, _ = detector.detectMarkers(grey)
