@@ -7,8 +7,10 @@ The journal is append-only, one JSON object per line, on disk at each entry (:cl
 ``recovery`` (a move to where a segment starts), then per segment
 ``sent`` and ``finished`` (with the arms' q and grippers after it; when the arms work at
 once, ``streams``: each robot's segments finished and running then), ``measured`` (a load
-cell), ``replanned``, ``cycle`` (``run --cycles N``: the program begins again; the start
-says how many cycles), ``fault`` (what stopped the run), ``timing`` (the servo loop's), ``end``.
+cell), ``tared`` (each load cell's zero, taken with its gripper empty when the run
+started: a resumed run, whose gripper may hold something, uses it), ``replanned``,
+``cycle`` (``run --cycles N``: the program begins again; the start says how many cycles),
+``fault`` (what stopped the run), ``timing`` (the servo loop's), ``end``.
 A run killed at any moment leaves whole lines and at most one torn last line, which is
 ignored; any other line that is not a JSON object is an error at its line. So is every value
 ``--resume`` would act on that is not what the runner writes (a journal can be edited or
@@ -42,6 +44,7 @@ class Entry(StrEnum):
     SENT = "sent"
     FINISHED = "finished"
     MEASURED = "measured"
+    TARED = "tared"
     REPLANNED = "replanned"
     CYCLE = "cycle"
     FAULT = "fault"
@@ -77,6 +80,8 @@ class Progress:
     started: bool = False  # the journal has a ``start``: progress is of its last run
     cycle: int = 1  # the cycle ``labels`` are of (run --cycles)
     cycles: int = 1  # the cycles the run was started for
+    # each load cell's zero (kg, by arm) as the run's first activation took it
+    tares: dict[str, float] = field(default_factory=dict)
     # the arms at once: the segments (of the program's streams) finished and those running
     # where the run stopped (the last segment finished, or a fault), and where the program
     # had the arms then (None: none finished, or one after another)
@@ -281,6 +286,17 @@ def _measured(entry: dict[str, Any]) -> None:
         raise _Bad(f"'mass_kg' must be a finite mass in kg (0 to {MAX_MASS:g}), got {_shown(mass)}")
 
 
+def _tared(entry: dict[str, Any]) -> None:
+    zeros = _field(entry, "load_cells")
+    if not isinstance(zeros, dict) or not all(
+        isinstance(a, str) and _finite(v) and abs(v) <= MAX_MASS for a, v in zeros.items()
+    ):
+        raise _Bad(
+            f"'load_cells' must map arms to finite masses in kg (within {MAX_MASS:g}), "
+            f"got {_shown(zeros)}"
+        )
+
+
 def _fault(entry: dict[str, Any]) -> None:
     """Where the fault stopped the arms and grippers: resume starts there."""
     if "streams" in entry:
@@ -338,6 +354,7 @@ _CHECKS: dict[str, Callable[[dict[str, Any]], None]] = {
     Entry.START: _start,
     Entry.FINISHED: _finished,
     Entry.MEASURED: _measured,
+    Entry.TARED: _tared,
     Entry.FAULT: _fault,
     Entry.CYCLE: _cycle,
 }
@@ -358,11 +375,12 @@ def _progress(entries: list[dict[str, Any]]) -> Progress:
     started = False
     cycle, cycles = 1, 1
     streams: StreamState | None = None
+    tares: dict[str, float] = {}
     for e in entries:
         kind = e["entry"]
         if kind == Entry.START:  # a new run into the folder: progress is of it alone
             labels, q, grippers, measured, fault = [], None, {}, {}, None
-            run, started, streams = e.get("run"), True, None
+            run, started, streams, tares = e.get("run"), True, None, {}
             cycle, cycles = 1, int(e.get("cycles", 1))
         if kind == Entry.CYCLE:  # the program again from its start, where the arms are
             labels, measured, fault, streams = [], {}, None, None
@@ -378,6 +396,8 @@ def _progress(entries: list[dict[str, Any]]) -> Progress:
                 streams = _stream_state(e["streams"])
         elif kind == Entry.MEASURED:
             measured[str(e["object"])] = float(e["mass_kg"])
+        elif kind == Entry.TARED:
+            tares = {str(a): float(v) for a, v in e["load_cells"].items()}
         elif kind == Entry.END:
             ended = True
         elif kind == Entry.FAULT:
@@ -387,5 +407,16 @@ def _progress(entries: list[dict[str, Any]]) -> Progress:
         elif kind == Entry.START:
             ended = False
     return Progress(
-        tuple(labels), q, grippers, measured, ended, fault, run, started, cycle, cycles, streams
+        tuple(labels),
+        q,
+        grippers,
+        measured,
+        ended,
+        fault,
+        run,
+        started,
+        cycle,
+        cycles,
+        tares,
+        streams,
     )

@@ -45,6 +45,16 @@ def test_a_good_journal_is_read(tmp_path: Path) -> None:
     assert progress.measured == {"vial1": 0.03}
 
 
+def test_load_cell_zeros_are_kept_for_a_resumed_run_and_checked(tmp_path: Path) -> None:
+    tared = {"entry": "tared", "load_cells": {"robot1": 0.0037}}
+    assert read_progress(_write(tmp_path, START, tared, FINISHED)).tares == {"robot1": 0.0037}
+    assert read_progress(_write(tmp_path, START, tared, START)).tares == {}  # a new run
+    assert error(tmp_path, START, {**tared, "load_cells": {"robot1": "3.7 g"}}) == (
+        "journal.jsonl:2: 'load_cells' must map arms to finite masses in kg (within 1000), "
+        'got {"robot1": "3.7 g"}'
+    )
+
+
 def test_missing_field(tmp_path: Path) -> None:
     finished = {k: v for k, v in FINISHED.items() if k != "q"}
     assert error(tmp_path, START, finished) == (
@@ -160,7 +170,7 @@ def test_deep_nesting(tmp_path: Path) -> None:
 def test_unknown_entry(tmp_path: Path) -> None:
     assert error(tmp_path, START, {"entry": ["finished"]}) == (
         'journal.jsonl:2: unknown journal entry ["finished"]; known: cycle, end, fault, '
-        "finished, measured, recovery, replanned, resume, sent, start, timing"
+        "finished, measured, recovery, replanned, resume, sent, start, tared, timing"
     )
 
 

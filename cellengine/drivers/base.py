@@ -180,6 +180,11 @@ class Driver(ABC):
             raise DriverFault(self.kind, Fault("load_cell", message, arm=arm, value=kg))
         return kg
 
+    def tares(self) -> dict[str, float]:
+        """Each load cell's zero (kg, by arm) as activation took it, where the driver has
+        load cells that tare (a resumed run gives them back: its grippers may hold)."""
+        return {}
+
     def timing(self) -> dict[str, Any] | None:
         """How a real-time loop kept its period (servo_timing.py), where the driver has one."""
         return None

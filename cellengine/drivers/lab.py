@@ -21,7 +21,7 @@ import contextlib
 import math
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -66,6 +66,7 @@ class LabBenchDriver(Driver):
         objects: Objects | None = None,
         specs: Mapping[str, JointSpec] | None = None,
         serials: Mapping[str, Any] | None = None,
+        tares: Mapping[str, float] | None = None,
     ) -> None:
         if not isinstance(cell.driver, LabDriver):
             raise DriverRefused("lab", f"the cell's driver is '{cell.driver.kind}', not lab")
@@ -74,6 +75,9 @@ class LabBenchDriver(Driver):
         self.start_move_limit = self.config.start_move_limit
         self.specs = dict(specs or {})
         self._serials = dict(serials or {})  # robot -> an open pyserial-like port (tests)
+        # each load cell's zero from the run's start (a resumed run): not tared again, as
+        # its gripper may hold what that run picked
+        self._tares = dict(tares or {})
         self.addresses = {r: g.port for r, g in self.config.robots.items()}
         self.links: dict[str, GrblLink] = {}
         self.axes = self._axes(joints)
@@ -227,6 +231,9 @@ class LabBenchDriver(Driver):
                 self._command(robot, "$X", 2.0)
         self._q = self._read_joints()
         for robot, lc in self.load_cells.items():  # the grippers are empty: their zero
+            if robot in self._tares:
+                lc.tare = self._tares[robot]
+                continue
             try:
                 lc.zero()
             except LoadCellError as e:
@@ -300,6 +307,9 @@ class LabBenchDriver(Driver):
             None,
         )
 
+    def tares(self) -> dict[str, float]:
+        return {robot: lc.tare for robot, lc in self.load_cells.items()}
+
     def timing(self) -> dict[str, Any] | None:
         return None  # no servo loop: GRBL plans its own motion (see streamed)
 
@@ -327,9 +337,8 @@ class LabBenchDriver(Driver):
         try:
             return lc.weigh()
         except LoadCellError as e:
-            raise DriverFault(
-                self.kind, Fault("load_cell", f"load cell of '{arm}': {e}; {STOPPED}", arm)
-            ) from None
+            fault = Fault("load_cell", f"load cell of '{arm}': {e}; {STOPPED}", arm)
+            raise self._stopped(fault) from None
 
     # -- internals --------------------------------------------------------------------------
 
@@ -341,15 +350,11 @@ class LabBenchDriver(Driver):
         while link.last is None or link.last.time < asked:
             link.poll(0.005)
             if time.perf_counter() > deadline:
-                raise DriverFault(
-                    self.kind,
-                    Fault(
-                        "connection",
-                        f"robot '{robot}' at {link.port} did not answer a status request "
-                        f"within {STATUS_WAIT:g} s",
-                        robot,
-                    ),
+                message = (
+                    f"robot '{robot}' at {link.port} did not answer a status request "
+                    f"within {STATUS_WAIT:g} s; {STOPPED}"
                 )
+                raise self._stopped(Fault("connection", message, robot))
         return link.last
 
     def _command(self, robot: str, line: str, timeout: float) -> None:
@@ -358,14 +363,26 @@ class LabBenchDriver(Driver):
         except GrblError as e:
             raise DriverRefused(self.kind, str(e)) from None
 
-    def _stop_all(self) -> None:
-        """A feed hold then a soft reset on every controller; best effort."""
+    def _stop_all(self) -> float:
+        """A feed hold then a soft reset on every controller, best effort; the time taken
+        to write the holds (s)."""
+        start = time.perf_counter()
         for link in self.links.values():
             with contextlib.suppress(GrblError):
                 link.hold()
+        latency = time.perf_counter() - start
         for link in self.links.values():
             with contextlib.suppress(GrblError):
                 link.reset()
+        return latency
+
+    def _stopped(self, fault: Fault) -> DriverFault:
+        """Every controller held and reset for ``fault`` found outside a segment's play;
+        the fault with how long the holds took (as lab_stream's)."""
+        latency = self._stop_all()
+        self.hold_latencies.append(latency)
+        details = {**fault.details, "hold_commands_s": round(latency, 6)}
+        return DriverFault(self.kind, replace(fault, details=details))
 
     def _close(self) -> None:
         for link in self.links.values():

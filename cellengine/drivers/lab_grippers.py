@@ -24,7 +24,9 @@ class Grippers:
         self.holding = dict(holding)  # each arm's modes that close on something
         self.states = {arm: GripperState(None, None) for arm in grippers}
         self._due: list[TimedEvent] = []
-        self._moving: set[str] = set()
+        # each gripper taking a mode, and the state it will be in once it has: a grasp
+        # that does not close leaves the gripper as it was (it holds nothing)
+        self._moving: dict[str, GripperState] = {}
 
     def start(self, events: Sequence[TimedEvent]) -> None:
         self._due = sorted(events, key=lambda e: e.time)
@@ -36,11 +38,10 @@ class Grippers:
                 e = self._due.pop(0).event
                 who = e.arm
                 self.grippers[e.arm].set(e.mode, e.mode in self.holding.get(e.arm, ()))
-                self.states[e.arm] = GripperState(e.mode, e.holds)
-                self._moving.add(e.arm)
+                self._moving[e.arm] = GripperState(e.mode, e.holds)
             for who in sorted(self._moving):
                 if self.grippers[who].settled():
-                    self._moving.discard(who)
+                    self.states[who] = self._moving.pop(who)
         except GripperError as err:
             return Fault("gripper", f"gripper of '{who}': {err}; {STOPPED}", who, time=t)
         return None

@@ -18,7 +18,7 @@ from __future__ import annotations
 import contextlib
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Protocol
 
 import numpy as np
@@ -27,6 +27,7 @@ from cellengine.drivers.fault import Fault
 from cellengine.drivers.gcode import AxisMap, Block, blocks
 from cellengine.drivers.grbl_link import ALARMS, ERRORS, GrblLink, GrblLost
 from cellengine.motion.trajectory import Trajectory
+from cellengine.program import SAME_INSTANT
 
 LOOKAHEAD = 1.0  # s of blocks sent ahead of the program's time
 STOPPED = "both robots stopped (feed hold)"
@@ -87,9 +88,8 @@ def play(
     try:
         _prime(streams, traj.start_time)
     except GrblLost as e:
-        out.fault = Fault("connection", f"{e}; {STOPPED}", time=traj.start_time)
-        out.hold_latency = _hold(streams)
-        return out
+        lost = Fault("connection", f"{e}; {STOPPED}", time=traj.start_time)
+        return _stopped(out, lost, streams, traj.end_time)
     wall0 = time.perf_counter()
     period = 1.0 / status_hz
     next_status = wall0
@@ -111,17 +111,34 @@ def play(
         fault = out.fault or _check(streams, traj, q, out, tolerance, joint_names, wall0, t)
         if fault is None and side is not None:
             fault = side.at(t)
-        if fault is None and now > deadline:
+        # a gripper still taking its mode has its own timeout, which names it
+        if fault is None and now > deadline and (side is None or not side.busy()):
             fault = Fault(
                 "overrun", f"the segment ran past {deadline - wall0:.1f} s; {STOPPED}", time=t
             )
         if fault is not None:
-            out.fault = fault
-            out.hold_latency = _hold(streams)
-            return out
+            return _stopped(out, fault, streams, traj.end_time)
         if _done(streams, traj, t) and (side is None or not side.busy()):
             return out
         time.sleep(0.001)
+
+
+# s before a segment's end: a fault while its robots stand at the end is in the segment
+UNFINISHED = 1e3 * SAME_INSTANT
+
+
+def _stopped(out: Outcome, fault: Fault, streams: list[Stream], end: float) -> Outcome:
+    """Every controller held at once; the fault journaled with how long that took from its
+    detection (``hold_commands_s``: the feed holds written, as the UR driver's
+    ``stop_commands_s``), before the segment's end (``end``): past it the robots stand
+    there, waiting for a gripper to take its mode or a controller to finish, and the
+    segment has not finished (a resumed run does what is left of it, its last gripper
+    event too)."""
+    out.hold_latency = _hold(streams)
+    details = {**fault.details, "hold_commands_s": round(out.hold_latency, 6)}
+    at = None if fault.time is None else min(fault.time, end - UNFINISHED)
+    out.fault = replace(fault, details=details, time=at)
+    return out
 
 
 def _prime(streams: list[Stream], t0: float) -> None:

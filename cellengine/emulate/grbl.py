@@ -301,7 +301,7 @@ class Grbl:
     def _move(self, dt: float) -> float:
         """Along the first block for at most ``dt`` s; the time left."""
         block = self.planner[0]
-        if block.dwell > 0:
+        if block.dwell > 0 or block.length <= 1e-12:  # a dwell (G4 P0 too), or no motion
             if self.state == "Hold:1":
                 return 0.0
             used = min(dt, block.dwell)

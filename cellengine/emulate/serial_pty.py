@@ -49,6 +49,18 @@ def open_port(device: Device) -> Port:
     return Port(device, master, slave, os.ttyname(slave))
 
 
+def replug(p: Port) -> None:
+    """A port back after its ``lost`` fault, as a USB device plugged in again: a new
+    terminal (a new path) for the same device, whose state is kept (a controller that kept
+    its power, as with a USB cable pulled out and back)."""
+    master, slave = os.openpty()
+    tty.setraw(slave)
+    os.set_blocking(master, False)
+    p.master, p.slave, p.path = master, slave, os.ttyname(slave)
+    p.started = time.monotonic() if p.device.talks_first else None
+    p.closed = False
+
+
 def serve(ports: list[Port], stop: list[bool], log: IO[str] | None = None) -> None:
     """Run every controller until ``stop[0]``; each line executed is logged (JSON lines:
     controller, time, line) to ``log``."""

@@ -17,7 +17,7 @@ import numpy as np
 from cellengine.concurrency import Overlap
 from cellengine.execute.held import Holding
 from cellengine.execute.refused import Refused
-from cellengine.execute.retime import timed
+from cellengine.execute.retime import still, timed
 from cellengine.execute.streams import SAME, SCHEDULE_DT, Piece, Streams
 from cellengine.execute.timeline_arms import Slot
 from cellengine.motion.clearance import least
@@ -153,6 +153,10 @@ def _program(
     stop one mid-motion), each with the events, notes and facts of the segments in it."""
     events: list[TimedEvent] = []
     out: list[CompiledSegment] = []
+    at_start = [x for x in scheduled if x.index not in done and x.end <= SAME]
+    if at_start:
+        out.append(_standing(compiled, at_start))
+        events += [TimedEvent(0.0, e) for x in at_start for e in compiled[x.index].segment.after]
     for window in _windows(pieces):
         lo, hi = window[0].lo, window[-1].hi
         slots = sorted({s for p in window for s in p.slots}, key=lambda s: s.index)
@@ -188,6 +192,40 @@ def _program(
     names = compiled[0].trajectory.joint_names
     events.sort(key=lambda e: e.time)
     return Program(names, tuple(out), tuple(events), tuple(scheduled), done)
+
+
+def _standing(
+    compiled: Sequence[CompiledSegment], at_start: Sequence[Scheduled]
+) -> CompiledSegment:
+    """The segments with nothing left to move at the program's start (a resumed run's
+    segment stopped at its end, its weighing or last gripper event not done): no piece has
+    them, so they are played first, as standing still, with their events and readings."""
+    segs = [compiled[x.index].segment for x in at_start]
+    first = compiled[at_start[0].index]
+    segment = Segment(
+        step=segs[0].step,
+        label=" + ".join(dict.fromkeys(seg.label for seg in segs)),
+        after=tuple(e for seg in segs for e in seg.after),
+        annotations=tuple(
+            a for seg in segs for a in seg.annotations if isinstance(a, Measure | Anchor)
+        ),
+        facts={"segments": [x.index for x in at_start]},
+    )
+    report = {
+        "arms": {p.arm: p.kind for seg in segs for p in seg.paths},
+        "segments": [x.index for x in at_start],
+        "pieces": 0,
+        "planning_time_s": 0.0,
+        "start_s": 0.0,
+        "duration_s": 0.0,
+        "min_arm_distance_m": None,
+        "closest_pair": None,
+        "clearance": None,
+        "checks_passed": True,
+        "checks": {"gate": True, "gate_samples": 0},
+    }
+    q = first.trajectory.q[0]
+    return CompiledSegment(segment, first.strategy, still(q, first.trajectory.joint_names), report)
 
 
 def _windows(pieces: Sequence[Piece]) -> list[list[Piece]]:

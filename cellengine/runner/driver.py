@@ -30,16 +30,18 @@ def open_driver(
     options: DriverOptions,
     q0: Any = None,
     grippers: dict[str, Any] | None = None,
+    tares: dict[str, float] | None = None,
 ) -> Driver:
     """The cell's driver (or ``options.kind``'s), unconfigured. The simulated cell starts
-    where the program does, or at ``q0`` with ``grippers`` (where a journal left it)."""
+    where the program does, or at ``q0`` with ``grippers`` (where a journal left it); the
+    lab bench's load cells keep the zeros ``tares`` (the run's start took them)."""
     from cellengine.drivers.registry import make_driver
 
     world, cell = compiled.world, compiled.cell
     joints = {name: arm.joint_names for name, arm in cell.arms.items()}
     sim: dict[str, Any] = {}
     if (options.kind or world.cell.driver.kind) == "lab":  # settings checked against these
-        sim = {"specs": joint_specs(cell)}
+        sim = {"specs": joint_specs(cell), "tares": tares or {}}
     if (options.kind or world.cell.driver.kind) == "sim":
         start = compiled.program.segments[0].trajectory.q[0] if q0 is None else q0
         sim = {"realtime": options.realtime, "q0": start}

@@ -93,10 +93,13 @@ def resume_run(
                 print(f"the run in {printable(display_path(run_dir))} is complete: nothing to do")
             return
         compiled = _resumable(compile_plan(), progress, run_dir)
+        progress = _unweighed(compiled, progress)
         _fits_cell(progress, compiled, journal_path)
         write_plan_outputs(compiled, run_dir)
         q0, grippers = _where_left(progress)
-        driver = open_driver(compiled, driver_options, q0=q0, grippers=grippers)
+        driver = open_driver(
+            compiled, driver_options, q0=q0, grippers=grippers, tares=progress.tares
+        )
         left = progress.cycles - progress.cycle + 1
         confirm(driver, yes, lambda: motion_summary(compiled, left), quiet)
         start, cycle = progress.done, progress.cycle
@@ -174,6 +177,8 @@ def _drive(
     with timed(journal, driver, out, quiet, compiled):
         driver.configure()
         driver.activate()
+        if progress is None and driver.tares():  # a resumed run's driver keeps the first's
+            append(journal, Entry.TARED, load_cells=driver.tares())
         move_to(now, driver, journal, start, left)
         journaled(journal, driver, go_on)
         driver.deactivate()
@@ -300,6 +305,28 @@ def _fits_cell(progress: Progress, compiled: Compiled, journal: Path) -> None:
             problems.append(f"a mass measured for unknown object '{name}'" + known(objects))
     if problems:
         raise InputError(Problem(p, str(journal)) for p in dict.fromkeys(problems))
+
+
+def _unweighed(compiled: Compiled, progress: Progress) -> Progress:
+    """A run stopped by its load cell journaled the weighing segment finished but not its
+    reading: that segment is taken as not finished, so the resumed run plays what is left
+    of it and weighs again (and plans the rest again if the mass changes a choice)."""
+    from cellengine.program import Measure
+
+    if not progress.labels:
+        return progress
+    label = progress.labels[-1]
+    seg = next((s.segment for s in compiled.program.segments if s.segment.label == label), None)
+    if seg is None or all(
+        a.object in progress.measured for a in seg.annotations if isinstance(a, Measure)
+    ):
+        return progress
+    streams = progress.streams
+    if streams is not None:
+        done, running, q = streams
+        k = next(s.index for s in compiled.program.streams if s.label == label)
+        streams = (done - {k}, running | {k}, q)
+    return replace(progress, labels=progress.labels[:-1], streams=streams)
 
 
 def _where_left(progress: Progress) -> tuple[Any, dict[str, Any] | None]:

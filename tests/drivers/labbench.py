@@ -22,7 +22,7 @@ import numpy as np
 from cellengine.emulate.dynamixel import GOAL, DynamixelBus, Servo
 from cellengine.emulate.grbl import DEFAULTS, Grbl
 from cellengine.emulate.loadcell import LoadCellEmulator
-from cellengine.emulate.serial_pty import Port, open_port, serve
+from cellengine.emulate.serial_pty import Port, open_port, replug, serve
 from tests.conftest import CELLS
 
 # what the lab cell's joints need (mm/min, mm/s^2, mm; A in degrees), with room
@@ -53,26 +53,41 @@ class Physics:
     def step(self) -> None:
         for ident, servo in self.bus.servos.items():
             closing = servo.word(GOAL, 4, signed=True) == POSITIONS["grasp"]
-            if closing and not self._closed.get(ident):
-                servo.stop = HOLD_AT
+            servo.stop = HOLD_AT if closing else None
+            # the object is held (and weighs on robot1's load cell) once the fingers are on it
+            held = closing and servo.position <= HOLD_AT + 1.0
+            if held and not self._closed.get(ident):
                 if ident == 1:
                     mass = self.masses[self.grasps] if self.grasps < len(self.masses) else 0.0
                     self.scale.load = mass
                     self.grasps += 1
-            elif not closing and self._closed.get(ident):
-                servo.stop = None
-                if ident == 1:
-                    self.scale.load = 0.0
-            self._closed[ident] = closing
+            elif not held and self._closed.get(ident) and ident == 1:
+                self.scale.load = 0.0
+            self._closed[ident] = held
 
 
 @dataclass
 class Bench:
-    folder: Path  # the cell copy: cell.yaml (cartesian) drives the emulators
+    """The cell copy (cell.yaml drives the emulators), its devices, and the links that
+    name their terminals in cell.yaml (dev/grbl0, ...: as /dev/serial/by-id names a USB
+    device, whichever terminal it gets when plugged in)."""
+
+    folder: Path
     grbl: list[Port]
     bus: Port
     scale: Port
     physics: Physics
+
+    def link(self, port: Port) -> Path:
+        names = {id(p): f"grbl{k}" for k, p in enumerate(self.grbl)}
+        names |= {id(self.bus): "dynamixel", id(self.scale): "loadcell"}
+        return self.folder / "dev" / names[id(port)]
+
+    def replug(self, port: Port) -> None:
+        """``port`` back after its ``lost`` fault, at its link."""
+        replug(port)
+        self.link(port).unlink()
+        self.link(port).symlink_to(port.path)
 
 
 @contextmanager
@@ -98,14 +113,16 @@ def emulated_bench(tmp_path: Path, q0: np.ndarray, masses: list[float]) -> Itera
         th.start()
     folder = tmp_path / "cell"
     shutil.copytree(CELLS / "lab_bench", folder)
+    bench = Bench(folder, grbl, bus, cell_port, physics)
+    (folder / "dev").mkdir()
+    for port in ports:
+        bench.link(port).symlink_to(port.path)
     cell = folder / "cell.yaml"
     text = cell.read_text()
     assert "driver: {kind: sim, mass_noise: 0.2}" in text
-    cell.write_text(
-        text.replace("driver: {kind: sim, mass_noise: 0.2}", _driver(grbl, bus, cell_port))
-    )
+    cell.write_text(text.replace("driver: {kind: sim, mass_noise: 0.2}", _driver(bench)))
     try:
-        yield Bench(folder, grbl, bus, cell_port, physics)
+        yield bench
     finally:
         stop[0] = True
         for th in threads:
@@ -118,15 +135,20 @@ def _couple(physics: Physics, stop: list[bool]) -> None:
         time.sleep(0.002)
 
 
-def _driver(grbl: list[Port], bus: Port, scale: Port) -> str:
+def _driver(bench: Bench) -> str:
     grip = "positions: {open: 2600, grasp: 1500}, timeout: 3.0"
+    grbl, bus, scale = (
+        [bench.link(p) for p in bench.grbl],
+        bench.link(bench.bus),
+        bench.link(bench.scale),
+    )
     robot1 = (
-        f"robot1: {{port: {grbl[0].path}, axes: {AXES}roll: {{letter: A}}}}, "
-        f"gripper: {{port: {bus.path}, id: 1, {grip}}}, "
-        f"load_cell: {{port: {scale.path}, settle: 0.3}}}}"
+        f"robot1: {{port: {grbl[0]}, axes: {AXES}roll: {{letter: A}}}}, "
+        f"gripper: {{port: {bus}, id: 1, {grip}}}, "
+        f"load_cell: {{port: {scale}, settle: 0.3}}}}"
     )
     robot2 = (
-        f"robot2: {{port: {grbl[1].path}, axes: {AXES}turn: {{letter: A}}}}, "
-        f"gripper: {{port: {bus.path}, id: 2, {grip}}}}}"
+        f"robot2: {{port: {grbl[1]}, axes: {AXES}turn: {{letter: A}}}}, "
+        f"gripper: {{port: {bus}, id: 2, {grip}}}}}"
     )
     return f"driver: {{kind: lab, robots: {{{robot1}, {robot2}}}}}"

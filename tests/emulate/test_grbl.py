@@ -77,6 +77,19 @@ def test_a_move_takes_its_time_with_acceleration() -> None:
     assert g.position[0] == pytest.approx(-100.0, abs=1e-9)
 
 
+def test_a_dwell_of_zero_and_a_move_to_where_it_is_take_no_time() -> None:
+    """G4 P0 (what a host streams for a segment with nothing to move) and a G1 to the
+    current position are done at once: GRBL answers and stays Idle."""
+    g = _unlocked()
+    g.receive(b"G4P0.000\nG1X0Y0Z0F600\n?")
+    for _ in range(5):
+        g.advance(DT)
+    g.receive(b"?")
+    answers = _answers(g)
+    assert answers[:2] == ["ok", "ok"] and answers[-1].startswith("<Idle|")
+    assert g.position[:3] == [0.0, 0.0, 0.0]
+
+
 def test_a_target_outside_the_travel_is_a_soft_limit_alarm() -> None:
     g = _unlocked()
     g.receive(b"G1X-2000F600\n")
