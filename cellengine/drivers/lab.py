@@ -29,14 +29,16 @@ import numpy as np
 from cellengine.arrays import FloatArray
 from cellengine.drivers.base import Driver, GripperState
 from cellengine.drivers.dynamixel_grip import Gripper, GripperError
+from cellengine.drivers.dynamixel_joint import ServoError, ServoJoint
 from cellengine.drivers.fault import DriverFault, DriverRefused, Fault
 from cellengine.drivers.gcode import AxisMap
 from cellengine.drivers.grbl_link import GrblError, GrblLink, GrblLost
 from cellengine.drivers.lab_grippers import Grippers
-from cellengine.drivers.lab_stream import STOPPED, play
+from cellengine.drivers.lab_servos import ServoJoints
+from cellengine.drivers.lab_stream import STOPPED, Sides, play
 from cellengine.drivers.loadcell import LoadCell, LoadCellError
 from cellengine.drivers.record import AppliedEvent, Played
-from cellengine.info.cell import Cell, LabDriver
+from cellengine.info.cell import Cell, DynamixelJoint, LabDriver
 from cellengine.info.objects import Objects
 from cellengine.program import CompiledSegment, TimedEvent
 
@@ -86,6 +88,7 @@ class LabBenchDriver(Driver):
         self.hold_latencies: list[float] = []  # s from a fault's detection to the holds
         self._q = np.full(len(self.joint_names), np.nan)
         self.grippers = Grippers({}, {})
+        self.servos = ServoJoints({}, self.config.tracking_tolerance_rotary)
         self.load_cells: dict[str, LoadCell] = {}
         # per segment played: its duration (s), the blocks sent after the start and the
         # least time one went before its planned start (s): the streaming's margin
@@ -99,8 +102,16 @@ class LabBenchDriver(Driver):
                 raise DriverRefused(self.kind, f"robot '{robot}' is not one of the cell's")
             names = list(joints[robot])
             mine = []
+            mapped = {_joint(names, j) for j in [*grbl.axes, *grbl.servos]}
+            if not set(names) <= mapped:
+                missing = ", ".join(n for n in names if n not in mapped)
+                raise DriverRefused(
+                    self.kind,
+                    f"robots.{robot}: joint(s) {missing} in neither axes nor servos: each joint "
+                    "is a GRBL axis or a Dynamixel servo",
+                )
             for joint, axis in grbl.axes.items():
-                full = next((n for n in names if n == joint or n.endswith("_" + joint)), None)
+                full = _joint(names, joint)
                 if full is None:
                     raise DriverRefused(
                         self.kind,
@@ -183,6 +194,7 @@ class LabBenchDriver(Driver):
                 grippers[robot], holding[robot] = g, spec.holding
                 g.open()
                 buses[spec.port] = g.bus
+            self._open_servos(robot, grbl.servos, buses)
             cell = grbl.load_cell
             if cell is not None:
                 lc = LoadCell(
@@ -190,6 +202,34 @@ class LabBenchDriver(Driver):
                 )
                 self.load_cells[robot] = lc
                 lc.open()
+
+    def _open_servos(
+        self, robot: str, servos: Mapping[str, DynamixelJoint], buses: dict[str, Any]
+    ) -> None:
+        """The robot's joints on Dynamixel servos, their profiles from the joints' limits."""
+        names = list(self.layout.joint_names[self.layout.slices[robot]])
+        for joint, spec in servos.items():
+            full = _joint(names, joint)
+            if full is None:
+                raise DriverRefused(
+                    self.kind,
+                    f"robots.{robot}.servos: '{joint}' is not a joint of '{robot}' "
+                    f"({', '.join(names)})",
+                )
+            servo = ServoJoint(
+                spec.port,
+                spec.id,
+                sign=spec.sign,
+                zero=spec.zero,
+                baud=spec.baud,
+                bus=buses.get(spec.port),
+            )
+            limits = self.specs.get(full)
+            self.servos.joints[self.joint_names.index(full)] = (robot, full, servo)
+            servo.open(
+                limits.velocity if limits else math.pi, limits.acceleration if limits else math.pi
+            )
+            buses[spec.port] = servo.bus
 
     def _check_settings(self, robot: str, settings: Mapping[int, float]) -> None:
         for a in self.axes[robot]:
@@ -271,6 +311,7 @@ class LabBenchDriver(Driver):
                 )
         self.grippers.start(events)
         traj = segment.trajectory
+        self.servos.start(traj)
         out = play(
             traj,
             self.links,
@@ -280,8 +321,9 @@ class LabBenchDriver(Driver):
             (self.config.tracking_tolerance, self.config.tracking_tolerance_rotary),
             self.config.status_hz,
             self.joint_names,
-            self.grippers,
+            Sides((self.grippers, self.servos)),
         )
+        self.servos.fill(out.times, out.measured)
         if out.hold_latency is not None:
             self.hold_latencies.append(out.hold_latency)
         if out.leads:
@@ -321,6 +363,11 @@ class LabBenchDriver(Driver):
             mpos = self._status(robot).mpos
             for a in self.axes[robot]:
                 q[a.joint] = a.joint_value(mpos["XYZA".index(a.letter)])
+        for j, (_, _, servo) in self.servos.joints.items():
+            try:
+                q[j] = servo.position()
+            except ServoError as e:
+                raise self._stopped(Fault("connection", f"{e}; {STOPPED}")) from None
         self._q = q
         return q
 
@@ -388,11 +435,22 @@ class LabBenchDriver(Driver):
         for link in self.links.values():
             link.close()
         self.links.clear()
-        for g in self.grippers.grippers.values():
-            g.torque_off()
-        for g in self.grippers.grippers.values():  # a bus' port once (closing is idempotent)
-            g.close()
+        servos = [
+            *self.grippers.grippers.values(),
+            *(servo for _, _, servo in self.servos.joints.values()),
+        ]
+        for servo in servos:
+            servo.torque_off()
+        for servo in servos:  # a bus' port once (closing is idempotent)
+            servo.close()
+        self.servos = ServoJoints({}, self.config.tracking_tolerance_rotary)
         for lc in self.load_cells.values():
             lc.close()
         self.grippers = Grippers({}, {})
         self.load_cells = {}
+
+
+def _joint(names: Sequence[str], joint: str) -> str | None:
+    """The robot's joint the cell file names ``joint`` (its URDF name, or that without the
+    robot's prefix: ``z`` for ``robot1_z``)."""
+    return next((n for n in names if n == joint or n.endswith("_" + joint)), None)

@@ -46,6 +46,23 @@ class Side(Protocol):
         """Whether something it started has not finished."""
 
 
+@dataclass(frozen=True)
+class Sides:
+    """What else is done on the same clock, each in turn: the grippers, servo joints."""
+
+    parts: Sequence[Side]
+
+    def at(self, t: float) -> Fault | None:
+        for part in self.parts:
+            fault = part.at(t)
+            if fault is not None:
+                return fault
+        return None
+
+    def busy(self) -> bool:
+        return any(part.busy() for part in self.parts)
+
+
 @dataclass
 class Stream:
     """One robot's part of a segment."""

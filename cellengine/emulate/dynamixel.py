@@ -17,6 +17,7 @@ there with the load at ``HOLD_LOAD``. Faults: ``stuck`` (a servo no longer moves
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 HEADER = b"\xff\xff\xfd\x00"
@@ -26,6 +27,9 @@ MODEL_XL430 = 1060
 TABLE = 147  # bytes of control table emulated
 MODEL, FIRMWARE, TORQUE, HW_ERROR = 0, 6, 64, 70
 GOAL, MOVING, LOAD, POSITION = 116, 122, 126, 132
+PROFILE_ACCELERATION, PROFILE_VELOCITY, VELOCITY_LIMIT = 108, 112, 44
+TICKS_PER_TURN = 4096
+RPM_UNIT, RPM2_UNIT = 0.229, 214.577  # rev/min per unit of profile velocity, rev/min^2 of accel
 SPEED = 2000.0  # ticks/s the fingers move at
 HOLD_LOAD = 600  # present load (0.1 %) while closed on something
 
@@ -63,10 +67,12 @@ class Servo:
     position: float = 2048.0
     stop: float | None = None  # where an object stops the fingers (ticks), if any
     stuck: bool = False
+    speed: float = 0.0  # ticks/s
 
     def __post_init__(self) -> None:
         self.table[MODEL : MODEL + 2] = MODEL_XL430.to_bytes(2, "little")
         self.table[FIRMWARE] = 46
+        self.table[VELOCITY_LIMIT : VELOCITY_LIMIT + 4] = (265).to_bytes(4, "little")
         self.table[7] = self.ident
         self._sync()
 
@@ -78,8 +84,7 @@ class Servo:
         on = self.table[TORQUE] == 1 and not self.stuck
         loaded = False
         if on and abs(goal - self.position) > 0.5:
-            step = min(SPEED * dt, abs(goal - self.position))
-            new = self.position + (step if goal > self.position else -step)
+            new = self.position + self._step(goal, dt)
             if self.stop is not None and min(self.position, new) <= self.stop <= max(
                 self.position, new
             ):
@@ -92,6 +97,26 @@ class Servo:
         load = HOLD_LOAD if loaded else 0
         self.table[LOAD : LOAD + 2] = load.to_bytes(2, "little", signed=True)
         self._sync()
+
+    def _step(self, goal: float, dt: float) -> float:
+        """The move towards ``goal`` in ``dt``: at the profile velocity (112; SPEED when 0),
+        speeding up and slowing down at the profile acceleration (108; at once when 0), to
+        stop on the goal, as the servo's own profile does."""
+        velocity = self.word(PROFILE_VELOCITY, 4) * RPM_UNIT * TICKS_PER_TURN / 60.0 or SPEED
+        accel = self.word(PROFILE_ACCELERATION, 4) * RPM2_UNIT * TICKS_PER_TURN / 3600.0
+        left = goal - self.position
+        direction = 1.0 if left > 0 else -1.0
+        cap = min(velocity, math.sqrt(2.0 * accel * abs(left))) if accel else velocity
+        target = direction * cap
+        if accel:
+            change = accel * dt
+            self.speed = min(max(target, self.speed - change), self.speed + change)
+        else:
+            self.speed = target
+        step = self.speed * dt
+        if abs(step) >= abs(left):  # on the goal: stopped there
+            self.speed, step = 0.0, left
+        return step
 
     def _sync(self) -> None:
         self.table[POSITION : POSITION + 4] = round(self.position).to_bytes(

@@ -254,6 +254,17 @@ class DynamixelGripper(Frozen):
     timeout: float = Field(2.0, gt=0)  # s for a mode to take
 
 
+class DynamixelJoint(Frozen):
+    """A rotation joint turned by a Dynamixel XL430 (Protocol 2.0) instead of a GRBL axis:
+    the servo's position (ticks) = ``zero`` + ``sign`` x the joint's angle x 4096 / turn."""
+
+    port: str = Field(min_length=1)  # servos and grippers on one bus share it
+    baud: int = Field(57600, gt=0)
+    id: int = Field(ge=0, le=252)
+    sign: Literal[-1, 1] = 1
+    zero: int = Field(2048, ge=-(2**20), le=2**20)
+
+
 class SerialLoadCell(Frozen):
     """A load cell whose Arduino prints one reading a line on USB serial."""
 
@@ -272,12 +283,24 @@ class GrblRobot(Frozen):
     port: str = Field(min_length=1)  # e.g. /dev/ttyACM0
     baud: int = Field(115200, gt=0)
     axes: dict[Name, GrblAxis] = Field(min_length=1)  # the robot's joints (URDF names)
+    # joints turned by Dynamixel servos instead (a gripper's roll or turn)
+    servos: dict[Name, DynamixelJoint] = {}
     # activate runs GRBL's homing cycle ($H); else an alarm at activation is refused unless
     # unlock says to clear it ($X)
     home: bool = False
     unlock: bool = False
     gripper: DynamixelGripper | None = None
     load_cell: SerialLoadCell | None = None
+
+    @model_validator(mode="after")
+    def _one_drive_each(self) -> GrblRobot:
+        both = sorted(set(self.axes) & set(self.servos))
+        if both:
+            raise ValueError(f"joint(s) {', '.join(both)} both in axes and in servos: give one")
+        ids = [s.id for s in self.servos.values()] + ([self.gripper.id] if self.gripper else [])
+        if len(set(ids)) != len(ids):
+            raise ValueError("two servos (joints or gripper) share a Dynamixel id")
+        return self
 
 
 class LabDriver(Frozen):
