@@ -1,55 +1,33 @@
-"""Issue 17: a lab plan end to end on the emulated bench through the real drivers:
+"""Issue 17: every lab plan end to end on the emulated bench through the real drivers:
 `cellengine run` streams both robots' G-code to two emulated GRBL 1.1 controllers (pyserial,
 character counting), sets both Dynamixel grippers (ROBOTIS' dynamixel-sdk, Protocol 2.0)
-and reads robot1's serial load cell, all on pseudo-terminals (tests/drivers/labbench.py)."""
+and reads robot1's serial load cell, all on pseudo-terminals (tests/drivers/labbench.py).
+Each plan meets a fault while it runs: a limit switch, a lost port, a gripper that does not
+close, a silent load cell. Both robots are held (the one still connected, for a lost port),
+the run exits 3 with the fault journaled, and once the fault is gone `--resume` completes
+the plan, each robot where the plan ends."""
 
 from __future__ import annotations
 
 import json
 import subprocess
 import sys
+import threading
+import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+import pytest
 
 import cellengine.skills.lab  # noqa: F401  (registers the lab skills)
 from cellengine.pipeline import compile_plan
 from tests.conftest import CELLS, ROOT
-from tests.drivers.labbench import emulated_bench, machine
+from tests.drivers.labbench import Bench, emulated_bench, machine
 
-PLAN = "plan_weigh_handover.yaml"
-
-
-def test_the_weigh_handover_plan_runs_on_the_emulated_bench(tmp_path: Path) -> None:
-    c = compile_plan(CELLS / "lab_bench" / PLAN)
-    q0 = c.program.segments[0].trajectory.q[0]
-    with emulated_bench(tmp_path, q0, masses=[36.0]) as bench:
-        run = tmp_path / "run"
-        cmd = [sys.executable, "-m", "cellengine.cli", "run", str(bench.folder / PLAN)]
-        result = subprocess.run(
-            [*cmd, "--out", str(run), "--yes", "-q"],
-            cwd=ROOT,
-            capture_output=True,
-            text=True,
-            timeout=300,
-        )
-        assert result.returncode == 0, result.stderr[-3000:]
-        journal = [json.loads(line) for line in (run / "journal.jsonl").read_text().splitlines()]
-        assert journal[-1]["entry"] == "end"
-        (weighed,) = [e for e in journal if e["entry"] == "measured"]
-        # objects.yaml: 36 g; the emulated cell's noise 0.2 g, tared at activation
-        assert weighed["object"] == "vial3" and abs(weighed["mass_kg"] - 0.036) < 0.001
-        # every block went through GRBL's buffer whole, and each robot ends where the plan
-        # does, within the axes' resolution (GRBL's 0.001 mm, 80 steps/mm)
-        end = c.program.segments[-1].trajectory.q[-1]
-        for k, port in enumerate(bench.grbl):
-            assert port.device.overflows == 0
-            assert sum(line.startswith("G1") for line in port.device.log) > 100
-            assert np.allclose(port.device.position, machine(end[4 * k : 4 * k + 4]), atol=0.02)
-        # both grippers took their modes: robot2 gave vial3 over, robot1 weighed it
-        writes = [line for line in bench.bus.device.log if "instruction 0x03" in line]
-        assert {line.split()[1] for line in writes} == {"1", "2"}
-        assert bench.physics.grasps == 1
+# when the fault happens, the fault, and what takes it away (before --resume)
+Fault = tuple[Callable[[], bool], Callable[[], None], Callable[[], None]]
 
 
 def test_an_alarm_mid_overlap_holds_both_and_resume_completes(tmp_path: Path) -> None:
@@ -88,3 +66,105 @@ def test_an_alarm_mid_overlap_holds_both_and_resume_completes(tmp_path: Path) ->
         assert journal[-1]["entry"] == "end"
         last = [e for e in journal if e["entry"] == "finished"][-1]
         assert set(last["streams"]["done"]) == {s.index for s in c.program.streams}
+
+
+def _lost(bench: Bench) -> Fault:
+    """robot1's USB cable pulled once it is under way, plugged back in after."""
+    port = bench.grbl[0]
+
+    def moving() -> bool:
+        return sum(line.startswith("G1") for line in port.device.log) >= 40
+
+    return moving, lambda: port.faults.append((0.0, "lost")), lambda: bench.replug(port)
+
+
+def _stuck(bench: Bench) -> Fault:
+    """The grippers' servos stop moving before the run: the first grasp never closes."""
+
+    def stick(stuck: bool) -> None:
+        for servo in bench.bus.device.servos.values():
+            servo.stuck = stuck
+
+    return lambda: True, lambda: stick(True), lambda: stick(False)
+
+
+def _silent(bench: Bench) -> Fault:
+    """The load cell falls silent once robot1 holds what it weighs."""
+    scale = bench.scale.device
+
+    def speak(silent: bool) -> None:
+        scale.silent = silent
+
+    return lambda: bench.physics.grasps >= 1, lambda: speak(True), lambda: speak(False)
+
+
+# plan, fault, its kind, the masses of robot1's grasps (g), what is weighed
+CASES = {
+    "lost port": ("plan_cluttered", _lost, "connection", [], {}),
+    "gripper": ("plan_pour_heavier", _stuck, "gripper", [30.0, 42.0], {"vial1": 30, "vial2": 42}),
+    "silent load cell": ("plan_weigh_handover", _silent, "load_cell", [36.0], {"vial3": 36}),
+}
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_a_plan_runs_through_a_fault_and_resume_completes(tmp_path: Path, name: str) -> None:
+    plan_name, make, kind, masses, weighed = CASES[name]
+    c = compile_plan(CELLS / "lab_bench" / f"{plan_name}.yaml")
+    q0, end = c.program.segments[0].trajectory.q[0], c.program.segments[-1].trajectory.q[-1]
+    with emulated_bench(tmp_path, q0, masses) as bench:
+        plan = bench.folder / f"{plan_name}.yaml"
+        when, fault, mend = make(bench)
+        watcher = _when(when, fault)
+        run = tmp_path / "run"
+        stopped = _cli(plan, "--out", str(run))
+        watcher.join(timeout=1.0)
+        assert stopped.returncode == 3, stopped.stderr[-3000:]
+        entry = next(e for e in _journal(run) if e["entry"] == "fault")
+        assert entry["fault"]["kind"] == kind, entry
+        # every controller still connected was held within 20 ms of the detection, then reset
+        assert entry["fault"]["details"]["hold_commands_s"] < 0.020
+        lost = bench.grbl[0] if name == "lost port" else None
+        for port in bench.grbl:
+            if port is not lost:
+                assert port.device.realtime[-2:] == ["!", "^X"]
+        mend()
+        resumed = _cli(plan, "--resume", str(run))
+        assert resumed.returncode == 0, resumed.stderr[-3000:]
+        journal = _journal(run)
+        assert journal[-1]["entry"] == "end"
+        # the load cell tared once, empty, at the start; each weighing read with 0.2 g noise
+        measured = {e["object"]: e["mass_kg"] for e in journal if e["entry"] == "measured"}
+        assert set(measured) == set(weighed)
+        assert all(abs(measured[k] - weighed[k] / 1000.0) < 0.001 for k in weighed)
+        assert bench.physics.grasps >= len(masses)  # a grasp that failed, done on resuming
+        # every block went through GRBL's buffer whole, each robot ends where the plan does
+        # within the axes' resolution (GRBL's 0.001 mm, 80 steps/mm), both grippers worked
+        for k, port in enumerate(bench.grbl):
+            assert port.device.overflows == 0
+            assert sum(line.startswith("G1") for line in port.device.log) > 100
+            assert np.allclose(port.device.position, machine(end[4 * k : 4 * k + 4]), atol=0.02)
+        writes = [line for line in bench.bus.device.log if "instruction 0x03" in line]
+        assert {line.split()[1] for line in writes} == {"1", "2"}
+
+
+def _when(condition: Callable[[], bool], action: Callable[[], None]) -> threading.Thread:
+    """``action`` as soon as ``condition`` holds (polled every 2 ms, for up to 120 s)."""
+
+    def watch() -> None:
+        deadline = time.monotonic() + 120.0
+        while not condition() and time.monotonic() < deadline:
+            time.sleep(0.002)
+        action()
+
+    thread = threading.Thread(target=watch, daemon=True)
+    thread.start()
+    return thread
+
+
+def _cli(plan: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    cmd = [sys.executable, "-m", "cellengine.cli", "run", str(plan), *args, "--yes", "-q"]
+    return subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=300)
+
+
+def _journal(run: Path) -> list[dict[str, Any]]:
+    return [json.loads(line) for line in (run / "journal.jsonl").read_text().splitlines()]
