@@ -9,13 +9,17 @@ import contextlib
 from typing import Any
 
 MODEL_XL430 = 1060
-# control table (XL430-W250, e-Manual): operating mode, torque enable, hardware error status,
-# profile acceleration and velocity, goal position, moving, present load and position
-MODE, TORQUE, HW_ERROR = 11, 64, 70
+MODEL_XM430 = 1020  # XM430-W350: current sensing, current-based position control
+MODELS = {"xl430": MODEL_XL430, "xm430": MODEL_XM430}
+# control table (XL430-W250 and XM430-W350, e-Manuals): operating mode, torque enable,
+# hardware error status, goal current (XM), profile acceleration and velocity, goal position,
+# moving, present load (XL; present current on the XM) and position
+MODE, TORQUE, HW_ERROR, GOAL_CURRENT = 11, 64, 70, 102
 PROFILE_ACCELERATION, PROFILE_VELOCITY, GOAL, MOVING, LOAD, POSITION = 108, 112, 116, 122, 126, 132
 TICKS_PER_TURN = 4096
 RPM_UNIT = 0.229  # rev/min of profile velocity 1
 RPM2_UNIT = 214.577  # rev/min^2 of profile acceleration 1
+MA_UNIT = 2.69  # mA of goal and present current 1 (XM430)
 
 
 class DynamixelError(RuntimeError):
@@ -25,12 +29,15 @@ class DynamixelError(RuntimeError):
 class Servo:
     error: type[DynamixelError] = DynamixelError  # what a servo of this kind raises
 
-    def __init__(self, port: str, ident: int, *, baud: int = 57600, bus: Any = None) -> None:
-        self.port, self.ident, self.baud = port, ident, baud
+    def __init__(
+        self, port: str, ident: int, *, baud: int = 57600, bus: Any = None, model: str = "xl430"
+    ) -> None:
+        self.port, self.ident, self.baud, self.model = port, ident, baud, model
         self._bus = bus  # (PortHandler, PacketHandler), shared with the bus' other servos
 
     def connect(self) -> None:
-        """Open the bus (unless another servo on it has) and ping this servo: an XL430."""
+        """Open the bus (unless another servo on it has) and ping this servo: the model the
+        cell file says (an XL430-W250 or an XM430-W350)."""
         if self._bus is None:
             from dynamixel_sdk import PacketHandler, PortHandler
 
@@ -45,9 +52,10 @@ class Servo:
         port, handler = self._bus
         model, result, error = handler.ping(port, self.ident)
         self._check(handler, result, error, "ping")
-        if model != MODEL_XL430:
+        if model != MODELS[self.model]:
             raise self.error(
-                f"{self.port} id {self.ident}: model {model}, not an XL430-W250 ({MODEL_XL430})"
+                f"{self.port} id {self.ident}: model number {model}, not the cell file's "
+                f"{self.model} ({MODELS[self.model]})"
             )
 
     @property

@@ -190,6 +190,8 @@ class LabBenchDriver(Driver):
                     load=spec.load,
                     timeout=spec.timeout,
                     bus=buses.get(spec.port),
+                    model=spec.model,
+                    currents=spec.currents,
                 )
                 grippers[robot], holding[robot] = g, spec.holding
                 g.open()

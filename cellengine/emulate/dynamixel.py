@@ -11,8 +11,10 @@ uses: model number (0), firmware version (6), torque enable (64), hardware error
 
 A servo with torque on moves its present position towards the goal at ``SPEED`` ticks/s.
 What the fingers close on (``stop``, a position a test sets: the object's width) stops them
-there with the load at ``HOLD_LOAD``. Faults: ``stuck`` (a servo no longer moves), ``overload``
-(the hardware error status' overload bit, the torque off).
+there with the load at ``HOLD_LOAD`` (an XM430, ``model=MODEL_XM430``, in current-based
+position control: pressing with its goal current, read at the same address). Faults:
+``stuck`` (a servo no longer moves), ``overload`` (the hardware error status' overload bit,
+the torque off).
 """
 
 from __future__ import annotations
@@ -24,6 +26,8 @@ HEADER = b"\xff\xff\xfd\x00"
 PING, READ, WRITE, SYNC_WRITE, STATUS = 0x01, 0x02, 0x03, 0x83, 0x55
 ERR_CRC, ERR_INSTRUCTION, ERR_LENGTH, ERR_ACCESS = 0x03, 0x02, 0x05, 0x07
 MODEL_XL430 = 1060
+MODEL_XM430 = 1020  # XM430-W350: present current at 126, current-based position control
+MODE, GOAL_CURRENT, CURRENT_BASED_POSITION = 11, 102, 5
 TABLE = 147  # bytes of control table emulated
 MODEL, FIRMWARE, TORQUE, HW_ERROR = 0, 6, 64, 70
 GOAL, MOVING, LOAD, POSITION = 116, 122, 126, 132
@@ -68,9 +72,10 @@ class Servo:
     stop: float | None = None  # where an object stops the fingers (ticks), if any
     stuck: bool = False
     speed: float = 0.0  # ticks/s
+    model: int = MODEL_XL430
 
     def __post_init__(self) -> None:
-        self.table[MODEL : MODEL + 2] = MODEL_XL430.to_bytes(2, "little")
+        self.table[MODEL : MODEL + 2] = self.model.to_bytes(2, "little")
         self.table[FIRMWARE] = 46
         self.table[VELOCITY_LIMIT : VELOCITY_LIMIT + 4] = (265).to_bytes(4, "little")
         self.table[7] = self.ident
@@ -94,9 +99,16 @@ class Servo:
             loaded = abs(goal - self.position) > 0.5
         moving = on and abs(goal - self.position) > 0.5 and not loaded and not self.stuck
         self.table[MOVING] = 1 if moving else 0
-        load = HOLD_LOAD if loaded else 0
+        load = self._pressing() if loaded else 0
         self.table[LOAD : LOAD + 2] = load.to_bytes(2, "little", signed=True)
         self._sync()
+
+    def _pressing(self) -> int:
+        """What it reports pressing on something: its goal current (an XM430 on current),
+        else HOLD_LOAD."""
+        if self.model == MODEL_XM430 and self.table[MODE] == CURRENT_BASED_POSITION:
+            return self.word(GOAL_CURRENT, 2, signed=True)
+        return HOLD_LOAD
 
     def _step(self, goal: float, dt: float) -> float:
         """The move towards ``goal`` in ``dt``: at the profile velocity (112; SPEED when 0),

@@ -242,6 +242,9 @@ class GrblAxis(Frozen):
     offset: float = Field(0.0, allow_inf_nan=False)  # GRBL's units (mm, deg)
 
 
+MAX_XM430_MA = 3209.0  # the XM430-W350's current limit (1193 x 2.69 mA)
+
+
 class DynamixelGripper(Frozen):
     """A gripper turned by a Dynamixel XL430 (Protocol 2.0, a U2D2 on USB)."""
 
@@ -252,6 +255,22 @@ class DynamixelGripper(Frozen):
     holding: tuple[Name, ...] = ("grasp",)  # modes that close on something
     load: int = Field(200, ge=0, le=1000)  # 0.1 %: what a holding mode holds with at least
     timeout: float = Field(2.0, gt=0)  # s for a mode to take
+    model: Literal["xl430", "xm430"] = "xl430"  # XL430-W250, or XM430-W350 (current sensing)
+    # jaw mode -> the most current it squeezes with (mA): an XM430 in current-based position
+    # control (its grasp confirmed by pressing with 80 % of it)
+    currents: dict[Name, float] = {}
+
+    @model_validator(mode="after")
+    def _currents(self) -> DynamixelGripper:
+        if self.currents and self.model != "xm430":
+            raise ValueError("currents need a servo that senses current: model: xm430")
+        unknown = sorted(set(self.currents) - set(self.positions))
+        if unknown:
+            raise ValueError(f"currents for mode(s) {', '.join(unknown)} without a position")
+        bad = [m for m, v in self.currents.items() if not 0 < v <= MAX_XM430_MA]
+        if bad:
+            raise ValueError(f"currents.{bad[0]} must be more than 0 and at most {MAX_XM430_MA} mA")
+        return self
 
 
 class DynamixelJoint(Frozen):

@@ -10,7 +10,7 @@ from collections.abc import Iterator
 import pytest
 
 from cellengine.drivers.dynamixel_grip import Gripper, GripperError
-from cellengine.emulate.dynamixel import DynamixelBus, Servo, crc16, packet
+from cellengine.emulate.dynamixel import MODEL_XM430, DynamixelBus, Servo, crc16, packet
 from cellengine.emulate.serial_pty import Port
 from tests.drivers.ptys import served
 
@@ -69,3 +69,27 @@ def test_a_servo_that_is_not_there_does_not_answer(bus: Port) -> None:
     g = Gripper(bus.path, 7, POSITIONS)
     with pytest.raises(GripperError, match=r"id 7: ping: \[TxRxResult\] There is no status packet"):
         g.open()
+
+
+def test_an_xm430_squeezes_with_each_modes_current_and_confirms_by_it() -> None:
+    """``model: xm430`` with ``currents``: current-based position control, each mode's goal
+    current written before its position, a grasp confirmed by pressing with that current."""
+    servos = {3: Servo(3, model=MODEL_XM430), 4: Servo(4)}
+    with served(DynamixelBus(servos)) as (p,):
+        g = Gripper(p.path, 3, POSITIONS, model="xm430", currents={"grasp": 300.0, "open": 500.0})
+        g.open()
+        assert servos[3].word(11, 1) == 5  # current-based position control
+        servos[3].stop = 1800.0
+        g.set("grasp", holds=True)
+        _settle(g)
+        assert servos[3].word(102, 2) == round(300.0 / 2.69)
+        servos[3].stop = None  # the vial let go
+        g.set("open", holds=False)
+        _settle(g)
+        assert servos[3].word(102, 2) == round(500.0 / 2.69)
+        xl = Gripper(p.path, 4, POSITIONS, model="xm430", bus=g.bus)
+        with pytest.raises(
+            GripperError, match=r"id 4: model number 1060, not the cell file's xm430"
+        ):
+            xl.open()
+        g.close()
