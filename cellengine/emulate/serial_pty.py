@@ -12,7 +12,9 @@ from __future__ import annotations
 import json
 import os
 import select
+import sys
 import time
+import traceback
 import tty
 from dataclasses import dataclass, field
 from typing import IO, Protocol
@@ -63,7 +65,16 @@ def replug(p: Port) -> None:
 
 def serve(ports: list[Port], stop: list[bool], log: IO[str] | None = None) -> None:
     """Run every controller until ``stop[0]``; each line executed is logged (JSON lines:
-    controller, time, line) to ``log``."""
+    controller, time, line) to ``log``. An emulator's own error is printed before it stops
+    the loop: in a test's thread it would otherwise end silently, and every device with it."""
+    try:
+        _serve(ports, stop, log)
+    except Exception:
+        traceback.print_exc(file=sys.stderr)
+        raise
+
+
+def _serve(ports: list[Port], stop: list[bool], log: IO[str] | None) -> None:
     last = time.monotonic()
     logged = [0] * len(ports)
     for p in ports:
