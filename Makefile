@@ -58,6 +58,9 @@ bench: $(VENV)/.installed-bench
 	$(BIN)/python bench/validate_speed.py
 	$(BIN)/python bench/bench_validate.py --cells
 	$(BIN)/python bench/bench_lab.py
+	$(BIN)/python bench/bench_lab_bench.py
+	$(BIN)/python bench/bench_lab_soak.py
+	$(BIN)/python bench/bench_locate.py
 	$(BIN)/python bench/bench_x3d.py
 	$(BIN)/python bench/run_all.py
 
