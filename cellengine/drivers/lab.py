@@ -95,36 +95,46 @@ class LabBenchDriver(Driver):
         self.streamed: list[tuple[float, int, float]] = []
 
     def _axes(self, joints: Mapping[str, Sequence[str]]) -> dict[str, list[AxisMap]]:
-        """Each robot's joints as its controller's axes (the cell file's ``axes``)."""
+        """Each robot's joints as its controller's axes (the cell file's ``axes``); every
+        joint named in ``axes`` or ``servos`` is the robot's, and each joint is one of them."""
         out: dict[str, list[AxisMap]] = {}
         for robot, grbl in self.config.robots.items():
             if robot not in joints:
                 raise DriverRefused(self.kind, f"robot '{robot}' is not one of the cell's")
             names = list(joints[robot])
-            mine = []
-            mapped = {_joint(names, j) for j in [*grbl.axes, *grbl.servos]}
-            if not set(names) <= mapped:
-                missing = ", ".join(n for n in names if n not in mapped)
+            full = {
+                (key, j): self._joint(robot, names, key, j)
+                for key, table in (("axes", grbl.axes), ("servos", grbl.servos))
+                for j in table
+            }
+            missing = ", ".join(n for n in names if n not in full.values())
+            if missing:
                 raise DriverRefused(
                     self.kind,
                     f"robots.{robot}: joint(s) {missing} in neither axes nor servos: each joint "
                     "is a GRBL axis or a Dynamixel servo",
                 )
+            mine = []
             for joint, axis in grbl.axes.items():
-                full = _joint(names, joint)
-                if full is None:
-                    raise DriverRefused(
-                        self.kind,
-                        f"robots.{robot}.axes: '{joint}' is not a joint of '{robot}' "
-                        f"({', '.join(names)})",
-                    )
-                index = self.joint_names.index(full)
-                spec = self.specs.get(full)
+                name = full[("axes", joint)]
+                spec = self.specs.get(name)
                 prismatic = spec.prismatic if spec is not None else axis.letter != "A"
                 scale = 1000.0 if prismatic else 180.0 / math.pi
+                index = self.joint_names.index(name)
                 mine.append(AxisMap(index, axis.letter, axis.sign, axis.offset, scale))
             out[robot] = mine
         return out
+
+    def _joint(self, robot: str, names: Sequence[str], key: str, joint: str) -> str:
+        """The robot's joint the cell file names ``joint`` in ``key`` (its URDF name, or that
+        without the robot's prefix: ``z`` for ``robot1_z``)."""
+        full = next((n for n in names if n == joint or n.endswith("_" + joint)), None)
+        if full is None:
+            raise DriverRefused(
+                self.kind,
+                f"robots.{robot}.{key}: '{joint}' is not a joint of '{robot}' ({', '.join(names)})",
+            )
+        return full
 
     # -- lifecycle hooks --------------------------------------------------------------------
 
@@ -211,13 +221,7 @@ class LabBenchDriver(Driver):
         """The robot's joints on Dynamixel servos, their profiles from the joints' limits."""
         names = list(self.layout.joint_names[self.layout.slices[robot]])
         for joint, spec in servos.items():
-            full = _joint(names, joint)
-            if full is None:
-                raise DriverRefused(
-                    self.kind,
-                    f"robots.{robot}.servos: '{joint}' is not a joint of '{robot}' "
-                    f"({', '.join(names)})",
-                )
+            full = self._joint(robot, names, "servos", joint)
             servo = ServoJoint(
                 spec.port,
                 spec.id,
@@ -450,9 +454,3 @@ class LabBenchDriver(Driver):
             lc.close()
         self.grippers = Grippers({}, {})
         self.load_cells = {}
-
-
-def _joint(names: Sequence[str], joint: str) -> str | None:
-    """The robot's joint the cell file names ``joint`` (its URDF name, or that without the
-    robot's prefix: ``z`` for ``robot1_z``)."""
-    return next((n for n in names if n == joint or n.endswith("_" + joint)), None)

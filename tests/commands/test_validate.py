@@ -223,15 +223,15 @@ def test_control_characters_from_files_are_escaped(
     (cell_dir / "cell.yaml").write_text(CELL + '"\\e[31mred\\n::error::x": 1\n')
     assert main(["validate", "--no-compile", "cell.yaml"]) == 1
     assert capsys.readouterr().out == (
-        "cell.yaml:5:1: unknown key '\\x1b[31mred\\n::error::x'; known: clearance, driver, "
-        "name, obstacles, platforms, robots, speed, tcp_speed, tools, units, work_clearance, "
-        "zones\n"
+        "cell.yaml:5:1: unknown key '\\x1b[31mred\\n::error::x'; known: camera, clearance, "
+        "driver, name, obstacles, platforms, robots, speed, tcp_speed, tools, units, "
+        "work_clearance, zones\n"
     )
     assert main(["validate", "--no-compile", "cell.yaml", "--format", "github"]) == 1
     assert capsys.readouterr().out == (
         "::error file=cell.yaml,line=5,col=1::unknown key '\\x1b[31mred\\n::error::x'; known: "
-        "clearance, driver, name, obstacles, platforms, robots, speed, tcp_speed, tools, units, "
-        "work_clearance, zones\n"
+        "camera, clearance, driver, name, obstacles, platforms, robots, speed, tcp_speed, tools, "
+        "units, work_clearance, zones\n"
     )
     assert main(["validate", "--no-compile", "cell.yaml", "--format", "json"]) == 1
     problem = json.loads(capsys.readouterr().out)["files"][0]["problems"][0]

@@ -41,13 +41,12 @@ steps:
 AT_SEGMENT = 3
 
 # (emulated fault, the arm it hits, the driver's fault kind, what the message says): the arms
-# taken in turn, so each arm meets a stop, a lost connection and a fault of its own kind
-# (the detection and the stop are the same code for either arm; each case is a whole run
-# and its resume, about 22 s); the protective stop on the right arm is in test_ur_emulated.py
+# taken in turn, so each arm meets a stop of its controller and a lost connection (the
+# detection and the stop are the same code for either arm; each case is a whole run and its
+# resume, about 22 s); the protective stop on the right arm is in test_ur_emulated.py
 FAULTS = [
     ("protective_stop", "left", "protective_stop", "protective stop"),
     ("emergency_stop", "right", "emergency_stop", "emergency stop"),
-    ("frozen", "left", "tracking", "does not follow"),
     ("frozen", "right", "tracking", "does not follow"),
     ("drop", "right", "connection", "connection to arm '{arm}'"),
     ("kill", "left", "connection", "connection to arm '{arm}'"),
