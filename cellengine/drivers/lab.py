@@ -28,7 +28,8 @@ import numpy as np
 
 from cellengine.arrays import FloatArray
 from cellengine.drivers.base import Driver, GripperState
-from cellengine.drivers.dynamixel_grip import Gripper, GripperError
+from cellengine.drivers.dynamixel import DynamixelError
+from cellengine.drivers.dynamixel_grip import Gripper
 from cellengine.drivers.dynamixel_joint import ServoError, ServoJoint
 from cellengine.drivers.fault import DriverFault, DriverRefused, Fault
 from cellengine.drivers.gcode import AxisMap
@@ -158,7 +159,7 @@ class LabBenchDriver(Driver):
                 ]
             self._open_tools()
             self._q = self._read_joints()
-        except (GrblError, GripperError, LoadCellError, DriverRefused) as e:
+        except (GrblError, DynamixelError, LoadCellError, DriverRefused) as e:
             self._close()
             if isinstance(e, DriverRefused):
                 raise

@@ -129,3 +129,18 @@ def test_a_joint_in_neither_axes_nor_servos_is_refused(tmp_path: Path) -> None:
         "lab driver: robots.robot2: joint(s) robot2_turn in neither axes nor servos: each "
         "joint is a GRBL axis or a Dynamixel servo"
     )
+
+
+def test_a_servo_joint_that_does_not_answer_is_refused_at_configure(
+    bench: tuple[Path, list[Port], Port],
+) -> None:
+    folder, _, bus = bench
+    cell = folder / "cell.yaml"
+    cell.write_text(cell.read_text().replace("id: 3}", "id: 9}"))
+    driver, _ = _driver(folder)
+    with pytest.raises(DriverRefused) as e:
+        driver.configure()
+    assert str(e.value) == (
+        f"lab driver: {bus.path} id 9: ping: [TxRxResult] There is no status packet!"
+    )
+    assert driver.links == {}  # nothing left open
