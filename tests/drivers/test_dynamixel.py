@@ -51,7 +51,9 @@ def test_modes_are_reached_and_a_grasp_is_confirmed_by_load(bus: Port) -> None:
 
 
 def test_a_grasp_on_nothing_and_a_stuck_servo_are_errors(bus: Port) -> None:
-    g = Gripper(bus.path, 2, POSITIONS, timeout=0.5)
+    # a second: four times what the fingers take to close (548 ticks at 2000 ticks/s), so a
+    # loaded machine does not read a slow close as a failed one
+    g = Gripper(bus.path, 2, POSITIONS, timeout=1.0)
     g.open()
     g.set("grasp", holds=True)  # nothing between the fingers: it reaches its goal
     with pytest.raises(GripperError, match=r"jaw mode 'grasp' closed on nothing"):
