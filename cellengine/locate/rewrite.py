@@ -15,11 +15,18 @@ def at_text(found: Found, objects: Objects, box: bool) -> str:
     if found.keypoint is not None:
         return found.keypoint
     unit = LENGTH[objects.units.length]
-    xyz = ", ".join(f"{round(v / unit, 2) + 0.0:g}" for v in found.xyz)
+    # to 0.01 mm in the file's unit (m: 5 decimals), trailing zeros dropped
+    digits = {"mm": 2, "cm": 3, "m": 5}[objects.units.length]
+    xyz = ", ".join(_number(v / unit, digits) for v in found.xyz)
     if not box:
         return f"{{xyz: [{xyz}]}}"
-    yaw = round(found.yaw / ANGLE[objects.units.angle], 4) + 0.0
-    return f"{{xyz: [{xyz}], rpy: [0, 0, {yaw:g}]}}"
+    yaw = _number(found.yaw / ANGLE[objects.units.angle], 4)
+    return f"{{xyz: [{xyz}], rpy: [0, 0, {yaw}]}}"
+
+
+def _number(value: float, digits: int) -> str:
+    text = f"{round(value, digits) + 0.0:.{digits}f}".rstrip("0").rstrip(".")
+    return "0" if text in ("", "-0") else text
 
 
 def rewritten(text: str, doc: YamlDoc, values: dict[str, str]) -> str:

@@ -3,13 +3,18 @@ container's `at` replaced or added."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from cellengine.info.load import load_objects
+from cellengine.info.objects import Objects
+from cellengine.info.units import Units
 from cellengine.info.yamlio import load_yaml
-from cellengine.locate.rewrite import rewritten
+from cellengine.locate.objects import Found
+from cellengine.locate.rewrite import at_text, rewritten
 
 TEXT = """\
 # the bench's objects
@@ -73,3 +78,16 @@ def test_an_at_written_over_several_lines_is_refused(tmp_path: Path) -> None:
     path.write_text(text)
     with pytest.raises(ValueError, match=r"line 7: containers\.a\.at is a block mapping"):
         rewritten(text, load_yaml(path), {"a": "bench.free1"})
+
+
+def test_a_place_is_written_to_a_hundredth_of_a_millimetre_in_the_files_unit() -> None:
+    found = Found("a", 4, np.array([0.5500612, 0.23, 0.0]), 0.3, None, math.inf)
+    assert at_text(found, Objects(units=Units(length="m")), box=False) == (
+        "{xyz: [0.55006, 0.23, 0]}"
+    )
+    assert at_text(found, Objects(units=Units(length="mm")), box=False) == (
+        "{xyz: [550.06, 230, 0]}"
+    )
+    assert at_text(found, Objects(units=Units(length="mm", angle="deg")), box=True) == (
+        "{xyz: [550.06, 230, 0], rpy: [0, 0, 17.1887]}"
+    )
