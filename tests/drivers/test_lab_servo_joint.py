@@ -26,14 +26,11 @@ from cellengine.motion.robot import build_cell_model
 from cellengine.program import CompiledSegment, Segment
 from cellengine.runner.driver import joint_specs
 from tests.conftest import CELLS
+from tests.drivers.labbench import machine
 from tests.drivers.test_lab_grbl import AXES, AXES_1, SETTINGS
 
 AXES_2 = AXES[:-2] + "}"  # robot2's z, x, y: its turn is on the servo
 HOME = np.array([0.25, 0.75, 0.0, 0.0, 0.25, 0.75, 0.0, 0.0])  # cell.yaml's homes (m, rad)
-
-
-def _machine(q: np.ndarray) -> list[float]:
-    return [-q[1] * 1000.0, -q[2] * 1000.0, -q[0] * 1000.0, float(np.degrees(q[3]))]
 
 
 @pytest.fixture
@@ -41,25 +38,35 @@ def bench(tmp_path: Path) -> Iterator[tuple[Path, list[Port], Port]]:
     ports = []
     for k in range(2):
         grbl = Grbl({**DEFAULTS, **SETTINGS, 22: 0.0})
-        grbl.position = _machine(HOME[4 * k : 4 * k + 4])
+        grbl.position = machine(HOME[4 * k : 4 * k + 4])
         ports.append(open_port(grbl))
     bus = open_port(DynamixelBus({3: Servo(3, position=2048.0)}))
     stop = [False]
     thread = threading.Thread(target=serve, args=([*ports, bus], stop), daemon=True)
     thread.start()
+    folder = _cell(
+        tmp_path,
+        ports[0].path,
+        ports[1].path,
+        f", servos: {{turn: {{port: {bus.path}, id: 3}}}}",
+    )
+    yield folder, ports, bus
+    stop[0] = True
+    thread.join(timeout=2)
+
+
+def _cell(tmp_path: Path, port1: str, port2: str, robot2: str) -> Path:
+    """A copy of the lab cell driven by GRBL controllers at ``port1`` and ``port2``, robot2's
+    turn on no axis (``robot2``: the rest of its entry, its servos)."""
     folder = tmp_path / "cell"
     shutil.copytree(CELLS / "lab_bench", folder)
     cell = folder / "cell.yaml"
     driver = (
-        f"driver: {{kind: lab, robots: {{robot1: {{port: {ports[0].path}, axes: {AXES_1}}}, "
-        f"robot2: {{port: {ports[1].path}, axes: {AXES_2}, "
-        f"servos: {{turn: {{port: {bus.path}, id: 3}}}}}}}}}}"
+        f"driver: {{kind: lab, robots: {{robot1: {{port: {port1}, axes: {AXES_1}}}, "
+        f"robot2: {{port: {port2}, axes: {AXES_2}{robot2}}}}}}}"
     )
-    text = cell.read_text()
-    cell.write_text(text.replace("driver: {kind: sim, mass_noise: 0.2}", driver))
-    yield folder, ports, bus
-    stop[0] = True
-    thread.join(timeout=2)
+    cell.write_text(cell.read_text().replace("driver: {kind: sim, mass_noise: 0.2}", driver))
+    return folder
 
 
 def _driver(folder: Path) -> tuple[LabBenchDriver, CompiledSegment]:
@@ -115,14 +122,7 @@ def test_a_servo_that_stops_following_holds_both_robots(
 
 
 def test_a_joint_in_neither_axes_nor_servos_is_refused(tmp_path: Path) -> None:
-    folder = tmp_path / "cell"
-    shutil.copytree(CELLS / "lab_bench", folder)
-    cell = folder / "cell.yaml"
-    driver = (
-        f"driver: {{kind: lab, robots: {{robot1: {{port: /dev/null, axes: {AXES_1}}}, "
-        f"robot2: {{port: /dev/null, axes: {AXES_2}}}}}}}"
-    )
-    cell.write_text(cell.read_text().replace("driver: {kind: sim, mass_noise: 0.2}", driver))
+    folder = _cell(tmp_path, "/dev/null", "/dev/null", "")
     with pytest.raises(DriverRefused) as e:
         _driver(folder)
     assert str(e.value) == (
