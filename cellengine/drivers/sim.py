@@ -288,7 +288,7 @@ class SimDriver(Driver):
         objects = self.objects
         thing = None
         if objects is not None:
-            thing = objects.cables.get(name) or objects.containers.get(name)
+            thing = objects.cable(name) or objects.containers.get(name)
         if thing is None:
             raise DriverRefused(
                 self.kind, f"arm '{arm}' holds '{name}', which is not in the objects"

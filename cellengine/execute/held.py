@@ -64,8 +64,9 @@ def held_object(world: World, scene: CollisionScene, arm: str, obj: str) -> Held
         pass  # not a connector or a container: a piece of cable, or an unknown name
     cable = obj.split(".", 1)[0]
     size = DEFAULT_SIZE
-    if cable in world.objects.cables:
-        size = float(world.objects.cables[cable].diameter)
+    found = world.objects.cable(cable)
+    if found is not None:
+        size = float(found.diameter)
     return held_box(name, arm, (size, size, size), np.eye(4), allowed)
 
 

@@ -1,22 +1,17 @@
-"""objects.yaml (DESIGN 3.3): cables and containers."""
+"""objects.yaml (DESIGN 3.3): cables, harnesses (cellengine.info.harness) and containers."""
 
 from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from cellengine.info.camera import MarkerId
 from cellengine.info.cell import Name
+from cellengine.info.connector import Connector
+from cellengine.info.harness import Harness
 from cellengine.info.pose import Pose
 from cellengine.info.units import Frozen, Length, Mass, Number, Units
-
-
-class Connector(Frozen):
-    type: str
-    length: Length = Field(gt=0)
-    width: Length = Field(gt=0)
-    height: Length = Field(gt=0)
 
 
 class Cable(Frozen):
@@ -69,13 +64,57 @@ class Container(Frozen):
         return self.size[2] if self.size is not None else self.height
 
 
+def bundle(harness: Harness, cables: tuple[str, ...]) -> Cable:
+    """``cables`` of ``harness`` bundled, as one cable: as thick as the bundle, as long as
+    its shortest cable, on the harness's connector (lengths already in metres)."""
+    masses = [harness.cables[c].mass for c in cables]
+    return Cable.model_construct(
+        length=min(harness.cables[c].length for c in cables),
+        diameter=harness.bundle_diameter(cables),
+        color=harness.color,
+        connector=harness.connector,
+        mass=None if None in masses else sum(m for m in masses if m is not None),
+    )
+
+
 class Objects(Frozen):
     units: Units = Units()
     cables: dict[Name, Cable] = {}
+    harnesses: dict[Name, Harness] = {}
     containers: dict[Name, Container] = {}
 
     def names(self) -> list[str]:
-        return [*self.cables, *self.containers]
+        return [*self.cables, *self.harnesses, *self.containers]
+
+    def cable_names(self) -> list[str]:
+        """What a cable skill may pick, place and route: cables and whole harnesses."""
+        return [*self.cables, *self.harnesses]
+
+    def cable(self, name: str) -> Cable | None:
+        """A cable, or a harness as the bundle of all its cables (None: neither)."""
+        if name in self.cables:
+            return self.cables[name]
+        harness = self.harnesses.get(name)
+        return None if harness is None else bundle(harness, tuple(harness.cables))
+
+    @field_validator("harnesses")
+    @classmethod
+    def _harness_names(
+        cls, harnesses: dict[str, Harness], info: ValidationInfo
+    ) -> dict[str, Harness]:
+        """A name says which object it is: no harness, its cables or branches share a name
+        with a cable or with each other."""
+        seen = {n: "a cable" for n in info.data.get("cables", {})}
+        for h, harness in harnesses.items():
+            for name, what in (
+                (h, "a harness"),
+                *((c, f"a cable of harness {h}") for c in harness.cables),
+                *((b, f"a branch of harness {h}") for b in harness.branches),
+            ):
+                if name in seen:
+                    raise ValueError(f"{name} is both {seen[name]} and {what}: rename one")
+                seen[name] = what
+        return harnesses
 
     @model_validator(mode="after")
     def _markers_once(self) -> Objects:

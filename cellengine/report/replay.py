@@ -318,7 +318,7 @@ def cables(program: Program, world: World) -> list[dict[str, Any]]:
     :class:`~cellengine.program.Anchor`, e.g. the slot of a guide it was inserted into, from
     that segment's end). The page draws a cable through its anchors so far and then the
     hands holding it."""
-    names = set(world.objects.cables)
+    names = set(world.objects.cable_names())
     events = sorted(program.events, key=lambda e: e.time)
     held = _held_spans(events, names, program_span(program)[1])
     anchors: dict[str, list[dict[str, Any]]] = {}
