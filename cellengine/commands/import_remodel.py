@@ -11,6 +11,7 @@ so a failed import leaves DEST as it was.
 from __future__ import annotations
 
 import argparse
+import itertools
 import math
 import os
 import re
@@ -25,6 +26,7 @@ from typing import Any, TypeVar
 
 import yaml
 
+from cellengine.commands.remodel_links import Labels, Link, connector_data
 from cellengine.errors import (
     EXIT_OK,
     InputError,
@@ -40,12 +42,11 @@ from cellengine.info.load import load_cell, load_plan, load_world
 from cellengine.info.remodel import load_ids
 from cellengine.info.remodel_csv import (
     Components,
-    HarnessCable,
     Operation,
     load_components,
-    load_harness,
     load_sequence,
 )
+from cellengine.info.remodel_harness import load_wiring
 from cellengine.world import RefError, World
 
 COMPONENTS = "Components_definition.csv"
@@ -97,14 +98,22 @@ Turn a REMODEL cable-routing folder into a native cell in DEST:
                 platform per <name>_cad.x3d + <name>_ids.wri pair in SRC, copied to
                 DEST/<name>/ with the shared Jigs_definition*.xml, as `format: remodel`
   objects.yaml  the cables of Components_definition.csv, each with its connector
-                (the CSV's x, y, z are the connector's width, height and length)
-  plan.yaml     Assembly_sequence.csv: EC -> PickCable, PC -> PlaceConnector (the
+                (the CSV's x, y, z are the connector's width, height and length);
+                a WH_configuration.xml harness of several cables becomes a harness
+                named after its first connector, its end_connector labels its branches
+  plan.yaml     Assembly_sequence.csv, in file order as REMODEL runs it (its Order
+                column is not used): EC -> PickCable, PC -> PlaceConnector (the
                 spot's L/R picks robot left/right; with --arms auto, the engine),
                 RC -> RouteCable. A spot such as C2.1 is guide 1 of element C2 of
-                whichever platform has C2.
+                whichever platform has C2. Labels are typed by their first letter as
+                in REMODEL (T table, J jig, B box, C comb, A tool changer slot):
+                J, B, C and A labels are unique across the platforms, tables may repeat.
 
-The Label column names a connector; each step acts on that connector's cable, from
-WH_configuration.xml, or the only cable there is.
+The Label column names a connector (a harness's first connector names the harness),
+a cable, or, in RC rows, a branch. What REMODEL itself would read otherwise (an Order
+out of file order, a lower-case type, an EC arm its PC contradicts) is a warning at
+its line. The later system's one-comb EC, branch RC and T (taping) rows are read and
+checked, then refused at their rows: the engine cannot do them yet.
 
 Platforms are placed with --pose (default: at the cell origin). REMODEL's Blender
 exports come out turned 180 deg about z in the z-up cell frame; a yaw of 180 lays
@@ -235,18 +244,33 @@ def _platform_files(src: Path) -> dict[str, tuple[Path, Path]]:
     return out
 
 
-def element_platforms(source: Source) -> dict[str, str]:
-    """Element label -> the platform it is on. Spots name elements by label alone, so a
-    label on two platforms could not be told apart."""
+# REMODEL gives an element its type by its label's first letter (HARNESS.md 1.2). Spots name
+# jigs, boxes, combs and tool changer slots by label alone, so those labels are unique across
+# the platforms; tables are never named by a spot, and may repeat (T1 on two platforms).
+LETTERS = {"T": "table", "J": "jig", "B": "box", "C": "comb", "A": "tool changer slot"}
+
+
+def element_platforms(source: Source, warnings: list[Problem] | None = None) -> dict[str, str]:
+    """Element label -> the platform it is on, for the labels a spot may name."""
     out: dict[str, str] = {}
     where: dict[str, tuple[Path, int]] = {}
     for name, (_, ids) in source.platforms.items():
         for row in load_ids(ids):
+            letter = row.label[:1].upper()
+            if letter not in LETTERS and warnings is not None:
+                types = ", ".join(f"{k} ({v})" for k, v in LETTERS.items())
+                msg = (
+                    f"label '{row.label}' starts with none of {types}: REMODEL gives it no "
+                    "type, and no spot can name it"
+                )
+                warnings.append(Problem(msg, str(ids), row.row))
+            if letter not in LETTERS or letter == "T":
+                continue
             if row.label in out:
                 first, line = where[row.label]
                 raise InputError.at(
                     f"label '{row.label}' is also on platform '{out[row.label]}' "
-                    f"({first.name} line {line}); spots name elements by label alone",
+                    f"({first.name} line {line}); spots name {LETTERS[letter]}s by label alone",
                     ids,
                     row.row,
                 )
@@ -363,54 +387,6 @@ class Step:
 
 
 @dataclass(frozen=True)
-class CableLink:
-    cable: str
-    why: str  # for the plan's comment
-
-
-def cable_of(
-    op: Operation, sequence: Path, components: Components, harness: Sequence[HarnessCable] | None
-) -> CableLink:
-    """The cable an operation acts on. Its Label names a connector (or the cable itself)."""
-    label = op.label
-
-    def error(message: str) -> InputError:
-        return InputError(Problem(message, str(sequence), op.row))
-
-    if label in components.cables:
-        return CableLink(label, f"{label} is a cable")
-    if label not in components.connectors:
-        raise error(
-            f"unknown Label '{label}': not a connector or cable of {COMPONENTS}"
-            + known(components.labels())
-        )
-    if harness is not None:
-        cables = list(dict.fromkeys(h.cable for h in harness if label in (h.first, h.end)))
-        if len(cables) == 1 and cables[0] not in components.cables:
-            raise error(
-                f"{HARNESS} puts connector {label} on cable '{cables[0]}', which {COMPONENTS} "
-                "does not define" + known(components.cables)
-            )
-        if len(cables) == 1:
-            return CableLink(cables[0], f"connector {label} is on cable {cables[0]} ({HARNESS})")
-        if cables:
-            raise error(
-                f"connector '{label}' is on {len(cables)} cables in {HARNESS} "
-                f"({', '.join(cables)}); write the cable's label in the Label column"
-            )
-    if len(components.cables) == 1:
-        only = next(iter(components.cables))
-        return CableLink(
-            only, f"connector {label} is taken to be on {only}, the only cable in {COMPONENTS}"
-        )
-    where = f"{HARNESS} does not list it" if harness is not None else f"there is no {HARNESS}"
-    raise error(
-        f"cannot tell which cable connector '{label}' is on: {where}, and "
-        f"{COMPONENTS} has {len(components.cables)} cables" + known(components.cables)
-    )
-
-
-@dataclass(frozen=True)
 class Inputs:
     """Everything read from SRC and the command line that the written files depend on."""
 
@@ -418,9 +394,10 @@ class Inputs:
     setup: Setup
     components: Components
     operations: tuple[Operation, ...]
-    harness: tuple[HarnessCable, ...] | None
+    labels: Labels
     elements: Mapping[str, str]  # element label -> platform
     arms: str = "file"  # --arms: "auto" leaves each PC's arm to the engine
+    warnings: tuple[Problem, ...] = ()  # what REMODEL would read differently, at file:line
 
 
 def read_inputs(source: Source, setup: Setup, arms: str = "file") -> Inputs:
@@ -435,37 +412,59 @@ def read_inputs(source: Source, setup: Setup, arms: str = "file") -> Inputs:
             return None
 
     components = attempt(lambda: load_components(source.components))
-    operations = attempt(lambda: load_sequence(source.sequence))
+    warnings: list[Problem] = []
+    operations = attempt(lambda: load_sequence(source.sequence, warnings))
     wh = source.harness
-    harness = attempt(lambda: load_harness(wh)) if wh is not None else None
-    elements = attempt(lambda: element_platforms(source))
-    if problems or components is None or operations is None or elements is None:
+    wiring = attempt(lambda: load_wiring(wh)) if wh is not None else None
+    elements = attempt(lambda: element_platforms(source, warnings))
+    harnesses = None
+    if wiring is not None:
+        harnesses, more = wiring
+        warnings += more
+    labels = None
+    if components is not None and (wh is None or wiring is not None):
+        labels = Labels(components, harnesses, source.sequence)
+        problems += labels.check(wh) if wh is not None else []
+    if problems or components is None or operations is None or elements is None or not labels:
         raise InputError(problems)
-    return Inputs(source, setup, components, operations, harness, elements, arms)
+    return Inputs(source, setup, components, operations, labels, elements, arms, tuple(warnings))
 
 
-def build_steps(inputs: Inputs) -> tuple[list[Step], dict[str, str]]:
-    """Plan steps, and the connector that each cable's steps name (for objects.yaml)."""
+def build_steps(inputs: Inputs) -> tuple[list[Step], dict[str, str], list[Problem]]:
+    """Plan steps, the connector that each single cable's steps name (for objects.yaml),
+    and warnings at the sequence's rows."""
     steps: list[Step] = []
     connectors: dict[str, str] = {}
     problems: list[Problem] = []
     for op in inputs.operations:
         try:
-            link = cable_of(op, inputs.source.sequence, inputs.components, inputs.harness)
+            link = inputs.labels.link(op)
             steps.append(_step(op, link, inputs))
         except InputError as e:
             problems.extend(e.problems)
             continue
-        if op.label in inputs.components.connectors:
-            connectors.setdefault(link.cable, op.label)
+        if op.label in inputs.components.connectors and link.name in inputs.components.cables:
+            connectors.setdefault(link.name, op.label)
     if problems:
         raise InputError(problems)
-    return steps, connectors
+    return steps, connectors, _side_warnings(inputs)
 
 
-def _step(op: Operation, link: CableLink, inputs: Inputs) -> Step:
+# What the later REMODEL system does that the engine's skills do not do yet (issue #15).
+_NOT_YET = {
+    "EC": "picking from one comb with one hand (the later system's EC) is not built yet",
+    "RC": "routing a branch as a cable group is not built yet",
+    "T": "taping is not built yet",
+}
+
+
+def _step(op: Operation, link: Link, inputs: Inputs) -> Step:
+    single_comb = op.kind == "EC" and len(op.spots) == 1
+    if single_comb or op.kind == "T" or link.branch is not None:
+        what = f"{op.kind} {op.label} {op.spot}: {_NOT_YET[op.kind]}"
+        raise InputError.at(f"{what} in this engine (issue #15)", inputs.source.sequence, op.row)
     refs = [_ref(op, i, inputs) for i in range(len(op.spots))]
-    data = Block(skill=_SKILLS[op.kind], cable=link.cable)
+    data = Block(skill=_SKILLS[op.kind], cable=link.name)
     if op.kind == "EC":
         data["from"] = refs  # the Spot writes the connector end first, as PickCable does
     elif op.kind == "PC":
@@ -483,6 +482,23 @@ def _step(op: Operation, link: CableLink, inputs: Inputs) -> Step:
     if op.kind == "PC" and inputs.arms == "auto" and op.spots[0].arm is not None:
         comment += f"; the engine chooses the arm, not the spot's {op.spots[0].arm} (--arms auto)"
     return Step(op.row, comment, data, tuple((kind, r) for r in refs))
+
+
+def _side_warnings(inputs: Inputs) -> list[Problem]:
+    """An EC's arm letter that its PC's disagrees with: REMODEL takes the arm from the PC
+    after the EC and never reads the EC's (HARNESS.md 1.7)."""
+    out = []
+    ops = inputs.operations
+    for ec, pc in itertools.pairwise(ops):
+        if ec.kind != "EC" or len(ec.spots) != 1 or ec.spots[0].arm is None:
+            continue
+        if pc.kind == "PC" and pc.spots[0].arm not in (None, ec.spots[0].arm):
+            msg = (
+                f"EC's spot names the {ec.spots[0].arm} arm, the PC after it (row {pc.row}) "
+                f"the {pc.spots[0].arm}: REMODEL picks with the PC's arm, and so does the import"
+            )
+            out.append(Problem(msg, str(inputs.source.sequence), ec.row))
+    return out
 
 
 def _ref(op: Operation, i: int, inputs: Inputs) -> str:
@@ -506,20 +522,6 @@ def _check_arm(op: Operation, arm: str, inputs: Inputs) -> None:
             inputs.source.sequence,
             op.row,
         )
-
-
-def cable_connectors(inputs: Inputs, from_plan: Mapping[str, str]) -> dict[str, str]:
-    """Each cable's connector: the one its plan steps name; else its harness's first
-    connector; else, with one connector and one cable, that connector."""
-    out = dict(from_plan)
-    for h in inputs.harness or ():
-        connector = h.first or h.end
-        if connector is not None and connector in inputs.components.connectors:
-            out.setdefault(h.cable, connector)
-    c = inputs.components
-    if len(c.connectors) == 1 and len(c.cables) == 1:
-        out.setdefault(next(iter(c.cables)), next(iter(c.connectors)))
-    return out
 
 
 # --- writing -----------------------------------------------------------------------------
@@ -629,21 +631,18 @@ def cell_text(inputs: Inputs, name: str, poses: Mapping[str, Any], dest: Path) -
 
 
 def objects_text(inputs: Inputs, connectors: Mapping[str, str], dest: Path) -> str:
-    c = inputs.components
+    c, labels = inputs.components, inputs.labels
     entries = []
     for label, cable in c.cables.items():
+        if label in labels.in_bundle:
+            continue  # written with its harness
         data = Block(length=cable.length, diameter=cable.diameter)
         if cable.color:
             data["color"] = cable.color
         comment = f"{COMPONENTS} row {cable.row}"
         if label in connectors:
             k = c.connectors[connectors[label]]
-            data["connector"] = {
-                "type": k.type,
-                "length": k.length,
-                "width": k.width,
-                "height": k.height,
-            }
+            data["connector"] = connector_data(k)
             comment += f"; connector {k.label}, row {k.row}"
         entries.append((comment, {label: data}))
     comments = [
@@ -652,6 +651,9 @@ def objects_text(inputs: Inputs, connectors: Mapping[str, str], dest: Path) -> s
         "length = z (along the cable).",
     ]
     body = "units: {length: mm, mass: g}\n" + ("cables:\n" + _commented(entries) if entries else "")
+    harnesses = labels.harness_entries()
+    if harnesses:
+        body += "harnesses:\n" + _commented(harnesses)
     return _document("objects", dest, comments, body)
 
 
@@ -819,13 +821,13 @@ def run(args: argparse.Namespace) -> int:
 
     contents = read_copies(source)  # before anything is written
     inputs = read_inputs(source, setup, args.arms)
-    steps, connectors = build_steps(inputs)
+    steps, connectors, side_warnings = build_steps(inputs)
     texts = dict(
         zip(
             texts_names,
             (
                 cell_text(inputs, name, poses, dest),
-                objects_text(inputs, cable_connectors(inputs, connectors), dest),
+                objects_text(inputs, inputs.labels.single_connectors(connectors), dest),
                 plan_text(steps, source, dest),
             ),
             strict=True,
@@ -843,7 +845,7 @@ def run(args: argparse.Namespace) -> int:
             f"plan.yaml ({_count(len(steps), 'step')})"
         )
     )
-    for w in warnings:
+    for w in [*inputs.warnings, *side_warnings, *warnings]:
         print(w.warning(), file=sys.stderr)
     # honest about what was checked: files and reach, not the motion
     print(printable(f"not compiled: `cellengine validate {display_path(dest)}` compiles the plan"))

@@ -1,6 +1,6 @@
-"""The process files of a REMODEL cell (DESIGN 3.2): the components and the assembly
-sequence (``;``-separated CSVs with a header), and the wiring-harness XML that says which
-cable each connector belongs to.
+"""The process files of a REMODEL cell (DESIGN 3.2, HARNESS.md 1.5 and 1.7): the
+components and the assembly sequence, ``;``-separated CSVs with a header (the wiring-harness
+XML is cellengine.info.remodel_harness's).
 
 ```
 Type;Model;Reference;Label;Color;length;Diameter;x;y;z;Type
@@ -13,6 +13,9 @@ Order;Type of operation;Label;Spot
 3;RC;CON1;J3.1-J4.1-J1.1-J2.1
 ```
 
+The later REMODEL system adds EC's one-comb form (``C1.1.L``), RC rows naming a branch
+(``RC;GR11;J1.1-J2.1``) and taping (``T;WH1;J1.1-J2.1-J2.1``).
+
 Rows are CSV line numbers (the header is row 1), so errors point where a spreadsheet or an
 editor does. Lengths stay in the file's millimetres: the importer writes them into an
 ``objects.yaml`` that declares ``mm``, and conversion happens once, when that is loaded.
@@ -20,6 +23,7 @@ editor does. Lengths stay in the file's millimetres: the importer writes them in
 
 from __future__ import annotations
 
+import itertools
 import math
 import re
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -30,7 +34,6 @@ from typing import TypeVar
 from cellengine.errors import InputError, Problem, known
 from cellengine.info.csvrows import records
 from cellengine.info.files import read_capped
-from cellengine.info.xmlsafe import parse_xml
 
 SEP = ";"
 T = TypeVar("T")
@@ -40,11 +43,21 @@ Number = int | float  # ints stay ints so the written YAML reads as the CSV did
 # the robot of that name, so a cell used with REMODEL plans names its arms left and right.
 ARMS = {"L": "left", "R": "right"}
 
-# Operation -> (how many guides its Spot names, how to write them), in the REMODEL order.
+# Operation -> (how many spots its Spot names, how to write them), in the REMODEL order.
+# EC has two grammars: the published sample's two combs (connector end first) and the later
+# system's one comb with the arm's letter (HARNESS.md 1.7).
 OPERATIONS: dict[str, tuple[str, str]] = {
-    "EC": ("2", "C2.1-C1.1 (connector end first)"),
+    "EC": ("2|1.arm", "C2.1-C1.1 (two combs, connector end first) or C1.1.L (a comb, the arm)"),
     "PC": ("1", "J8.1.L (guide, then L or R for the arm)"),
     "RC": ("1+", "J3.1-J4.1 (guides in routing order)"),
+    "T": ("3", "J1.1-J2.1-J2.1 (the two guides to tape between, then the one to hold beside)"),
+    "TJ": ("1", "J1.1"),
+}
+# What REMODEL parses but never executes: refused at its row rather than guessed at.
+UNEXECUTED = {
+    "TJ": "TJ (taping in a jig) is parsed but never executed by REMODEL's planner (it has no "
+    "handler for it, HARNESS.md 1.7); the import does not guess what it means: remove the "
+    "row, or write a T row (J1.1-J2.1-J2.1)",
 }
 
 # Required columns as REMODEL spells them; matched ignoring case and extra spaces.
@@ -279,19 +292,42 @@ class Spot:
 @dataclass(frozen=True)
 class Operation:
     order: int
-    kind: str  # EC | PC | RC
-    label: str  # a connector (or cable) label of the components file
+    kind: str  # EC | PC | RC | T
+    label: str  # a connector (or cable) label of the components file, or a branch's (RC)
     spot: str  # as written, for messages
     spots: tuple[Spot, ...]
     row: int
 
 
-def load_sequence(path: Path) -> tuple[Operation, ...]:
-    """Operations in the order of their Order column (unique whole numbers)."""
+def load_sequence(path: Path, warnings: list[Problem] | None = None) -> tuple[Operation, ...]:
+    """Operations in file order, as REMODEL runs them: it ignores the Order column, so an
+    Order out of step with the rows is a warning (appended to ``warnings``), not a sort."""
     table = read_table(path, SEQUENCE_COLUMNS)
     ops = _parse_rows(table, _operation)
-    _unique(ops, lambda o: o.order, "Order", path, lambda o: o.row)
-    return tuple(sorted(ops, key=lambda o: o.order))
+    if warnings is not None:
+        warnings += _order_warnings(table, ops, path)
+    return tuple(ops)
+
+
+def _order_warnings(table: Table, ops: Sequence[Operation], path: Path) -> list[Problem]:
+    out: list[Problem] = []
+    for before, op in itertools.pairwise(ops):
+        if op.order <= before.order:
+            msg = (
+                f"Order {op.order} comes after Order {before.order} (row {before.row}): "
+                "REMODEL ignores the Order column and runs the rows in file order; so does the "
+                "import"
+            )
+            out.append(Problem(msg, str(path), op.row))
+    for row, cells in table.rows:
+        kind = table.cell(cells, "type of operation")
+        if kind != kind.upper():
+            msg = (
+                f"operation '{kind}' is read as {kind.upper()}; REMODEL's planner compares "
+                "operation types case-sensitively and would not run it"
+            )
+            out.append(Problem(msg, str(path), row))
+    return out
 
 
 def _operation(table: Table, cells: Sequence[str], row: int) -> Operation:
@@ -306,24 +342,34 @@ def _operation(table: Table, cells: Sequence[str], row: int) -> Operation:
     if kind.upper() not in OPERATIONS:
         raise InputError.at(f"unknown operation '{kind}'" + known(OPERATIONS), path, row)
     kind = kind.upper()
+    if kind in UNEXECUTED:
+        raise InputError.at(UNEXECUTED[kind], path, row)
     label = _name(table.cell(cells, "label"), "Label", path, row)
     spot = table.cell(cells, "spot")
     return Operation(int(order_text), kind, label, spot, parse_spot(kind, spot, path, row), row)
 
 
 def parse_spot(kind: str, spot: str, path: Path, row: int) -> tuple[Spot, ...]:
-    """``C2.1-C1.1`` -> guides C2/1 and C1/1; ``J8.1.L`` (PC only) -> J8/1, arm left."""
+    """``C2.1-C1.1`` -> C2/1 and C1/1; ``J8.1.L`` (PC, and EC's one-comb form) -> J8/1, arm
+    left; ``J1.1-J2.1-J2.1`` (T) -> three guides."""
     count, example = OPERATIONS[kind]
     if not spot:
         raise InputError.at(f"empty Spot; {kind} writes e.g. {example}", path, row)
     spots = tuple(_spot_item(kind, item.strip(), spot, path, row) for item in spot.split("-"))
-    expected = {"1": len(spots) == 1, "2": len(spots) == 2, "1+": len(spots) >= 1}[count]
+    armed = [s for s in spots if s.arm is not None]
+    n = len(spots)
+    expected = {
+        "1": n == 1,
+        "3": n == 3,
+        "1+": n >= 1,
+        "2|1.arm": (n == 2 and not armed) or (n == 1 and bool(armed)),
+    }[count]
     if not expected:
+        what = {"2|1.arm": "2 combs, or 1 comb with an arm", "1+": "1 or more guides"}
+        names = what.get(count, f"{count} guide{'s' if count != '1' else ''}")
+        written = f"{n}" + (" with an arm" if armed else "") if count == "2|1.arm" else f"{n}"
         raise InputError.at(
-            f"{kind} names {count} guide{'s' if count != '1' else ''}, e.g. {example}; "
-            f"'{spot}' names {len(spots)}",
-            path,
-            row,
+            f"{kind} names {names}, e.g. {example}; '{spot}' names {written}", path, row
         )
     return spots
 
@@ -331,10 +377,11 @@ def parse_spot(kind: str, spot: str, path: Path, row: int) -> tuple[Spot, ...]:
 def _spot_item(kind: str, item: str, spot: str, path: Path, row: int) -> Spot:
     parts = [p.strip() for p in item.split(".")]
     where = f" in Spot '{spot}'" if item != spot else ""
+    armed = kind in ("PC", "EC")
     if len(parts) not in (2, 3) or not all(parts):
         raise InputError.at(
             f"'{item}'{where} is not element.guide (e.g. J3.1)"
-            + (" or element.guide.arm (e.g. J8.1.L)" if kind == "PC" else ""),
+            + (" or element.guide.arm (e.g. J8.1.L)" if armed else ""),
             path,
             row,
         )
@@ -343,9 +390,9 @@ def _spot_item(kind: str, item: str, spot: str, path: Path, row: int) -> Spot:
         raise InputError.at(f"guide '{couple}' of '{item}'{where} is not a number", path, row)
     if len(parts) == 2:
         return Spot(element, couple)
-    if kind != "PC":
+    if not armed:
         raise InputError.at(
-            f"'{item}'{where}: only PC spots name an arm; {kind} writes e.g. "
+            f"'{item}'{where}: only PC and EC spots name an arm; {kind} writes e.g. "
             + OPERATIONS[kind][1],
             path,
             row,
@@ -358,41 +405,3 @@ def _spot_item(kind: str, item: str, spot: str, path: Path, row: int) -> Spot:
             row,
         )
     return Spot(element, couple, ARMS[letter.upper()])
-
-
-# --- WH_configuration.xml ----------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class HarnessCable:
-    """A cable of a wiring harness: it leaves ``first`` (the harness's first_connector)
-    and ends at ``end`` (None for a free end)."""
-
-    cable: str
-    first: str | None
-    end: str | None
-    line: int | None
-
-
-def load_harness(path: Path) -> tuple[HarnessCable, ...]:
-    """Every ``<cable>`` of every ``<wiring_harness>``, in document order::
-
-    <wiring_harness id="1" first_connector="CON1" tray="B3.1">
-      <end_connector label="Free"><cable Row1="1" Col1="1">CA1</cable></end_connector>
-    </wiring_harness>
-    """
-    root = parse_xml(path).getroot()
-    out: list[HarnessCable] = []
-    for harness in root.iter("wiring_harness"):
-        first = (harness.get("first_connector") or "").strip() or None
-        for cable in harness.iter("cable"):
-            name = (cable.text or "").strip()
-            if not name:
-                raise InputError.at(
-                    "empty <cable> (expected a cable label)", path, cable.sourceline
-                )
-            parent = cable.getparent()
-            end = (parent.get("label") or "").strip() if parent.tag == "end_connector" else ""
-            free = not end or end.lower() == "free"
-            out.append(HarnessCable(name, first, None if free else end, cable.sourceline))
-    return tuple(out)

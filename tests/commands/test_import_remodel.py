@@ -343,7 +343,7 @@ def test_unknown_label_names_the_row(
     assert run(src, tmp_path / "cell") == 1
     assert errors(capsys) == [
         "Assembly_sequence.csv:3: unknown Label 'CON9': not a connector or cable of "
-        "Components_definition.csv; known: CA1, CON1"
+        "Components_definition.csv nor a branch of WH_configuration.xml; known: CA1, CON1"
     ]
 
 
@@ -356,7 +356,9 @@ def test_unknown_operation(
     sequence(src, "1;EC;CON1;C2.1-C1.1", "2;PC;CON1;J8.1.L", "3;XX;CON1;J3.1")
     monkeypatch.chdir(src)
     assert run(src, tmp_path / "cell") == 1
-    assert errors(capsys) == ["Assembly_sequence.csv:4: unknown operation 'XX'; known: EC, PC, RC"]
+    assert errors(capsys) == [
+        "Assembly_sequence.csv:4: unknown operation 'XX'; known: EC, PC, RC, T, TJ"
+    ]
     assert not (tmp_path / "cell").exists()
 
 
@@ -368,7 +370,7 @@ def test_unknown_element_label(
     assert run(src, tmp_path / "cell") == 1
     assert errors(capsys) == [
         "Assembly_sequence.csv:2: unknown label 'C9' in Spot 'C9.1-C1.1'; "
-        "known: C1, C2, J1, J2, J3, J4, J8, T1, T2"
+        "known: C1, C2, J1, J2, J3, J4, J8"
     ]
 
 
@@ -540,39 +542,77 @@ def test_harness_cable_must_be_a_component(
     monkeypatch.chdir(src)
     assert run(src, tmp_path / "cell") == 1
     assert errors(capsys) == [
-        "Assembly_sequence.csv:2: WH_configuration.xml puts connector CON1 on cable 'CA9', "
-        "which Components_definition.csv does not define; known: CA1"
+        "WH_configuration.xml:2: cable 'CA9' is not defined in Components_definition.csv; "
+        "known: CA1"
     ]
 
 
-def test_connector_on_two_cables_needs_the_cable_label(
+def test_a_connector_with_several_cables_is_a_harness(
     src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     with (src / "Components_definition.csv").open("a") as f:
-        f.write("Cable;;;CA2;Red;600;4;;;;\r\n")  # long enough to lie in both combs
+        f.write("Cable;;;CA2;Red;600;4;;;;\r\n")
     harness(
         src,
         '<wiring_harness first_connector="CON1"><end_connector label="Free">'
         "<cable>CA1</cable><cable>CA2</cable></end_connector></wiring_harness>",
     )
-    sequence(src, "1;EC;CON1;C2.1-C1.1", "2;EC;CA2;C2.1-C1.1")
+    sequence(src, "1;EC;CON1;C2.1-C1.1")
     monkeypatch.chdir(src)
     assert run(src, tmp_path / "cell") == 1
+    no_row = (
+        "has no Row1: REMODEL orders a harness's cables at its first connector by Row1 "
+        "(0 at the bottom)"
+    )
     assert errors(capsys) == [
-        "Assembly_sequence.csv:2: connector 'CON1' is on 2 cables in WH_configuration.xml "
-        "(CA1, CA2); write the cable's label in the Label column"
+        f"WH_configuration.xml:2: cable CA1 {no_row}",
+        f"WH_configuration.xml:2: cable CA2 {no_row}",
     ]
-    sequence(src, "1;EC;CA1;C2.1-C1.1", "2;EC;CA2;C2.1-C1.1")
+    harness(
+        src,
+        '<wiring_harness first_connector="CON1"><end_connector label="GR1">'
+        '<cable Row1="1" Col1="0">CA1</cable></end_connector><end_connector label="GR2">'
+        '<cable Row1="0" Col1="0">CA2</cable></end_connector></wiring_harness>',
+    )
+    sequence(src, "1;EC;CA2;C2.1-C1.1")
+    assert run(src, tmp_path / "cell") == 1
+    assert errors(capsys) == [
+        "Assembly_sequence.csv:2: CA2 is a cable of harness CON1 (WH_configuration.xml); name "
+        "the harness's connector CON1, or (RC) one of its branches; known: GR1, GR2"
+    ]
+    sequence(src, "1;EC;CON1;C2.1-C1.1", "2;PC;CON1;J8.1.L", "3;RC;CON1;J3.1-J4.1")
     assert run(src, tmp_path / "cell") == 0
-    cables = read(tmp_path / "cell" / "objects.yaml")["cables"]
-    # both leave the harness's first connector
-    assert cables["CA1"]["connector"] == cables["CA2"]["connector"]
-    assert cables["CA2"] == {
-        "length": 600,
-        "diameter": 4,
-        "color": "Red",
-        "connector": {"type": "VGA", "length": 46.55, "width": 32.9, "height": 14.64},
+    objects = read(tmp_path / "cell" / "objects.yaml")
+    assert "cables" not in objects
+    assert objects["harnesses"] == {
+        "CON1": {
+            "connector": {"type": "VGA", "length": 46.55, "width": 32.9, "height": 14.64},
+            "color": "Grey",
+            "cables": {
+                "CA1": {"length": 500, "diameter": 5.1, "color": "Grey", "pin": [1, 0]},
+                "CA2": {"length": 600, "diameter": 4, "color": "Red", "pin": [0, 0]},
+            },
+            "branches": {"GR1": {"cables": ["CA1"]}, "GR2": {"cables": ["CA2"]}},
+        }
     }
+    steps = read(tmp_path / "cell" / "plan.yaml")["steps"]
+    assert [(s["skill"], s["cable"]) for s in steps] == [
+        ("PickCable", "CON1"),
+        ("PlaceConnector", "CON1"),
+        ("RouteCable", "CON1"),
+    ]
+    sequence(
+        src, "1;EC;CON1;C2.1-C1.1", "2;RC;GR2;J3.1", "3;PC;GR1;J8.1.L", "4;T;CON1;J3.1-J4.1-J4.1"
+    )
+    assert run(src, tmp_path / "cell2") == 1
+    assert errors(capsys) == [
+        "Assembly_sequence.csv:3: RC GR2 J3.1: routing a branch as a cable group is not built "
+        "yet in this engine (issue #15)",
+        "Assembly_sequence.csv:4: GR1 is a branch of harness CON1 (WH_configuration.xml); PC "
+        "names the harness's connector, CON1",
+        "Assembly_sequence.csv:5: T CON1 J3.1-J4.1-J4.1: taping is not built yet in this engine "
+        "(issue #15)",
+    ]
 
 
 def test_problems_of_every_file_together(
@@ -585,7 +625,7 @@ def test_problems_of_every_file_together(
     assert run(src, tmp_path / "cell") == 1
     assert errors(capsys) == [
         "Components_definition.csv:4: empty length of cable CA2",
-        "Assembly_sequence.csv:2: EC names 2 guides, e.g. C2.1-C1.1 (connector end first); "
-        "'C2.1' names 1",
-        "Assembly_sequence.csv:3: unknown operation 'ZZ'; known: EC, PC, RC",
+        "Assembly_sequence.csv:2: EC names 2 combs, or 1 comb with an arm, e.g. C2.1-C1.1 "
+        "(two combs, connector end first) or C1.1.L (a comb, the arm); 'C2.1' names 1",
+        "Assembly_sequence.csv:3: unknown operation 'ZZ'; known: EC, PC, RC, T, TJ",
     ]
