@@ -5,8 +5,9 @@ timed trajectories, the gripper events), the world's keypoints and dimensions, f
 kinematics (cellengine.motion.robot), the engine's trajectory gate and its grippers' state
 (cellengine.execute.held: the jaws and what they hold). It checks:
 
-- ``insert``: for each RouteCable guide, in plan order, a segment labelled
-  "RouteCable <guide>: insert"; at its end both hands hold the cable, the guide's slot lies
+- ``insert``: for each RouteCable guide, in plan order, a segment of that step labelled
+  "RouteCable <guide>: insert"; at its end both hands hold what the step routes (a cable, or
+  a harness's group of cables), the guide's slot lies
   on the segment between the two fingertips within the slot's gap / 2 and that segment is
   within 15 deg of the guide's x (the cable runs through the slot);
 - ``order``: the inserts come in the plan's order;
@@ -61,13 +62,22 @@ class CheckResult:
         return self.min_arm_distance is not None and self.min_arm_distance < MIN_ARM_DISTANCE
 
 
-def route_guides(compiled: Compiled) -> list[str]:
-    """The guides of the plan's RouteCable steps, in plan order (from the plan, not a skill)."""
-    out: list[str] = []
-    for step in compiled.loaded.plan.steps:
+Route = tuple[int, str, tuple[str, ...]]  # a RouteCable step: its index, cable, guides
+
+
+def routes(compiled: Compiled) -> list[Route]:
+    """The plan's RouteCable steps (from the plan, not a skill): what each routes where."""
+    out: list[Route] = []
+    for i, step in enumerate(compiled.loaded.plan.steps):
         if step.skill == "RouteCable":
-            out += [str(g) for g in getattr(step, "guides")]  # noqa: B009 (plan model field)
+            guides = tuple(str(g) for g in getattr(step, "guides"))  # noqa: B009 (plan field)
+            out.append((i, str(getattr(step, "cable")), guides))  # noqa: B009
     return out
+
+
+def route_guides(compiled: Compiled) -> list[str]:
+    """The guides of the plan's RouteCable steps, in plan order."""
+    return [g for _, _, guides in routes(compiled) for g in guides]
 
 
 def check_compiled(compiled: Compiled, world: World | None = None) -> CheckResult:
@@ -80,7 +90,7 @@ def check_compiled(compiled: Compiled, world: World | None = None) -> CheckResul
         return lambda q: checkers[k].distance(q, (a, b))
 
     return check_program(
-        compiled.program, world or compiled.world, cell, route_guides(compiled), distance
+        compiled.program, world or compiled.world, cell, routes(compiled), distance
     )
 
 
@@ -108,13 +118,11 @@ def check_program(
     program: Program,
     world: World,
     cell: CellModel,
-    guides: Sequence[str],
+    steps: Sequence[Route],
     distance: Callable[[int], ArmDistance],
 ) -> CheckResult:
     """The checks; ``distance(k)``: the distance between the two arms during segment k."""
-    cables = world.objects.cables
-    cable = next(iter(cables)) if cables else ""
-    failures = _inserts(program, world, cell, guides, cable)
+    failures = _inserts(program, world, cell, steps)
     report = check_trajectory(
         concatenate([s.trajectory for s in program.segments]), cell.joint_names, cell.limits
     )
@@ -141,32 +149,38 @@ def _least_arm_distance(
 
 
 def _inserts(
-    program: Program, world: World, cell: CellModel, guides: Sequence[str], cable: str
+    program: Program, world: World, cell: CellModel, steps: Sequence[Route]
 ) -> list[Failure]:
-    ends = _insert_ends(program)
+    """Each RouteCable step's guides inserted by its own segments, in plan order, with what
+    it routes (a cable, a harness or one of its branches) held through each slot."""
     out: list[Failure] = []
     last = -math.inf
-    for guide in guides:
-        times = ends.get(guide, [])
-        if not times:
-            out.append(Failure("insert", f"{guide}: no insert"))
-            continue
-        seg = times[0]
-        t = seg.trajectory.end_time
-        if t <= last:
-            out.append(Failure("order", f"{guide}: inserted before the guide planned before it"))
-        last = max(last, t)
-        problem = _through_slot(program, world, cell, guide, cable, seg)
-        if problem:
-            out.append(Failure("insert", f"{guide}: {problem}"))
+    for i, cable, guides in steps:
+        ends = _insert_ends(program, i)
+        for guide in guides:
+            times = ends.get(guide, [])
+            if not times:
+                out.append(Failure("insert", f"{guide}: no insert"))
+                continue
+            seg = times.pop(0)
+            t = seg.trajectory.end_time
+            if t <= last:
+                msg = f"{guide}: inserted before the guide planned before it"
+                out.append(Failure("order", msg))
+            last = max(last, t)
+            problem = _through_slot(program, world, cell, guide, cable, seg)
+            if problem:
+                out.append(Failure("insert", f"{guide}: {problem}"))
     return out
 
 
-def _insert_ends(program: Program) -> dict[str, list[CompiledSegment]]:
-    """Each guide's insert segments, by the guide named in the label."""
+def _insert_ends(program: Program, step: int) -> dict[str, list[CompiledSegment]]:
+    """Step ``step``'s insert segments, by the guide named in the label."""
     ends: dict[str, list[CompiledSegment]] = {}
     for seg in program.segments:
         label = seg.segment.label
+        if seg.segment.step != step:
+            continue
         if label.startswith("RouteCable ") and label.endswith(": insert"):
             guide = label[len("RouteCable ") : -len(": insert")]
             ends.setdefault(guide, []).append(seg)

@@ -52,7 +52,7 @@ from cellengine.program import Anchor, Annotation, ArmPath, GripperEvent, Segmen
 from cellengine.skill import CableRef, GuideRef, KeypointRef, Skill
 from cellengine.skills import cable_geometry as cg
 from cellengine.skills.best_first import best_first
-from cellengine.skills.cable_state import ANY_BRANCH, CableState
+from cellengine.skills.cable_state import ANY_BRANCH, CableState, Placed
 from cellengine.world import World
 
 if TYPE_CHECKING:  # planning needs the motion stack; parsing a plan does not
@@ -242,6 +242,7 @@ class PlaceConnector(Skill):
                     if swap:
                         more, after = _hand_over(ctx, after, geo, c_arm, f_arm, self.cable, where)
                         segments += more
+                    after = _with_placed(after, self.cable, self.guide, geo.rear)
                 except InputError as e:
                     first = first or e
                     continue
@@ -249,6 +250,17 @@ class PlaceConnector(Skill):
                 yield segments, after
         if not found:
             raise first or _error(f"{where}: no way to place it")
+
+
+def _with_placed(state: CableState, cable: str, guide: str, rear: Vec) -> CableState:
+    """``state`` remembering where ``cable``'s connector was placed and the hold behind it
+    the placing ends with: a harness's later groups are taken from there (cable_group)."""
+    arm = state.routing_arm
+    assert arm is not None
+    placed = Placed(
+        guide, _point(rear), arm, state.tcp[arm], state.held[arm].s, state.pull_distance
+    )
+    return replace(state, placed={**state.placed, cable: placed})
 
 
 Carry = tuple[tuple[float, float], str]  # PlaceConnector's: (the other hand's hold, order)

@@ -15,7 +15,7 @@ from cellengine.errors import InputError, Problem, StepError, at_step
 from cellengine.family import Candidate
 from cellengine.program import Segment
 from cellengine.skill import Skill
-from cellengine.skills import cable_meaning, cable_swap, cable_top
+from cellengine.skills import cable_group, cable_meaning, cable_swap, cable_top
 from cellengine.skills.cable import (
     RELEASE,
     PickCable,
@@ -76,7 +76,7 @@ def _from(
         return
     step = steps[i]
     if isinstance(step, RouteCable):
-        yield from _guide(ctx, steps, i, replace(state, step=i), 0, failed)
+        yield from _route(ctx, steps, i, replace(state, step=i), failed)
         return
     # a PickCable decides which arm holds the connector end, a PlaceConnector which arm routes
     # (the other one, or the connector arm after a hand-over): a guide out of the routing
@@ -98,6 +98,36 @@ def _from(
         yield Candidate(tuple(segments), then=then, decides=decides)
     if not offered and stranded:
         with at_step(i):
+            raise _stranded(i, step, stranded)
+
+
+def _route(
+    ctx: PlanningContext, steps: Sequence[Skill], i: int, state: CableState, failed: Failed
+) -> Iterator[Candidate]:
+    """RouteCable ``steps[i]``: its first guide's candidates; for a harness's branch not held
+    yet, first the ways to take the group at the connector (cable_group), each a choice."""
+    step = steps[i]
+    assert isinstance(step, RouteCable)
+    with at_step(i):
+        taking = cable_group.group_ways(ctx, step, state)
+        if taking is None:
+            yield from _guide(ctx, steps, i, state, 0, failed)
+            return
+        offered, stranded = False, set[str]()
+        for segments, after in taking:
+            narrowed = _narrowed(ctx, state, segments, after)
+            if isinstance(narrowed, str):
+                stranded.add(narrowed)
+                continue
+            offered = True
+            segments, after = narrowed
+            then = functools.partial(_guide, ctx, steps, i, after, 0, failed)
+            # which arm takes the group decides which routes (a first guide it cannot route
+            # blames "arms": the other arm's take is tried next)
+            yield Candidate(
+                tuple(segments), then=then, decides={"arms": f"{after.routing_arm} routes"}
+            )
+        if not offered and stranded:
             raise _stranded(i, step, stranded)
 
 
@@ -151,6 +181,7 @@ def _guide(
                 continue
             segments, after = narrowed
             offered = True
+            after = _laid(ctx, step, k, after)
             then = (
                 functools.partial(_from, ctx, steps, i + 1, after, failed)
                 if last
@@ -158,6 +189,13 @@ def _guide(
             )
             failed_at = functools.partial(_release_failed, segments, dead)
             yield Candidate(tuple(segments), then=then, failed_at=failed_at)
+
+
+def _laid(ctx: PlanningContext, step: RouteCable, k: int, state: CableState) -> CableState:
+    """``state`` knowing that guide ``k``'s slot now holds ``step``'s cables too."""
+    guide = step.guides[k]
+    laid = (*state.laid.get(guide, ()), *ctx.world.objects.cables_of(step.cable))
+    return replace(state, laid={**state.laid, guide: laid})
 
 
 def _release_failed(segments: Sequence[Segment], dead: set[bytes], j: int) -> None:

@@ -39,6 +39,14 @@ def check(world: World, steps: Sequence[Skill]) -> list[Finding]:
     out: list[Finding] = []
     came_from: dict[str, _Seat] = {}  # cable -> the keypoint it last went into
     for i, step in enumerate(steps):
+        cable = str(getattr(step, "cable", ""))
+        branch = world.objects.branch_of(cable)
+        if branch is not None and not isinstance(step, RouteCable):
+            what = f"{step.skill} takes the whole harness (cable: {branch[0]})"
+            out.append(
+                (("steps", i, "cable"), f"{cable} is a branch of harness {branch[0]}: {what}")
+            )
+            continue
         if isinstance(step, PickCable):
             out += _span(world, step, ("steps", i, "from"))
         elif isinstance(step, PlaceConnector):
@@ -47,11 +55,18 @@ def check(world: World, steps: Sequence[Skill]) -> list[Finding]:
         elif isinstance(step, RouteCable):
             for j, ref in enumerate(step.guides):
                 here = _Seat(ref, ("steps", i, "guides", j), connector=False)
-                before = came_from.get(step.cable)
+                # a branch's first leg leaves its harness's connector
+                before = came_from.get(step.cable) or came_from.get(branch_harness(world, step))
                 if before is not None:
                     out += _leg(world, before, here, step.guides[j + 1 :])
                 came_from[step.cable] = here
     return out
+
+
+def branch_harness(world: World, step: RouteCable) -> str:
+    """The harness ``step``'s cable is a branch of ("" when it is none)."""
+    found = world.objects.branch_of(step.cable)
+    return "" if found is None else found[0]
 
 
 @dataclass(frozen=True)

@@ -38,6 +38,31 @@ class Hold:
     s: float
 
 
+@dataclass(frozen=True, eq=False)
+class Placed:
+    """A connector PlaceConnector placed, for the groups of its harness routed from it
+    later: its guide, the point its cable leaves it (its rear face), and the hold behind it
+    that the placing ended with (its arm, the routing hand's TCP, the hold's ``s``, the
+    cable from the rear face to the fingertips)."""
+
+    guide: str
+    rear: Point
+    arm: str
+    T_hold: Mat
+    s_hold: float
+    pull_distance: float
+
+    def key(self) -> tuple[object, ...]:
+        return (
+            self.guide,
+            self.rear,
+            self.arm,
+            np.round(self.T_hold, 9).tobytes(),
+            round(self.s_hold, 9),
+            round(self.pull_distance, 9),
+        )
+
+
 def _frozen(T: NDArray[np.float64]) -> Mat:
     a = np.array(T, dtype=float)
     a.setflags(write=False)
@@ -85,6 +110,12 @@ class CableState:
     # the IK branches (ArmIK.by_branch rows) each arm may still be on: those that followed
     # every pose the skills screened since the arm's last transit; an arm absent, any
     branches: Mapping[str, frozenset[int]] = field(default_factory=lambda: MappingProxyType({}))
+    # harnesses (and cables) by name -> where their connector was placed (cable_group)
+    placed: Mapping[str, Placed] = field(default_factory=lambda: MappingProxyType({}))
+    # the single cables whose routing has begun (a harness's groups are taken one by one)
+    routed: frozenset[str] = frozenset()
+    # guide -> the single cables laid in it so far, in order
+    laid: Mapping[str, tuple[str, ...]] = field(default_factory=lambda: MappingProxyType({}))
 
     def __post_init__(self) -> None:
         object.__setattr__(
@@ -94,6 +125,8 @@ class CableState:
         object.__setattr__(self, "held", MappingProxyType(dict(self.held)))
         object.__setattr__(self, "wound", MappingProxyType(dict(self.wound)))
         object.__setattr__(self, "branches", MappingProxyType(dict(self.branches)))
+        object.__setattr__(self, "placed", MappingProxyType(dict(self.placed)))
+        object.__setattr__(self, "laid", MappingProxyType(dict(self.laid)))
 
     @classmethod
     def at_home(cls, ctx: PlanningContext) -> CableState:
@@ -130,6 +163,9 @@ class CableState:
             (self.guides, self.route, round(self.pull_distance, 9), round(self.lean, 9)),
             tuple((a, round(w, 9)) for a, w in sorted(self.wound.items())),
             tuple((a, tuple(sorted(b))) for a, b in sorted(self.branches.items())),
+            tuple((n, p.key()) for n, p in sorted(self.placed.items())),
+            tuple(sorted(self.routed)),
+            tuple(sorted(self.laid.items())),
         )
 
     def branches_of(self, arm: str) -> frozenset[int]:

@@ -84,11 +84,16 @@ class Harness(Frozen):
         return tuple(sorted(cables, key=lambda c: self.cables[c].pin))
 
     def bundle_diameter(self, cables: Sequence[str]) -> float:
-        """The diameter of ``cables`` bundled: the packing of as many equal cables of the
-        same cross-section area, never less than the thickest (beyond ten cables, the
-        area at 80 % fill)."""
-        d = [self.cables[c].diameter for c in cables]
-        equal = math.sqrt(sum(x * x for x in d) / len(d))
-        n = len(d)
-        ratio = _PACKED[n - 1] if n <= len(_PACKED) else math.sqrt(n / 0.8)
-        return max(max(d), ratio * equal)
+        """The diameter of ``cables`` bundled (:func:`packed_diameter`)."""
+        return packed_diameter([self.cables[c].diameter for c in cables])
+
+
+def packed_diameter(diameters: Sequence[float]) -> float:
+    """The diameter of cables bundled: the packing of as many equal cables of the same
+    cross-section area, never less than the thickest (beyond ten cables, the area at 80 %
+    fill)."""
+    d = list(diameters)
+    equal = math.sqrt(sum(x * x for x in d) / len(d))
+    n = len(d)
+    ratio = _PACKED[n - 1] if n <= len(_PACKED) else math.sqrt(n / 0.8)
+    return max(max(d), ratio * equal)

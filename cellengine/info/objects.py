@@ -87,15 +87,35 @@ class Objects(Frozen):
         return [*self.cables, *self.harnesses, *self.containers]
 
     def cable_names(self) -> list[str]:
-        """What a cable skill may pick, place and route: cables and whole harnesses."""
-        return [*self.cables, *self.harnesses]
+        """What a cable skill may pick, place and route: cables, whole harnesses, and (route
+        only) a harness's branches."""
+        branches = [b for h in self.harnesses.values() for b in h.branches]
+        return [*self.cables, *self.harnesses, *branches]
 
     def cable(self, name: str) -> Cable | None:
-        """A cable, or a harness as the bundle of all its cables (None: neither)."""
+        """A cable, a harness as the bundle of all its cables, or a branch as the bundle of
+        its own (None: none of them)."""
         if name in self.cables:
             return self.cables[name]
         harness = self.harnesses.get(name)
-        return None if harness is None else bundle(harness, tuple(harness.cables))
+        if harness is not None:
+            return bundle(harness, tuple(harness.cables))
+        found = self.branch_of(name)
+        return None if found is None else bundle(found[1], found[1].branches[name].cables)
+
+    def branch_of(self, name: str) -> tuple[str, Harness] | None:
+        """The harness (its name and itself) that ``name`` is a branch of, if it is one."""
+        for h, harness in self.harnesses.items():
+            if name in harness.branches:
+                return h, harness
+        return None
+
+    def cables_of(self, name: str) -> tuple[str, ...]:
+        """The single cables ``name`` stands for: itself, a harness's, or a branch's."""
+        if name in self.harnesses:
+            return tuple(self.harnesses[name].cables)
+        found = self.branch_of(name)
+        return (name,) if found is None else found[1].branches[name].cables
 
     @field_validator("harnesses")
     @classmethod

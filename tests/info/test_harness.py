@@ -58,8 +58,10 @@ def test_a_harness_is_a_cable_bundle_for_the_cable_skills(tmp_path: Path) -> Non
     assert bundle.length == pytest.approx(0.640, abs=1e-9)  # its shortest cable
     assert bundle.diameter == pytest.approx(2.1547 * 0.0025, abs=1e-9)
     assert bundle.mass == pytest.approx(0.060, abs=1e-9)
-    assert objects.cable("GR11") is None  # a branch is not routed whole (yet)
-    assert objects.cable_names() == ["WH1"]
+    branch = objects.cable("GR11")
+    assert branch is not None and branch.diameter == pytest.approx(0.005, abs=1e-9)
+    assert objects.cable_names() == ["WH1", "GR11", "GR12"]
+    assert objects.cables_of("GR11") == ("CA3", "CA1") and objects.branch_of("GR12") is not None
 
 
 def test_an_unknown_cable_lists_harnesses_too() -> None:

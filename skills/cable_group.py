@@ -1,0 +1,250 @@
+"""RouteCable of a harness's branch (issue #15): the branch's cables are routed as one group,
+a thicker cable, from the harness's placed connector; before its first guide the routing
+hand takes the group there (REMODEL's implicit SC and GC operations, HARNESS.md 1.8, 2.3,
+2.4).
+
+Behind the connector the cables leave their pins in rows, the bottom row lowest: the stack
+at the hold the placing ended with (cable_state.Placed) is taken as a column of the harness's
+cables in row order, centred where the hand held the whole bundle. A group that is the whole
+of what is left there is grasped at the centre of that column (GC). A group above the cables
+left (the top rows, REMODEL's case A2) is separated from them: the open hand comes down with
+its fingertips at the middle of the group's lowest cable, above every other one, closes to
+slide and lifts the group off before it grasps (SC). :func:`separation_point` is the one place
+that decides where; a vision service (REMODEL's grasp point determination) would replace it.
+A group below cables still to be routed (case A1) needs them laid aside into a separation
+guide first, which is not built: refused, saying which branch to route first.
+
+Whatever the hands held before (the placing's hold, or the last group's route) is released
+first (release_ways), so a later group starts from the same place as the first.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from cellengine.arrays import Mat, Vec
+from cellengine.errors import InputError
+from cellengine.info.harness import Harness, packed_diameter
+from cellengine.program import GripperEvent, Segment
+from cellengine.skills import cable as c
+from cellengine.skills import cable_geometry as cg
+from cellengine.skills.cable_state import CableState, Placed
+
+if TYPE_CHECKING:
+    from cellengine.context import PlanningContext
+
+LIFT = 0.0075  # m: the separated group lifted off the rest (REMODEL: z_offset / 2)
+
+
+@dataclass(frozen=True)
+class Separation:
+    """Where the hand takes a group: its TCP's height over the hold's (m, along the
+    platform's up), the group, the cables left below it, and each cable's place in the
+    column (bottom, top heights over the hold, m)."""
+
+    height: float
+    group: tuple[str, ...]
+    below: tuple[str, ...]
+    column: dict[str, tuple[float, float]]
+
+    @property
+    def separates(self) -> bool:
+        return bool(self.below)
+
+
+def separation_point(harness: Harness, group: Sequence[str], left: Sequence[str]) -> Separation:
+    """The column of all the harness's cables in row order centred on the hold; the group's
+    take: at the middle of its lowest cable when cables left lie below it, else the middle
+    of what is left (``left``: the cables not yet routed, the group's among them)."""
+    order = harness.in_order(list(harness.cables))
+    total = sum(harness.cables[n].diameter for n in order)
+    column: dict[str, tuple[float, float]] = {}
+    z = -total / 2.0
+    for n in order:
+        d = harness.cables[n].diameter
+        column[n] = (z, z + d)
+        z += d
+    below = tuple(n for n in harness.in_order(left) if n not in group)
+    lowest = harness.in_order(group)[0]
+    if below:
+        bottom, top = column[lowest]
+        height = (bottom + top) / 2.0
+    else:
+        height = (column[harness.in_order(left)[0]][0] + column[harness.in_order(left)[-1]][1]) / 2
+    return Separation(height, harness.in_order(group), below, column)
+
+
+def group_ways(
+    ctx: PlanningContext, step: c.RouteCable, state: CableState
+) -> Iterator[tuple[list[Segment], CableState]] | None:
+    """The ways to take ``step``'s group at its harness's connector, each with the state
+    RouteCable's first guide starts from; None when ``step`` routes no branch, or routes on
+    a branch it already holds."""
+    world = ctx.world
+    found = world.objects.branch_of(step.cable)
+    if found is None or state.cable == step.cable:
+        return None
+    name, harness = found
+    where = f"steps[{state.step}] RouteCable {step.cable}"
+    placed = state.placed.get(name)
+    if placed is None:
+        raise c._error(
+            f"{where}: the connector of harness {name} is not placed; plan PlaceConnector "
+            f"(cable: {name}) before routing its branches"
+        )
+    group = harness.branches[step.cable].cables
+    left = [n for n in harness.cables if n not in state.routed]
+    taken = [n for n in group if n in state.routed]
+    if taken:
+        raise c._error(f"{where}: {', '.join(taken)} of {step.cable} are routed already")
+    _check_rows(harness, step.cable, group, left, where)
+    _check_laid(ctx, step, state, where)
+    sep = separation_point(harness, group, left)
+    return _ways(ctx, step, state, placed, sep, where)
+
+
+def _check_rows(
+    harness: Harness, branch: str, group: Sequence[str], left: Sequence[str], where: str
+) -> None:
+    rows = {n: harness.cables[n].pin for n in left}
+    others = [n for n in left if n not in group]
+    if all(rows[g] > rows[o] for g in group for o in others):
+        return
+    mine = ", ".join(harness.in_order(group))
+    above = ", ".join(n for n in harness.in_order(others) if rows[n] > min(rows[g] for g in group))
+    if all(rows[g] < rows[o] for g in group for o in others):
+        tops = [
+            b for b, br in harness.branches.items() if any(n in br.cables for n in others)
+        ]
+        raise c._error(
+            f"{where}: {branch}'s cables ({mine}) leave the connector below {above}, still to "
+            "be routed: separating those needs a separation guide to lay them aside in "
+            f"(REMODEL's J<n>S), which this engine does not have yet; route {' or '.join(tops)} "
+            f"before {branch}"
+        )
+    raise c._error(
+        f"{where}: {branch}'s cables ({mine}) leave the connector in rows between those of "
+        f"{above}, still to be routed: no grasp takes them apart from the others"
+    )
+
+
+def _check_laid(ctx: PlanningContext, step: c.RouteCable, state: CableState, where: str) -> None:
+    """Each guide's slot takes the group beside the cables laid in it before."""
+    objects = ctx.world.objects
+    group = objects.cables_of(step.cable)
+    for ref in step.guides:
+        laid = state.laid.get(ref, ())
+        if not laid:
+            continue
+        together = [*laid, *group]
+        d = packed_diameter([_diameter(ctx, n) for n in together])
+        gap = cg.GuideDims.of(ctx.world, ref, where).gap
+        if gap <= d:
+            raise c._error(
+                f"{where}: guide '{ref}' has a {c._mm(gap)} mm slot (its gap); "
+                f"{', '.join(laid)} lie in it already, and with {step.cable} "
+                f"({', '.join(group)}) the bundle is {c._mm(d)} mm thick: it does not fit"
+            )
+
+
+def _diameter(ctx: PlanningContext, cable: str) -> float:
+    objects = ctx.world.objects
+    for harness in objects.harnesses.values():
+        if cable in harness.cables:
+            return harness.cables[cable].diameter
+    return objects.cables[cable].diameter
+
+
+def _ways(
+    ctx: PlanningContext,
+    step: c.RouteCable,
+    state: CableState,
+    placed: Placed,
+    sep: Separation,
+    where: str,
+) -> Iterator[tuple[list[Segment], CableState]]:
+    """Release what the hands hold (each way of release_ways), then the arm nearer the
+    group takes it, else the other."""
+    up = cg.platform_up(ctx.world, placed.guide)
+    T_take = _shifted(placed.T_hold, sep.height * up)
+    T_above = _shifted(T_take, cg.APPROACH_HEIGHT * up)
+    T_end = _shifted(T_take, LIFT * up) if sep.separates else T_take
+    first: InputError | None = None
+    for released, after in c.release_ways(ctx, state):
+        # the arm nearest the group first (after the placing, the one that held behind the
+        # connector): the other's take is the search's next choice ("arms")
+        for arm in sorted(after.arms, key=lambda a: _distance(after.tcp[a], T_take)):
+            what = "separating grasp" if sep.separates else "group's grasp"
+            try:
+                c._check_reach(ctx, arm, [(f"{what} approach", T_above), (what, T_take)], where)
+            except InputError as e:
+                first = first or e
+                continue
+            more, taken = _take(step, after, placed, sep, arm, (T_above, T_take, T_end))
+            yield [*released, *more], taken
+    if first is not None:
+        raise first
+
+
+def _take(
+    step: c.RouteCable,
+    state: CableState,
+    placed: Placed,
+    sep: Separation,
+    arm: str,
+    poses: tuple[Mat, Mat, Mat],
+) -> tuple[list[Segment], CableState]:
+    T_above, T_take, T_end = poses
+    branch, element = step.cable, cg.element_of(placed.guide)
+    label = f"RouteCable {branch}: {arm} takes the group at {placed.guide}"
+    b = c._Builder(state)
+    b.add(f"{label}: to it", [c._transit(arm, T_above)], before=b.mode_event(arm, c.OPEN, None))
+    facts = {
+        "group": list(sep.group),
+        "below": list(sep.below),
+        "tcp_height": sep.height,
+        "column": {n: list(z) for n, z in sep.column.items()},
+    }
+    b.add(
+        f"{label}: down" + (", separating it" if sep.separates else ""),
+        [c._cartesian(arm, cg.line(T_above, T_take))],
+        after=[GripperEvent(arm, c.SLIDE if sep.separates else c.GRASP, branch)],
+        near=[(arm, element)],
+        facts=facts,
+    )
+    if sep.separates:
+        b.add(
+            f"{label}: lifts it off the others",
+            [c._cartesian(arm, cg.line(T_take, T_end))],
+            after=[GripperEvent(arm, c.GRASP, branch)],
+            near=[(arm, element)],
+        )
+    rear = np.asarray(placed.rear, dtype=float)
+    more = float(np.linalg.norm(T_end[:3, 3] - rear) - np.linalg.norm(placed.T_hold[:3, 3] - rear))
+    other = next(a for a in state.arms if a != arm)
+    after = b.state.hold(arm, branch, placed.s_hold).transited(arm)
+    return b.segments, replace(
+        after,
+        cable=branch,
+        routing_arm=arm,
+        connector_arm=other,
+        place_guide=None,
+        guides=(placed.guide,),
+        route=(placed.rear,),
+        pull_distance=placed.pull_distance + more,
+        routed=state.routed | set(sep.group),
+    )
+
+
+def _distance(T_a: Mat, T_b: Mat) -> float:
+    return float(np.linalg.norm(T_a[:3, 3] - T_b[:3, 3]))
+
+
+def _shifted(T: Mat, by: Vec) -> Mat:
+    out = np.array(T, dtype=float)
+    out[:3, 3] += by
+    return out
