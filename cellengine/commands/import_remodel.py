@@ -104,7 +104,7 @@ Turn a REMODEL cable-routing folder into a native cell in DEST:
   plan.yaml     Assembly_sequence.csv, in file order as REMODEL runs it (its Order
                 column is not used): EC -> PickCable, PC -> PlaceConnector (the
                 spot's L/R picks robot left/right; with --arms auto, the engine),
-                RC -> RouteCable. A spot such as C2.1 is guide 1 of element C2 of
+                RC -> RouteCable (of a branch: its cables as a group). A spot such as C2.1 is guide 1 of element C2 of
                 whichever platform has C2. Labels are typed by their first letter as
                 in REMODEL (T table, J jig, B box, C comb, A tool changer slot):
                 J, B, C and A labels are unique across the platforms, tables may repeat.
@@ -112,8 +112,8 @@ Turn a REMODEL cable-routing folder into a native cell in DEST:
 The Label column names a connector (a harness's first connector names the harness),
 a cable, or, in RC rows, a branch. What REMODEL itself would read otherwise (an Order
 out of file order, a lower-case type, an EC arm its PC contradicts) is a warning at
-its line. The later system's one-comb EC, branch RC and T (taping) rows are read and
-checked, then refused at their rows: the engine cannot do them yet.
+its line. The later system's one-comb EC and T (taping) rows are read and checked,
+then refused at their rows: the engine cannot do them yet.
 
 Platforms are placed with --pose (default: at the cell origin). REMODEL's Blender
 exports come out turned 180 deg about z in the z-up cell frame; a yaw of 180 lays
@@ -453,18 +453,19 @@ def build_steps(inputs: Inputs) -> tuple[list[Step], dict[str, str], list[Proble
 # What the later REMODEL system does that the engine's skills do not do yet (issue #15).
 _NOT_YET = {
     "EC": "picking from one comb with one hand (the later system's EC) is not built yet",
-    "RC": "routing a branch as a cable group is not built yet",
     "T": "taping is not built yet",
 }
 
 
 def _step(op: Operation, link: Link, inputs: Inputs) -> Step:
     single_comb = op.kind == "EC" and len(op.spots) == 1
-    if single_comb or op.kind == "T" or link.branch is not None:
+    if single_comb or op.kind == "T":
         what = f"{op.kind} {op.label} {op.spot}: {_NOT_YET[op.kind]}"
         raise InputError.at(f"{what} in this engine (issue #15)", inputs.source.sequence, op.row)
     refs = [_ref(op, i, inputs) for i in range(len(op.spots))]
-    data = Block(skill=_SKILLS[op.kind], cable=link.name)
+    # a branch is routed as a group, taken at its harness's connector first (the engine
+    # inserts the separation and the grasp that REMODEL inserts, HARNESS.md 1.8)
+    data = Block(skill=_SKILLS[op.kind], cable=link.branch or link.name)
     if op.kind == "EC":
         data["from"] = refs  # the Spot writes the connector end first, as PickCable does
     elif op.kind == "PC":

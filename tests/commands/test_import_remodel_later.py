@@ -123,7 +123,9 @@ def test_a_label_of_no_class_is_a_warning(
 
 
 def test_a_harness_of_several_cables_with_branches(src: Path, tmp_path: Path) -> None:
-    sequence(src, "1;EC;WH1;C2.1-C1.1", "2;PC;WH1;J8.1.L", "3;RC;WH1;J3.1-J4.1")
+    sequence(
+        src, "1;EC;WH1;C2.1-C1.1", "2;PC;WH1;J8.1.L", "3;RC;GR11;J3.1-J4.1", "4;RC;GR12;J3.1"
+    )
     assert run(src, tmp_path / "cell") == 0
     objects = yaml.safe_load((tmp_path / "cell" / "objects.yaml").read_text())
     assert list(objects["cables"]) == ["CA1"]  # the one-cable harness, as before
@@ -131,7 +133,7 @@ def test_a_harness_of_several_cables_with_branches(src: Path, tmp_path: Path) ->
     assert wh1["branches"] == {"GR11": {"cables": ["CA2", "CA3"]}, "GR12": {"cables": ["CA4"]}}
     assert wh1["cables"]["CA3"] == {"length": 520, "diameter": 2.1, "color": "Green", "pin": [2, 0]}
     steps = yaml.safe_load((tmp_path / "cell" / "plan.yaml").read_text())["steps"]
-    assert {s["cable"] for s in steps} == {"WH1"}
+    assert [s["cable"] for s in steps] == ["WH1", "WH1", "GR11", "GR12"]
 
 
 def test_later_rows_not_built_yet_are_refused_at_their_rows(
@@ -151,7 +153,6 @@ def test_later_rows_not_built_yet_are_refused_at_their_rows(
     assert capsys.readouterr().err.splitlines() == [
         f"Assembly_sequence.csv:2: EC WH1 C1.1.R: picking from one comb with one hand (the "
         f"later system's EC) {not_yet}",
-        f"Assembly_sequence.csv:4: RC GR11 J3.1-J4.1: routing a branch as a cable group {not_yet}",
         f"Assembly_sequence.csv:5: T WH1 J3.1-J4.1-J4.1: taping {not_yet}",
         "Assembly_sequence.csv:6: unknown Label 'WH3': not a connector or cable of "
         "Components_definition.csv nor a branch of WH_configuration.xml; known: CA1, CA2, CA3, "
