@@ -19,7 +19,7 @@ if TYPE_CHECKING:
 KINDS = ("cell", "objects", "plan")
 K = TypeVar("K")
 V = TypeVar("V")
-_KEYS = {"plan": ("steps",), "cell": ("robots",), "objects": ("cables", "containers")}
+_KEYS = {"plan": ("steps",), "cell": ("robots",), "objects": ("cables", "harnesses", "containers")}
 
 
 @dataclass
@@ -119,8 +119,8 @@ def _check_file(f: Path, explicit: bool, checker: Checker) -> Result | None:
         if not explicit:
             return None  # not one of ours: other YAML may live in a folder
         msg = (
-            "cannot tell what this file is: a cell has 'robots', objects have 'cables' or "
-            "'containers', a plan has 'steps'"
+            "cannot tell what this file is: a cell has 'robots', objects have 'cables', "
+            "'harnesses' or 'containers', a plan has 'steps'"
         )
         return Result(f, None, [Problem(msg, str(f), 1, 1)])
     if kind == "plan" and checker.compile_plans:

@@ -339,7 +339,11 @@ def load_plan(
 
 
 # The top-level keys that tell the kinds of file apart.
-_KIND_KEYS = {"cell": ("robots",), "objects": ("cables", "containers"), "plan": ("steps",)}
+_KIND_KEYS = {
+    "cell": ("robots",),
+    "objects": ("cables", "harnesses", "containers"),
+    "plan": ("steps",),
+}
 
 
 def _expect_kind(path: Path, kind: str, plan: YamlDoc) -> None:

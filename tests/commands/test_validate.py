@@ -52,7 +52,7 @@ def test_explicit_unknown_file_fails(
     assert main(["validate", "other.yaml"]) == 1
     assert capsys.readouterr().out == (
         "other.yaml:1:1: cannot tell what this file is: a cell has 'robots', objects have "
-        "'cables' or 'containers', a plan has 'steps'\n"
+        "'cables', 'harnesses' or 'containers', a plan has 'steps'\n"
     )
 
 

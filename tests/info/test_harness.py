@@ -82,3 +82,13 @@ def test_a_harness_is_picked_placed_and_routed_as_one_bundle(tmp_path: Path) -> 
     assert "WH1" in held and "cable1" not in held
     labels = [s.segment.label for s in compiled.program.segments]
     assert any(label.startswith("RouteCable routing.guide3") for label in labels)
+
+
+def test_a_file_of_harnesses_alone_is_objects(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from cellengine.cli import main
+
+    path = _objects(tmp_path)
+    assert main(["validate", str(path)]) == 0
+    assert "1 file(s) checked" in capsys.readouterr().out
