@@ -91,4 +91,4 @@ def test_a_file_of_harnesses_alone_is_objects(
 
     path = _objects(tmp_path)
     assert main(["validate", str(path)]) == 0
-    assert "1 file(s) checked" in capsys.readouterr().out
+    assert capsys.readouterr().out == f"{path}: ok (objects)\n"
