@@ -111,11 +111,13 @@ class Objects(Frozen):
         return None
 
     def cables_of(self, name: str) -> tuple[str, ...]:
-        """The single cables ``name`` stands for: itself, a harness's, or a branch's."""
+        """The single cables ``name`` stands for: itself, or a harness's or a branch's in
+        their order at the connector (bottom row first)."""
         if name in self.harnesses:
-            return tuple(self.harnesses[name].cables)
+            harness = self.harnesses[name]
+            return harness.in_order(list(harness.cables))
         found = self.branch_of(name)
-        return (name,) if found is None else found[1].branches[name].cables
+        return (name,) if found is None else found[1].in_order(found[1].branches[name].cables)
 
     @field_validator("harnesses")
     @classmethod

@@ -15,6 +15,7 @@ A link fixed in the cell (an arm's base) has one sample (``fixed``).
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -27,6 +28,7 @@ from cellengine.arrays import IntArray, Vec
 from cellengine.info import primitives
 from cellengine.info.cell import Obstacle
 from cellengine.info.mesh import Mesh
+from cellengine.info.objects import Objects
 from cellengine.motion.robot import CellModel, home_configuration
 from cellengine.motion.scene import place_fingers
 from cellengine.program import Anchor, Program, TimedEvent
@@ -331,10 +333,31 @@ def cables(program: Program, world: World) -> list[dict[str, Any]]:
                 anchors.setdefault(a.object, []).append(
                     {"time": end, "guide": a.by, "p": _round(a.point, DECIMALS)}
                 )
-    return [
-        {"name": c, "held": held.get(c, []), "anchors": anchors.get(c, [])}
-        for c in sorted(set(held) | set(anchors))
-    ]
+    objects = world.objects
+    out = []
+    for c in sorted(set(held) | set(anchors)):
+        mine = anchors.get(c, [])
+        branch = objects.branch_of(c)
+        if branch is not None:  # a group leaves its harness's connector
+            mine = [*anchors.get(branch[0], []), *mine]
+        members = [{"name": n, "color": _css(_color(objects, n))} for n in objects.cables_of(c)]
+        out.append({"name": c, "held": held.get(c, []), "anchors": mine, "members": members})
+    return out
+
+
+def _color(objects: Objects, cable: str) -> str | None:
+    for harness in objects.harnesses.values():
+        if cable in harness.cables:
+            return harness.cables[cable].color
+    found = objects.cables.get(cable)
+    return None if found is None else found.color
+
+
+def _css(color: str | None) -> str | None:
+    """A colour name as CSS takes it (objects.yaml's are words: grey, Yellow), else None."""
+    if color is None or not re.fullmatch(r"[A-Za-z]{3,20}", color):
+        return None
+    return color.lower()
 
 
 def _cable_of(name: str | None, cables: set[str]) -> str | None:

@@ -61,7 +61,7 @@ def test_a_harness_is_a_cable_bundle_for_the_cable_skills(tmp_path: Path) -> Non
     branch = objects.cable("GR11")
     assert branch is not None and branch.diameter == pytest.approx(0.005, abs=1e-9)
     assert objects.cable_names() == ["WH1", "GR11", "GR12"]
-    assert objects.cables_of("GR11") == ("CA3", "CA1") and objects.branch_of("GR12") is not None
+    assert objects.cables_of("GR11") == ("CA1", "CA3") and objects.branch_of("GR12") is not None
 
 
 def test_an_unknown_cable_lists_harnesses_too() -> None:

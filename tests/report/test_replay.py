@@ -169,6 +169,7 @@ def test_timeline_events_and_cable(replay: dict) -> None:
             "name": "cable1",
             "held": [{"arms": ["left", "right"], "start": 2.0, "end": 6.0}],
             "anchors": [{"time": 6.0, "guide": "routing.guide2", "p": [0.3, -0.2, 0.065]}],
+            "members": [{"name": "cable1", "color": "grey"}],
         }
     ]
 
@@ -195,6 +196,7 @@ def test_cables_held_by_one_or_two_hands_and_anchored() -> None:
                 {"arms": ["left", "right"], "start": 4.0, "end": 6.0},
             ],
             "anchors": [{"time": 6.0, "guide": "routing.guide2", "p": [0.3, -0.2, 0.065]}],
+            "members": [{"name": "cable1", "color": "grey"}],
         }
     ]
     # nobody holds a cable: nothing to draw, whatever the facts say

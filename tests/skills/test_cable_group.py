@@ -11,6 +11,7 @@ import pytest
 from bench.board_check import check_compiled
 from cellengine.errors import InputError
 from cellengine.pipeline import compile_plan
+from cellengine.report.replay import cables
 
 CELL = Path(__file__).resolve().parents[2] / "cells" / "cable_routing"
 HARNESS = """
@@ -71,6 +72,21 @@ def test_the_top_branch_is_separated_then_the_rest_grasped(tmp_path: Path) -> No
     assert result.ok, result.failures
     held = [e.event.holds for e in compiled.program.events if e.event.holds]
     assert held.index("TOP") < held.index("BOT")
+    # the page draws each group from the connector through its slots, a line per cable in
+    # its objects.yaml colour
+    drawn = {c["name"]: c for c in cables(compiled.program, compiled.world)}
+    assert drawn["TOP"]["members"] == [
+        {"name": "CA2", "color": "blue"},
+        {"name": "CA3", "color": "black"},
+    ]
+    connector = drawn["WH1"]["anchors"][0]
+    assert connector["guide"] == "routing.connector"
+    assert [a["guide"] for a in drawn["TOP"]["anchors"]] == [
+        "routing.connector",
+        "routing.guide1",
+        "routing.guide2",
+    ]
+    assert [a["guide"] for a in drawn["BOT"]["anchors"]] == ["routing.connector", "routing.guide1"]
 
 
 def test_a_bottom_branch_first_needs_a_separation_guide(tmp_path: Path) -> None:

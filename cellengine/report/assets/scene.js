@@ -182,6 +182,13 @@ function cablePath(c, tcp) {
   }
   return [pts, pts.concat(hands)];
 }
+// point j of the screen polyline q moved by d pixels across it (its neighbours' normal)
+function offsetAt(q, j, d) {
+  if (!d) return q[j];
+  const a = q[Math.max(0, j - 1)], b = q[Math.min(q.length - 1, j + 1)];
+  const len = Math.hypot(b[0] - a[0], b[1] - a[1]) || 1;
+  return [q[j][0] - d * (b[1] - a[1]) / len, q[j][1] + d * (b[0] - a[0]) / len, q[j][2]];
+}
 // drawn over everything: the cable and the fingertips are what the replay is about
 function drawCables(V, tcp) {
   let count = 0;
@@ -197,9 +204,18 @@ function drawCables(V, tcp) {
       q.forEach((p, k) => (k ? ctx.lineTo(p[0], p[1]) : ctx.moveTo(p[0], p[1])));
       ctx.stroke();
     };
+    const members = c.members && c.members.length ? c.members : [{ color: null }];
     const w = Math.max(3, 0.006 * V.focal / z);
-    ctx.strokeStyle = '#111827'; ctx.lineWidth = w; stroke();
-    ctx.strokeStyle = '#8b95a5'; ctx.lineWidth = Math.max(1, 0.3 * w); stroke();
+    const inner = Math.max(1, 0.3 * w);
+    ctx.strokeStyle = '#111827'; ctx.lineWidth = w + inner * (members.length - 1); stroke();
+    // each cable of a group in its own colour, side by side across the line
+    members.forEach((m, k) => {
+      const shift = (k - (members.length - 1) / 2) * inner;
+      const moved = q.map((p, j) => offsetAt(q, j, shift));
+      ctx.beginPath();
+      moved.forEach((p, j) => (j ? ctx.lineTo(p[0], p[1]) : ctx.moveTo(p[0], p[1])));
+      ctx.strokeStyle = m.color || '#8b95a5'; ctx.lineWidth = inner; ctx.stroke();
+    });
     for (let k = 0; k < anchors.length; k++) {
       ctx.beginPath(); ctx.arc(q[k][0], q[k][1], 3, 0, 2 * Math.PI);
       ctx.fillStyle = '#facc15'; ctx.fill();
