@@ -123,9 +123,7 @@ def test_a_label_of_no_class_is_a_warning(
 
 
 def test_a_harness_of_several_cables_with_branches(src: Path, tmp_path: Path) -> None:
-    sequence(
-        src, "1;EC;WH1;C2.1-C1.1", "2;PC;WH1;J8.1.L", "3;RC;GR11;J3.1-J4.1", "4;RC;GR12;J3.1"
-    )
+    sequence(src, "1;EC;WH1;C2.1-C1.1", "2;PC;WH1;J8.1.L", "3;RC;GR11;J3.1-J4.1", "4;RC;GR12;J3.1")
     assert run(src, tmp_path / "cell") == 0
     objects = yaml.safe_load((tmp_path / "cell" / "objects.yaml").read_text())
     assert list(objects["cables"]) == ["CA1"]  # the one-cable harness, as before
