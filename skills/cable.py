@@ -257,8 +257,15 @@ def _with_placed(state: CableState, cable: str, guide: str, rear: Vec) -> CableS
     the placing ends with: a harness's later groups are taken from there (cable_group)."""
     arm = state.routing_arm
     assert arm is not None
+    other = next(a for a in state.arms if a != arm)
     placed = Placed(
-        guide, _point(rear), arm, state.tcp[arm], state.held[arm].s, state.pull_distance
+        guide,
+        _point(rear),
+        arm,
+        state.tcp[arm],
+        state.held[arm].s,
+        state.pull_distance,
+        state.tcp[other],
     )
     return replace(state, placed={**state.placed, cable: placed})
 

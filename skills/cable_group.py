@@ -37,7 +37,7 @@ from cellengine.skills.cable_state import CableState, Placed
 if TYPE_CHECKING:
     from cellengine.context import PlanningContext
 
-LIFT = 0.0075  # m: the separated group lifted off the rest (REMODEL: z_offset / 2)
+LIFT = 0.0075  # m: a group lifted over where the bundle was held (REMODEL: z_offset / 2)
 
 
 @dataclass(frozen=True)
@@ -167,25 +167,39 @@ def _ways(
     sep: Separation,
     where: str,
 ) -> Iterator[tuple[list[Segment], CableState]]:
-    """Release what the hands hold (each way of release_ways), then the arm nearer the
-    group takes it, else the other."""
+    """Release what the hands hold (each way of release_ways), then the arm whose base is
+    nearer the route's end takes the group, else the other."""
     up = cg.platform_up(ctx.world, placed.guide)
     T_take = _shifted(placed.T_hold, sep.height * up)
     T_above = _shifted(T_take, cg.APPROACH_HEIGHT * up)
-    T_end = _shifted(T_take, LIFT * up) if sep.separates else T_take
+    # every group then held where the placing held the bundle, a little higher: the route
+    # starts as it does after the placing, whichever rows the group came from
+    T_end = _shifted(placed.T_hold, LIFT * up)
     first: InputError | None = None
+    # the arm whose base is nearer the route's end first, as PlaceConnector's roles keep each
+    # arm on its side: the other's take is the search's next choice ("arms")
+    arms = sorted(state.arms, key=lambda a: c._base_distance(ctx, a, step.guides[-1]))
     for released, after in c.release_ways(ctx, state):
-        # the arm nearest the group first (after the placing, the one that held behind the
-        # connector): the other's take is the search's next choice ("arms")
-        for arm in sorted(after.arms, key=lambda a: _distance(after.tcp[a], T_take)):
+        for arm in arms:
             what = "separating grasp" if sep.separates else "group's grasp"
             try:
                 c._check_reach(ctx, arm, [(f"{what} approach", T_above), (what, T_take)], where)
             except InputError as e:
                 first = first or e
                 continue
-            more, taken = _take(step, after, placed, sep, arm, (T_above, T_take, T_end))
-            yield [*released, *more], taken
+            other = next(a for a in after.arms if a != arm)
+            # the other arm out of the way first: where the placing left it, when it is the
+            # arm that stood there, else at home (a route's release leaves it over the board)
+            T_idle = placed.T_other if other != placed.arm else ctx.tcp_home(other)
+            idle = c._Builder(after)
+            idle.add(
+                f"RouteCable {step.cable}: {other} out of the way",
+                [c._transit(other, T_idle)],
+            )
+            more, taken = _take(
+                step, idle.state.transited(other), placed, sep, arm, (T_above, T_take, T_end)
+            )
+            yield [*released, *idle.segments, *more], taken
     if first is not None:
         raise first
 
@@ -216,13 +230,13 @@ def _take(
         near=[(arm, element)],
         facts=facts,
     )
-    if sep.separates:
-        b.add(
-            f"{label}: lifts it off the others",
-            [c._cartesian(arm, cg.line(T_take, T_end))],
-            after=[GripperEvent(arm, c.GRASP, branch)],
-            near=[(arm, element)],
-        )
+    what = "lifts it off the others" if sep.separates else "lifts it"
+    b.add(
+        f"{label}: {what}",
+        [c._cartesian(arm, cg.line(T_take, T_end))],
+        after=[GripperEvent(arm, c.GRASP, branch)] if sep.separates else [],
+        near=[(arm, element)],
+    )
     rear = np.asarray(placed.rear, dtype=float)
     more = float(np.linalg.norm(T_end[:3, 3] - rear) - np.linalg.norm(placed.T_hold[:3, 3] - rear))
     other = next(a for a in state.arms if a != arm)
@@ -238,10 +252,6 @@ def _take(
         pull_distance=placed.pull_distance + more,
         routed=state.routed | set(sep.group),
     )
-
-
-def _distance(T_a: Mat, T_b: Mat) -> float:
-    return float(np.linalg.norm(T_a[:3, 3] - T_b[:3, 3]))
 
 
 def _shifted(T: Mat, by: Vec) -> Mat:

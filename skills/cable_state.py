@@ -41,9 +41,9 @@ class Hold:
 @dataclass(frozen=True, eq=False)
 class Placed:
     """A connector PlaceConnector placed, for the groups of its harness routed from it
-    later: its guide, the point its cable leaves it (its rear face), and the hold behind it
+    later: its guide, the point its cable leaves it (its rear face), the hold behind it
     that the placing ended with (its arm, the routing hand's TCP, the hold's ``s``, the
-    cable from the rear face to the fingertips)."""
+    cable from the rear face to the fingertips) and where the other arm then stood."""
 
     guide: str
     rear: Point
@@ -51,6 +51,7 @@ class Placed:
     T_hold: Mat
     s_hold: float
     pull_distance: float
+    T_other: Mat  # the other arm's TCP as the placing left it
 
     def key(self) -> tuple[object, ...]:
         return (
@@ -60,6 +61,7 @@ class Placed:
             np.round(self.T_hold, 9).tobytes(),
             round(self.s_hold, 9),
             round(self.pull_distance, 9),
+            np.round(self.T_other, 9).tobytes(),
         )
 
 

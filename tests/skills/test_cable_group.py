@@ -49,8 +49,11 @@ def _cell(tmp_path: Path, routes: str) -> Path:
 def test_the_top_branch_is_separated_then_the_rest_grasped(tmp_path: Path) -> None:
     plan = _cell(
         tmp_path,
-        "  - {skill: RouteCable, cable: TOP, guides: [routing.guide1, routing.guide2]}\n"
-        "  - {skill: RouteCable, cable: BOT, guides: [routing.guide1]}\n",
+        # the branches share guide1 and guide2; BOT turns off to guide4 there
+        "  - {skill: RouteCable, cable: TOP, guides: [routing.guide1, routing.guide2, "
+        "routing.guide3]}\n"
+        "  - {skill: RouteCable, cable: BOT, guides: [routing.guide1, routing.guide2, "
+        "routing.guide4]}\n",
     )
     compiled = compile_plan(plan)
     downs = [s.segment for s in compiled.program.segments if "takes the group" in s.segment.label]
@@ -81,12 +84,11 @@ def test_the_top_branch_is_separated_then_the_rest_grasped(tmp_path: Path) -> No
     ]
     connector = drawn["WH1"]["anchors"][0]
     assert connector["guide"] == "routing.connector"
-    assert [a["guide"] for a in drawn["TOP"]["anchors"]] == [
-        "routing.connector",
-        "routing.guide1",
-        "routing.guide2",
-    ]
-    assert [a["guide"] for a in drawn["BOT"]["anchors"]] == ["routing.connector", "routing.guide1"]
+    route = ["routing.connector", "routing.guide1", "routing.guide2"]
+    assert [a["guide"] for a in drawn["TOP"]["anchors"]] == [*route, "routing.guide3"]
+    assert [a["guide"] for a in drawn["BOT"]["anchors"]] == [*route, "routing.guide4"]
+    # the arms kept the cell's clearance throughout
+    assert result.min_arm_distance is not None and result.min_arm_distance >= 0.010 - 1e-9
 
 
 def test_a_bottom_branch_first_needs_a_separation_guide(tmp_path: Path) -> None:
