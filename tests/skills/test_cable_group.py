@@ -113,3 +113,21 @@ def test_a_branch_is_not_picked_or_placed_alone(tmp_path: Path) -> None:
         "steps[1].cable: TOP is a branch of harness WH1: PlaceConnector takes the whole "
         "harness (cable: WH1)"
     ]
+
+
+def test_a_slot_must_take_the_group_beside_what_lies_in_it(tmp_path: Path) -> None:
+    plan = _cell(
+        tmp_path,
+        "  - {skill: RouteCable, cable: TOP, guides: [routing.guide1, routing.guide2]}\n"
+        "  - {skill: RouteCable, cable: BOT, guides: [routing.guide1]}\n",
+    )
+    cell = plan.parent / "cell.yaml"  # cables 4.8 mm thick: two fit a 10 mm slot, three not
+    cell.write_text(cell.read_text().replace("slide: 8, grasp: 2", "slide: 12, grasp: 2"))
+    objects = plan.parent / "objects.yaml"
+    objects.write_text(objects.read_text().replace("diameter: 2.5", "diameter: 4.8"))
+    with pytest.raises(InputError) as e:
+        compile_plan(plan)
+    assert e.value.problems[0].message == (
+        "steps[3] RouteCable BOT: guide 'routing.guide1' has a 10.0 mm slot (its gap); CA2, CA3 "
+        "lie in it already, and with BOT (CA1) the bundle is 10.3 mm thick: it does not fit"
+    )
