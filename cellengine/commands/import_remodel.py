@@ -249,6 +249,9 @@ def _platform_files(src: Path) -> dict[str, tuple[Path, Path]]:
 # jigs, boxes, combs and tool changer slots by label alone, so those labels are unique across
 # the platforms; tables are never named by a spot, and may repeat (T1 on two platforms).
 LETTERS = {"T": "table", "J": "jig", "B": "box", "C": "comb", "A": "tool changer slot"}
+# REMODEL's launcher reads these files by name and takes from each only these types
+# (HARNESS.md 1.2); a label of another type there is one REMODEL would not see.
+READS = {"platform": "JB", "combs": "C", "ATC": "A"}
 
 
 def element_platforms(source: Source, warnings: list[Problem] | None = None) -> dict[str, str]:
@@ -267,6 +270,13 @@ def element_platforms(source: Source, warnings: list[Problem] | None = None) -> 
                 warnings.append(Problem(msg, str(ids), row.row))
             if letter not in LETTERS or letter == "T":
                 continue
+            if name in READS and letter not in READS[name] and warnings is not None:
+                msg = (
+                    f"{LETTERS[letter]} '{row.label}' is on platform '{name}': REMODEL takes "
+                    f"only {' and '.join(LETTERS[k] + 's' for k in READS[name])} from "
+                    f"{ids.name}; the import takes it where it is"
+                )
+                warnings.append(Problem(msg, str(ids), row.row))
             if row.label in out:
                 first, line = where[row.label]
                 raise InputError.at(

@@ -190,3 +190,17 @@ def test_what_remodel_reads_otherwise_is_a_warning_at_its_line(
     ) in err
     steps = yaml.safe_load((tmp_path / "cell" / "plan.yaml").read_text())["steps"]
     assert [s["skill"] for s in steps] == ["PickCable", "PlaceConnector", "RouteCable"]
+
+
+def test_a_jig_on_the_combs_platform_is_a_warning(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    ids = src / "combs_ids.wri"
+    ids.write_text(ids.read_text().replace("\tC2\t", "\tJ9\t"))
+    sequence(src, "1;EC;CON1;J9.1-C1.1")
+    monkeypatch.chdir(src)
+    assert run(src, tmp_path / "cell") == 0
+    assert (
+        "combs_ids.wri:3: warning: jig 'J9' is on platform 'combs': REMODEL takes only combs "
+        "from combs_ids.wri; the import takes it where it is"
+    ) in capsys.readouterr().err.splitlines()
