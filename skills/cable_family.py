@@ -5,7 +5,7 @@ each step's ways offered to the compiler best first, and the cable released at t
 from __future__ import annotations
 
 import functools
-from collections.abc import Iterator, Sequence, Set
+from collections.abc import Callable, Iterator, Sequence, Set
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
@@ -78,27 +78,18 @@ def _from(
     if isinstance(step, RouteCable):
         yield from _route(ctx, steps, i, replace(state, step=i), failed)
         return
+
     # a PickCable decides which arm holds the connector end, a PlaceConnector which arm routes
     # (the other one, or the connector arm after a hand-over): a guide out of the routing
     # arm's reach (errors that blame "arms") comes back to the latest of them, to the other arm
-    offered, stranded = False, set[str]()
-    for segments, after in step_ways(ctx, steps, i, state):
-        narrowed = _narrowed(ctx, state, segments, after)
-        if isinstance(narrowed, str):
-            stranded.add(narrowed)
-            continue
-        offered = True
-        segments, after = narrowed
-        decides = (
-            {"arms": f"{after.connector_arm} holds the connector"}
-            if isinstance(step, PickCable)
-            else {"arms": f"{after.routing_arm} routes"}
-        )
-        then = functools.partial(_from, ctx, steps, i + 1, after, failed)
-        yield Candidate(tuple(segments), then=then, decides=decides)
-    if not offered and stranded:
-        with at_step(i):
-            raise _stranded(i, step, stranded)
+    def decides(after: CableState) -> dict[str, str]:
+        if isinstance(step, PickCable):
+            return {"arms": f"{after.connector_arm} holds the connector"}
+        return {"arms": f"{after.routing_arm} routes"}
+
+    then = functools.partial(_from, ctx, steps, i + 1, failed=failed)
+    ways = step_ways(ctx, steps, i, state)
+    yield from _chosen(ctx, i, step, state, ways, lambda after: then(state=after), decides)
 
 
 def _route(
@@ -110,25 +101,54 @@ def _route(
     assert isinstance(step, RouteCable)
     with at_step(i):
         taking = cable_group.group_ways(ctx, step, state)
-        if taking is None:
-            yield from _guide(ctx, steps, i, state, 0, failed)
-            return
-        offered, stranded = False, set[str]()
-        for segments, after in taking:
-            narrowed = _narrowed(ctx, state, segments, after)
-            if isinstance(narrowed, str):
-                stranded.add(narrowed)
-                continue
-            offered = True
-            segments, after = narrowed
-            then = functools.partial(_guide, ctx, steps, i, after, 0, failed)
-            # which arm takes the group decides which routes (a first guide it cannot route
-            # blames "arms": the other arm's take is tried next)
-            yield Candidate(
-                tuple(segments), then=then, decides={"arms": f"{after.routing_arm} routes"}
-            )
-        if not offered and stranded:
+    if taking is None:
+        yield from _guide(ctx, steps, i, state, 0, failed)
+        return
+
+    def then(after: CableState) -> Iterator[Candidate]:
+        return _guide(ctx, steps, i, after, 0, failed)
+
+    # which arm takes the group decides which routes (a first guide it cannot route blames
+    # "arms": the other arm's take is tried next)
+    def decides(after: CableState) -> dict[str, str]:
+        return {"arms": f"{after.routing_arm} routes"}
+
+    yield from _chosen(ctx, i, step, state, _stepped(i, taking), then, decides)
+
+
+def _chosen(
+    ctx: PlanningContext,
+    i: int,
+    step: Skill,
+    state: CableState,
+    ways: Iterator[tuple[list[Segment], CableState]],
+    then: Callable[[CableState], Iterator[Candidate]],
+    decides: Callable[[CableState], dict[str, str]],
+) -> Iterator[Candidate]:
+    """``ways`` of ``steps[i]`` from ``state`` as candidates (narrowed to the IK branches
+    that run them, _narrowed); when every one strands an arm, that error."""
+    offered, stranded = False, set[str]()
+    for segments, after in ways:
+        narrowed = _narrowed(ctx, state, segments, after)
+        if isinstance(narrowed, str):
+            stranded.add(narrowed)
+            continue
+        offered = True
+        segments, after = narrowed
+        yield Candidate(
+            tuple(segments), then=functools.partial(then, after), decides=decides(after)
+        )
+    if not offered and stranded:
+        with at_step(i):
             raise _stranded(i, step, stranded)
+
+
+def _stepped(
+    i: int, ways: Iterator[tuple[list[Segment], CableState]]
+) -> Iterator[tuple[list[Segment], CableState]]:
+    """``ways``, their errors those of plan step ``i``."""
+    with at_step(i):
+        yield from ways
 
 
 def _guide(
