@@ -87,6 +87,7 @@ def group_ways(
     world = ctx.world
     found = world.objects.branch_of(step.cable)
     if found is None or state.cable == step.cable:
+        _check_whole(ctx, step, state)
         return None
     name, harness = found
     where = f"steps[{state.step}] RouteCable {step.cable}"
@@ -105,6 +106,21 @@ def group_ways(
     _check_laid(ctx, step, state, where)
     sep = separation_point(harness, group, left)
     return _ways(ctx, step, state, placed, sep, where)
+
+
+def _check_whole(ctx: PlanningContext, step: c.RouteCable, state: CableState) -> None:
+    """A whole harness is routed as one bundle only while none of its branches has been."""
+    harness = ctx.world.objects.harnesses.get(step.cable)
+    if harness is None or state.cable == step.cable:
+        return
+    routed = [b for b, br in harness.branches.items() if set(br.cables) & state.routed]
+    if routed:
+        rest = [b for b in harness.branches if b not in routed]
+        raise c._error(
+            f"steps[{state.step}] RouteCable {step.cable}: its branch "
+            f"{', '.join(routed)} is routed already; route the others by name"
+            + (f" ({', '.join(rest)})" if rest else "")
+        )
 
 
 def _check_rows(

@@ -131,3 +131,16 @@ def test_a_slot_must_take_the_group_beside_what_lies_in_it(tmp_path: Path) -> No
         "steps[3] RouteCable BOT: guide 'routing.guide1' has a 10.0 mm slot (its gap); CA2, CA3 "
         "lie in it already, and with BOT (CA1) the bundle is 10.3 mm thick: it does not fit"
     )
+
+
+def test_the_whole_harness_after_a_branch_is_refused(tmp_path: Path) -> None:
+    plan = _cell(
+        tmp_path,
+        "  - {skill: RouteCable, cable: TOP, guides: [routing.guide1]}\n"
+        "  - {skill: RouteCable, cable: WH1, guides: [routing.guide1]}\n",
+    )
+    with pytest.raises(InputError) as e:
+        compile_plan(plan)
+    assert e.value.problems[0].message == (
+        "steps[3] RouteCable WH1: its branch TOP is routed already; route the others by name (BOT)"
+    )
