@@ -106,9 +106,9 @@ Turn a REMODEL cable-routing folder into a native cell in DEST:
                 spot's L/R picks robot left/right; with --arms auto, the engine),
                 RC -> RouteCable (of a branch: its cables as a group). A spot
                 such as C2.1 is guide 1 of element C2 of whichever platform has
-                C2. Labels are typed by their first letter as
-                in REMODEL (T table, J jig, B box, C comb, A tool changer slot):
-                J, B, C and A labels are unique across the platforms, tables may repeat.
+                C2. Labels are typed by their first letter as in REMODEL (T table,
+                J jig, B box, C comb, A tool changer slot): J, B, C and A labels
+                are unique across the platforms, tables may repeat.
 
 The Label column names a connector (a harness's first connector names the harness),
 a cable, or, in RC rows, a branch. What REMODEL itself would read otherwise (an Order
