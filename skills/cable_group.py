@@ -12,7 +12,9 @@ its fingertips at the middle of the group's lowest cable, above every other one,
 slide and lifts the group off before it grasps (SC). :func:`separation_point` is the one place
 that decides where; a vision service (REMODEL's grasp point determination) would replace it.
 A group below cables still to be routed (case A1) needs them laid aside into a separation
-guide first, which is not built: refused, saying which branch to route first.
+guide first, which is not built: cable_group_meaning refuses such a plan before any motion,
+saying which branch to route first, as it does a slot too narrow for a group beside the
+cables laid in it before.
 
 Whatever the hands held before (the placing's hold, or the last group's route) is released
 first (release_ways), so a later group starts from the same place as the first.
@@ -28,7 +30,7 @@ import numpy as np
 
 from cellengine.arrays import Mat, Vec
 from cellengine.errors import InputError
-from cellengine.info.harness import Harness, packed_diameter
+from cellengine.info.harness import Harness
 from cellengine.program import GripperEvent, Segment
 from cellengine.skills import cable as c
 from cellengine.skills import cable_geometry as cg
@@ -87,92 +89,16 @@ def group_ways(
     world = ctx.world
     found = world.objects.branch_of(step.cable)
     if found is None or state.cable == step.cable:
-        _check_whole(ctx, step, state)
         return None
     name, harness = found
-    where = f"steps[{state.step}] RouteCable {step.cable}"
     placed = state.placed.get(name)
-    if placed is None:
-        raise c._error(
-            f"{where}: the connector of harness {name} is not placed; plan PlaceConnector "
-            f"(cable: {name}) before routing its branches"
-        )
+    if placed is None:  # cable_group_meaning refuses such a plan before any motion
+        raise c._error(f"steps[{state.step}] RouteCable {step.cable}: {name} is not placed")
     group = harness.branches[step.cable].cables
     left = [n for n in harness.cables if n not in state.routed]
-    taken = [n for n in group if n in state.routed]
-    if taken:
-        raise c._error(f"{where}: {', '.join(taken)} of {step.cable} are routed already")
-    _check_rows(harness, step.cable, group, left, where)
-    _check_laid(ctx, step, state, where)
     sep = separation_point(harness, group, left)
+    where = f"steps[{state.step}] RouteCable {step.cable}"
     return _ways(ctx, step, state, placed, sep, where)
-
-
-def _check_whole(ctx: PlanningContext, step: c.RouteCable, state: CableState) -> None:
-    """A whole harness is routed as one bundle only while none of its branches has been."""
-    harness = ctx.world.objects.harnesses.get(step.cable)
-    if harness is None or state.cable == step.cable:
-        return
-    routed = [b for b, br in harness.branches.items() if set(br.cables) & state.routed]
-    if routed:
-        rest = [b for b in harness.branches if b not in routed]
-        raise c._error(
-            f"steps[{state.step}] RouteCable {step.cable}: its branch "
-            f"{', '.join(routed)} is routed already; route the others by name"
-            + (f" ({', '.join(rest)})" if rest else "")
-        )
-
-
-def _check_rows(
-    harness: Harness, branch: str, group: Sequence[str], left: Sequence[str], where: str
-) -> None:
-    rows = {n: harness.cables[n].pin for n in left}
-    others = [n for n in left if n not in group]
-    if all(rows[g] > rows[o] for g in group for o in others):
-        return
-    mine = ", ".join(harness.in_order(group))
-    above = ", ".join(n for n in harness.in_order(others) if rows[n] > min(rows[g] for g in group))
-    if all(rows[g] < rows[o] for g in group for o in others):
-        tops = [
-            b for b, br in harness.branches.items() if any(n in br.cables for n in others)
-        ]
-        raise c._error(
-            f"{where}: {branch}'s cables ({mine}) leave the connector below {above}, still to "
-            "be routed: separating those needs a separation guide to lay them aside in "
-            f"(REMODEL's J<n>S), which this engine does not have yet; route {' or '.join(tops)} "
-            f"before {branch}"
-        )
-    raise c._error(
-        f"{where}: {branch}'s cables ({mine}) leave the connector in rows between those of "
-        f"{above}, still to be routed: no grasp takes them apart from the others"
-    )
-
-
-def _check_laid(ctx: PlanningContext, step: c.RouteCable, state: CableState, where: str) -> None:
-    """Each guide's slot takes the group beside the cables laid in it before."""
-    objects = ctx.world.objects
-    group = objects.cables_of(step.cable)
-    for ref in step.guides:
-        laid = state.laid.get(ref, ())
-        if not laid:
-            continue
-        together = [*laid, *group]
-        d = packed_diameter([_diameter(ctx, n) for n in together])
-        gap = cg.GuideDims.of(ctx.world, ref, where).gap
-        if gap <= d:
-            raise c._error(
-                f"{where}: guide '{ref}' has a {c._mm(gap)} mm slot (its gap); "
-                f"{', '.join(laid)} lie in it already, and with {step.cable} "
-                f"({', '.join(group)}) the bundle is {c._mm(d)} mm thick: it does not fit"
-            )
-
-
-def _diameter(ctx: PlanningContext, cable: str) -> float:
-    objects = ctx.world.objects
-    for harness in objects.harnesses.values():
-        if cable in harness.cables:
-            return harness.cables[cable].diameter
-    return objects.cables[cable].diameter
 
 
 def _ways(

@@ -23,6 +23,7 @@ from cellengine.arrays import Vec
 from cellengine.info.platform import Element
 from cellengine.skill import Skill
 from cellengine.skills import cable_geometry as cg
+from cellengine.skills import cable_group_meaning
 from cellengine.skills.cable import PickCable, PlaceConnector, RouteCable
 from cellengine.world import World
 
@@ -60,7 +61,7 @@ def check(world: World, steps: Sequence[Skill]) -> list[Finding]:
                 if before is not None:
                     out += _leg(world, before, here, step.guides[j + 1 :])
                 came_from[step.cable] = here
-    return out
+    return out + cable_group_meaning.group_findings(world, steps)
 
 
 def branch_harness(world: World, step: RouteCable) -> str:

@@ -10,6 +10,7 @@ import pytest
 
 from bench.board_check import check_compiled
 from cellengine.errors import InputError
+from cellengine.info.load import load_plan
 from cellengine.pipeline import compile_plan
 from cellengine.report.replay import cables
 
@@ -94,9 +95,9 @@ def test_the_top_branch_is_separated_then_the_rest_grasped(tmp_path: Path) -> No
 def test_a_bottom_branch_first_needs_a_separation_guide(tmp_path: Path) -> None:
     plan = _cell(tmp_path, "  - {skill: RouteCable, cable: BOT, guides: [routing.guide1]}\n")
     with pytest.raises(InputError) as e:
-        compile_plan(plan)
+        load_plan(plan)  # before any motion: `validate` says so too
     assert e.value.problems[0].message == (
-        "steps[2] RouteCable BOT: BOT's cables (CA1) leave the connector below CA2, CA3, still "
+        "steps[2].cable: BOT's cables (CA1) leave the connector below CA2, CA3, still "
         "to be routed: separating those needs a separation guide to lay them aside in "
         "(REMODEL's J<n>S), which this engine does not have yet; route TOP before BOT"
     )
@@ -108,7 +109,7 @@ def test_a_branch_is_not_picked_or_placed_alone(tmp_path: Path) -> None:
         plan.read_text().replace("PlaceConnector, cable: WH1", "PlaceConnector, cable: TOP")
     )
     with pytest.raises(InputError) as e:
-        compile_plan(plan)
+        load_plan(plan)  # before any motion: `validate` says so too
     assert [p.message for p in e.value.problems] == [
         "steps[1].cable: TOP is a branch of harness WH1: PlaceConnector takes the whole "
         "harness (cable: WH1)"
@@ -126,9 +127,9 @@ def test_a_slot_must_take_the_group_beside_what_lies_in_it(tmp_path: Path) -> No
     objects = plan.parent / "objects.yaml"
     objects.write_text(objects.read_text().replace("diameter: 2.5", "diameter: 4.8"))
     with pytest.raises(InputError) as e:
-        compile_plan(plan)
+        load_plan(plan)  # before any motion: `validate` says so too
     assert e.value.problems[0].message == (
-        "steps[3] RouteCable BOT: guide 'routing.guide1' has a 10.0 mm slot (its gap); CA2, CA3 "
+        "steps[3].guides[0]: guide 'routing.guide1' has a 10.0 mm slot (its gap); CA2, CA3 "
         "lie in it already, and with BOT (CA1) the bundle is 10.3 mm thick: it does not fit"
     )
 
@@ -140,7 +141,19 @@ def test_the_whole_harness_after_a_branch_is_refused(tmp_path: Path) -> None:
         "  - {skill: RouteCable, cable: WH1, guides: [routing.guide1]}\n",
     )
     with pytest.raises(InputError) as e:
-        compile_plan(plan)
+        load_plan(plan)  # before any motion: `validate` says so too
     assert e.value.problems[0].message == (
-        "steps[3] RouteCable WH1: its branch TOP is routed already; route the others by name (BOT)"
+        "steps[3].cable: its branch TOP is routed already; route the others by name (BOT)"
     )
+
+
+def test_a_branch_before_its_connector_is_placed(tmp_path: Path) -> None:
+    plan = _cell(tmp_path, "  - {skill: RouteCable, cable: TOP, guides: [routing.guide1]}\n")
+    plan.write_text(plan.read_text().replace("  - {skill: PlaceConnector", "  # - {skill: PlaceC"))
+    with pytest.raises(InputError) as e:
+        load_plan(plan)
+    assert [p.message for p in e.value.problems] == [
+        "steps[1].cable: TOP is a branch of harness WH1, whose connector is not placed before "
+        "it: plan PlaceConnector (cable: WH1) first"
+    ]
+    assert e.value.problems[0].line == 6  # the RouteCable step's line
