@@ -746,11 +746,16 @@ def check_staged(tmp: Path, dest: Path, inputs: Inputs, steps: Sequence[Step]) -
     copies = inputs.source.copies()
 
     def remap(p: Problem) -> Problem:
-        # Problems in the staged copies point at the SRC files a user would edit; those
-        # in the written YAML at where it would have been written.
+        # Problems in the staged copies point at the SRC files a user would edit; a plan
+        # step's at the row of the sequence it comes from; the rest of the written YAML's
+        # at where it would have been written.
         if p.file is None or not real(Path(p.file)).is_relative_to(real(tmp)):
             return p
         rel = real(Path(p.file)).relative_to(real(tmp)).as_posix()
+        step = re.match(r"steps\[(\d+)\]", p.message)
+        if rel == "plan.yaml" and step is not None and int(step[1]) < len(steps):
+            row = steps[int(step[1])].row
+            return Problem(p.message, str(inputs.source.sequence), row)
         return replace(p, file=str(copies.get(rel, dest / rel)))
 
     try:

@@ -64,10 +64,10 @@ def src(tmp_path: Path) -> Path:
         "  </wiring_harness>\n"
         '  <wiring_harness id="2" first_connector="WH1">\n'
         '    <end_connector label="GR11">\n'
-        '      <cable Row1="0" Col1="0">CA2</cable>\n'
+        '      <cable Row1="1" Col1="0">CA2</cable>\n'
         '      <cable Row1="2" Col1="0">CA3</cable>\n'
         "    </end_connector>\n"
-        '    <end_connector label="GR12"><cable Row1="1" Col1="0">CA4</cable></end_connector>\n'
+        '    <end_connector label="GR12"><cable Row1="0" Col1="0">CA4</cable></end_connector>\n'
         "  </wiring_harness>\n</data>\n"
     )
     return folder
@@ -132,6 +132,21 @@ def test_a_harness_of_several_cables_with_branches(src: Path, tmp_path: Path) ->
     assert wh1["cables"]["CA3"] == {"length": 520, "diameter": 2.1, "color": "Green", "pin": [2, 0]}
     steps = yaml.safe_load((tmp_path / "cell" / "plan.yaml").read_text())["steps"]
     assert [s["cable"] for s in steps] == ["WH1", "WH1", "GR11", "GR12"]
+
+
+def test_a_bottom_branch_first_is_refused_at_its_row(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """REMODEL lays the top cables into a separation guide first (case A1): not built."""
+    sequence(src, "1;EC;WH1;C2.1-C1.1", "2;PC;WH1;J8.1.L", "3;RC;GR12;J3.1")
+    monkeypatch.chdir(src)
+    assert run(src, tmp_path / "cell") == 1
+    assert capsys.readouterr().err.splitlines()[0] == (
+        "Assembly_sequence.csv:4: steps[2].cable: GR12's cables (CA4) leave the connector below "
+        "CA2, CA3, still to be routed: separating those needs a separation guide to lay them "
+        "aside in (REMODEL's J<n>S), which this engine does not have yet; route GR11 before GR12"
+    )
+    assert not (tmp_path / "cell").exists()
 
 
 def test_later_rows_not_built_yet_are_refused_at_their_rows(
