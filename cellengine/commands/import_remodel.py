@@ -749,6 +749,8 @@ def check_staged(tmp: Path, dest: Path, inputs: Inputs, steps: Sequence[Step]) -
         # Problems in the staged copies point at the SRC files a user would edit; a plan
         # step's at the row of the sequence it comes from; the rest of the written YAML's
         # at where it would have been written.
+        for rel, src in copies.items():  # a message may name another staged copy
+            p = replace(p, message=p.message.replace(str(tmp / rel), str(src)))
         if p.file is None or not real(Path(p.file)).is_relative_to(real(tmp)):
             return p
         rel = real(Path(p.file)).relative_to(real(tmp)).as_posix()

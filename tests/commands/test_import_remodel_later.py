@@ -219,3 +219,15 @@ def test_a_jig_on_the_combs_platform_is_a_warning(
         "combs_ids.wri:3: warning: jig 'J9' is on platform 'combs': REMODEL takes only combs "
         "from combs_ids.wri; the import takes it where it is"
     ) in capsys.readouterr().err.splitlines()
+
+
+def test_a_message_naming_a_copied_file_names_it_in_src(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    cad = src / "ATC_cad.x3d"
+    cad.write_text(cad.read_text().replace('DEF="ID000003"', 'DEF="ID000002"'))
+    monkeypatch.chdir(src)
+    assert run(src, tmp_path / "cell") == 1
+    err = capsys.readouterr().err
+    assert f"(first defined at {src / 'ATC_cad.x3d'}:" in err
+    assert ".import-" not in err  # nothing names the staging folder
