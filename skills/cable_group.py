@@ -17,7 +17,9 @@ saying which branch to route first, as it does a slot too narrow for a group bes
 cables laid in it before.
 
 Whatever the hands held before (the placing's hold, or the last group's route) is released
-first (release_ways), so a later group starts from the same place as the first.
+first (release_ways), and the other arm goes where the placing left it (or home); the taking
+hand ends holding the group a little over where the placing held the whole bundle. So every
+group's route starts as a single cable's does after PlaceConnector.
 """
 
 from __future__ import annotations
