@@ -13,7 +13,6 @@ from pathlib import Path
 from cellengine.arrays import Mat
 from cellengine.errors import Problem, known
 from cellengine.info.cell import Cell
-from cellengine.info.harness import Harness
 from cellengine.info.mapcsv import OBSTACLE
 from cellengine.info.objects import Cable, Container, Objects
 from cellengine.info.platform import Element, Keypoint, Platform
@@ -106,11 +105,6 @@ class World:
             raise RefError(f"unknown cable '{name}'" + known(self.objects.cable_names()))
         return cable
 
-    def harness(self, name: str) -> Harness:
-        if name not in self.objects.harnesses:
-            raise RefError(f"unknown harness '{name}'" + known(self.objects.harnesses))
-        return self.objects.harnesses[name]
-
     def container(self, name: str) -> Container:
         if name not in self.objects.containers:
             raise RefError(f"unknown container '{name}'" + known(self.objects.containers))
@@ -124,8 +118,6 @@ class World:
             self.cable(name)
         elif kind == "container":
             self.container(name)
-        elif kind == "harness":
-            self.harness(name)
         elif kind == "object":
             if name not in self.objects.names():
                 raise RefError(f"unknown object '{name}'" + known(self.objects.names()))

@@ -87,9 +87,10 @@ def _from(
             return {"arms": f"{after.connector_arm} holds the connector"}
         return {"arms": f"{after.routing_arm} routes"}
 
-    then = functools.partial(_from, ctx, steps, i + 1, failed=failed)
-    ways = step_ways(ctx, steps, i, state)
-    yield from _chosen(ctx, i, step, state, ways, lambda after: then(state=after), decides)
+    def then(after: CableState) -> Iterator[Candidate]:
+        return _from(ctx, steps, i + 1, after, failed)
+
+    yield from _chosen(ctx, i, step, state, step_ways(ctx, steps, i, state), then, decides)
 
 
 def _route(
@@ -201,7 +202,6 @@ def _guide(
                 continue
             segments, after = narrowed
             offered = True
-            after = _laid(ctx, step, k, after)
             then = (
                 functools.partial(_from, ctx, steps, i + 1, after, failed)
                 if last
@@ -209,13 +209,6 @@ def _guide(
             )
             failed_at = functools.partial(_release_failed, segments, dead)
             yield Candidate(tuple(segments), then=then, failed_at=failed_at)
-
-
-def _laid(ctx: PlanningContext, step: RouteCable, k: int, state: CableState) -> CableState:
-    """``state`` knowing that guide ``k``'s slot now holds ``step``'s cables too."""
-    guide = step.guides[k]
-    laid = (*state.laid.get(guide, ()), *ctx.world.objects.cables_of(step.cable))
-    return replace(state, laid={**state.laid, guide: laid})
 
 
 def _release_failed(segments: Sequence[Segment], dead: set[bytes], j: int) -> None:

@@ -117,8 +117,6 @@ def _slot(
 
 
 def _diameter(world: World, cable: str) -> float:
-    objects = world.objects
-    for harness in objects.harnesses.values():
-        if cable in harness.cables:
-            return harness.cables[cable].diameter
-    return objects.cables[cable].diameter
+    found = world.objects.single(cable)
+    assert found is not None  # cables_of names only the objects' cables
+    return float(found.diameter)

@@ -116,8 +116,6 @@ class CableState:
     placed: Mapping[str, Placed] = field(default_factory=lambda: MappingProxyType({}))
     # the single cables whose routing has begun (a harness's groups are taken one by one)
     routed: frozenset[str] = frozenset()
-    # guide -> the single cables laid in it so far, in order
-    laid: Mapping[str, tuple[str, ...]] = field(default_factory=lambda: MappingProxyType({}))
 
     def __post_init__(self) -> None:
         object.__setattr__(
@@ -128,7 +126,6 @@ class CableState:
         object.__setattr__(self, "wound", MappingProxyType(dict(self.wound)))
         object.__setattr__(self, "branches", MappingProxyType(dict(self.branches)))
         object.__setattr__(self, "placed", MappingProxyType(dict(self.placed)))
-        object.__setattr__(self, "laid", MappingProxyType(dict(self.laid)))
 
     @classmethod
     def at_home(cls, ctx: PlanningContext) -> CableState:
@@ -167,7 +164,6 @@ class CableState:
             tuple((a, tuple(sorted(b))) for a, b in sorted(self.branches.items())),
             tuple((n, p.key()) for n, p in sorted(self.placed.items())),
             tuple(sorted(self.routed)),
-            tuple(sorted(self.laid.items())),
         )
 
     def branches_of(self, arm: str) -> frozenset[int]:

@@ -15,7 +15,7 @@ from typing import Any
 
 from cellengine.errors import InputError, Problem, known
 from cellengine.info.remodel_csv import CableRow, Components, ConnectorRow, Operation
-from cellengine.info.remodel_harness import HarnessXml
+from cellengine.info.remodel_harness import HarnessXml, PinnedCable
 
 COMPONENTS = "Components_definition.csv"
 HARNESS = "WH_configuration.xml"
@@ -166,7 +166,7 @@ class Labels:
         c = self.components
         for first, h in self.bundles.items():
             k = c.connectors[first]
-            cables = {p.cable: _harness_cable(c.cables[p.cable], p.row1, p.col1) for p in h.cables}
+            cables = {p.cable: _harness_cable(c.cables[p.cable], p) for p in h.cables}
             branches = {
                 b.label: {"cables": [p.cable for p in b.cables]}
                 for b in h.branches
@@ -187,11 +187,15 @@ def connector_data(k: ConnectorRow) -> dict[str, Any]:
     return {"type": k.type, "length": k.length, "width": k.width, "height": k.height}
 
 
-def _harness_cable(row: CableRow, row1: int | None, col1: int | None) -> dict[str, Any]:
+def _harness_cable(row: CableRow, pins: PinnedCable) -> dict[str, Any]:
+    """The cable's objects.yaml entry: the components file's sizes, its pins (a column not
+    given is 0; the end pin only when Row2 is given)."""
     data: dict[str, Any] = {"length": row.length, "diameter": row.diameter}
     if row.color:
         data["color"] = row.color
-    data["pin"] = [row1 if row1 is not None else 0, col1 if col1 is not None else 0]
+    data["pin"] = [pins.row1 or 0, pins.col1 or 0]
+    if pins.row2 is not None:
+        data["end_pin"] = [pins.row2, pins.col2 or 0]
     return data
 
 

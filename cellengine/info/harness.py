@@ -74,12 +74,6 @@ class Harness(Frozen):
             pins[wire.pin] = name
         return self
 
-    def groups(self) -> dict[str, tuple[str, ...]]:
-        """Branch -> its cables in their order at the connector (bottom row first); a
-        harness without branches is one group named after nothing ("")."""
-        branches = self.branches or {"": Branch(cables=tuple(self.cables))}
-        return {name: self.in_order(b.cables) for name, b in branches.items()}
-
     def in_order(self, cables: Sequence[str]) -> tuple[str, ...]:
         return tuple(sorted(cables, key=lambda c: self.cables[c].pin))
 

@@ -9,7 +9,7 @@ from pydantic import Field, ValidationInfo, field_validator, model_validator
 from cellengine.info.camera import MarkerId
 from cellengine.info.cell import Name
 from cellengine.info.connector import Connector
-from cellengine.info.harness import Harness
+from cellengine.info.harness import Harness, HarnessCable
 from cellengine.info.pose import Pose
 from cellengine.info.units import Frozen, Length, Mass, Number, Units
 
@@ -109,6 +109,13 @@ class Objects(Frozen):
             if name in harness.branches:
                 return h, harness
         return None
+
+    def single(self, cable: str) -> Cable | HarnessCable | None:
+        """A single cable by its name: one of ``cables`` or one of a harness's."""
+        for harness in self.harnesses.values():
+            if cable in harness.cables:
+                return harness.cables[cable]
+        return self.cables.get(cable)
 
     def cables_of(self, name: str) -> tuple[str, ...]:
         """The single cables ``name`` stands for: itself, or a harness's or a branch's in

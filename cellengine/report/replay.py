@@ -28,7 +28,6 @@ from cellengine.arrays import IntArray, Vec
 from cellengine.info import primitives
 from cellengine.info.cell import Obstacle
 from cellengine.info.mesh import Mesh
-from cellengine.info.objects import Objects
 from cellengine.motion.robot import CellModel, home_configuration
 from cellengine.motion.scene import place_fingers
 from cellengine.program import Anchor, Program, TimedEvent
@@ -340,17 +339,12 @@ def cables(program: Program, world: World) -> list[dict[str, Any]]:
         branch = objects.branch_of(c)
         if branch is not None:  # a group leaves its harness's connector
             mine = [*anchors.get(branch[0], []), *mine]
-        members = [{"name": n, "color": _css(_color(objects, n))} for n in objects.cables_of(c)]
+        members = [
+            {"name": n, "color": _css(getattr(objects.single(n), "color", None))}
+            for n in objects.cables_of(c)
+        ]
         out.append({"name": c, "held": held.get(c, []), "anchors": mine, "members": members})
     return out
-
-
-def _color(objects: Objects, cable: str) -> str | None:
-    for harness in objects.harnesses.values():
-        if cable in harness.cables:
-            return harness.cables[cable].color
-    found = objects.cables.get(cable)
-    return None if found is None else found.color
 
 
 def _css(color: str | None) -> str | None:

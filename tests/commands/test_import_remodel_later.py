@@ -65,7 +65,7 @@ def src(tmp_path: Path) -> Path:
         '  <wiring_harness id="2" first_connector="WH1">\n'
         '    <end_connector label="GR11">\n'
         '      <cable Row1="1" Col1="0">CA2</cable>\n'
-        '      <cable Row1="2" Col1="0">CA3</cable>\n'
+        '      <cable Row1="2" Col1="0" Row2="4" Col2="1">CA3</cable>\n'
         "    </end_connector>\n"
         '    <end_connector label="GR12"><cable Row1="0" Col1="0">CA4</cable></end_connector>\n'
         "  </wiring_harness>\n</data>\n"
@@ -129,7 +129,14 @@ def test_a_harness_of_several_cables_with_branches(src: Path, tmp_path: Path) ->
     assert list(objects["cables"]) == ["CA1"]  # the one-cable harness, as before
     wh1 = objects["harnesses"]["WH1"]
     assert wh1["branches"] == {"GR11": {"cables": ["CA2", "CA3"]}, "GR12": {"cables": ["CA4"]}}
-    assert wh1["cables"]["CA3"] == {"length": 520, "diameter": 2.1, "color": "Green", "pin": [2, 0]}
+    assert wh1["cables"]["CA3"] == {
+        "length": 520,
+        "diameter": 2.1,
+        "color": "Green",
+        "pin": [2, 0],
+        "end_pin": [4, 1],
+    }
+    assert "end_pin" not in wh1["cables"]["CA2"]
     steps = yaml.safe_load((tmp_path / "cell" / "plan.yaml").read_text())["steps"]
     assert [s["cable"] for s in steps] == ["WH1", "WH1", "GR11", "GR12"]
 

@@ -36,7 +36,7 @@ def _objects(tmp_path: Path, text: str = HARNESS) -> Path:
 
 def test_groups_are_in_pin_order_and_bundles_pack(tmp_path: Path) -> None:
     harness = load_objects(_objects(tmp_path)).harnesses["WH1"]
-    assert harness.groups() == {"GR11": ("CA1", "CA3"), "GR12": ("CA2",)}
+    assert harness.in_order(harness.branches["GR11"].cables) == ("CA1", "CA3")
     assert harness.bundle_diameter(["CA2"]) == pytest.approx(0.0025, abs=1e-9)
     # two equal cables side by side: twice as wide; three: the packing's 2.1547
     assert harness.bundle_diameter(["CA1", "CA3"]) == pytest.approx(0.005, abs=1e-9)
