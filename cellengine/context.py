@@ -39,6 +39,11 @@ class PlanningContext:
     # the plan's execution: "sequential" keeps a family's robots to one at a time
     execution: str = "split"
     probe: ToolProbe = field(init=False)  # on ``scene``
+    # every tool assignment built so far (world, robot models untimed, scene, checker, IK),
+    # by the tool of each arm: shared by the contexts derived from this one
+    tooling: dict[tuple[tuple[str, str | None], ...], Tooling] = field(
+        default_factory=dict, repr=False, compare=False
+    )
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "probe", ToolProbe(self.cell, self.scene))
@@ -59,6 +64,20 @@ class PlanningContext:
     def with_execution(self, execution: str) -> PlanningContext:
         return self if execution == self.execution else replace(self, execution=execution)
 
+    def tooled(self, tools: Mapping[str, str | None]) -> PlanningContext:
+        """The same cell with the arms named in ``tools`` carrying those tools (None: a bare
+        flange) and the others theirs: its robot models, scene, checker and IK, built once
+        per assignment; timed, weighed and executed as this one."""
+        assignment = {**self.world.tools, **tools}
+        key = tuple(sorted(assignment.items()))
+        if assignment == self.world.tools:
+            return self
+        if key not in self.tooling:
+            self.tooling[key] = _tooling(self.world.with_tools(assignment))
+        t = self.tooling[key]
+        cell = t.cell.with_speed(self.speed)
+        return replace(self, world=t.world, cell=cell, scene=t.scene, checker=t.checker, iks=t.iks)
+
     @property
     def speed(self) -> Speed:
         """How fast trajectories are timed (the cell model's)."""
@@ -69,16 +88,35 @@ class PlanningContext:
         return self if speed == self.speed else replace(self, cell=self.cell.with_speed(speed))
 
 
+@dataclass(frozen=True)
+class Tooling:
+    """The parts of a context that depend on the tools the arms carry."""
+
+    world: World
+    cell: CellModel
+    scene: CollisionScene
+    checker: CollisionChecker
+    iks: Mapping[str, ArmIK]
+
+
+def _tooling(world: World) -> Tooling:
+    cell = build_cell_model(world)
+    scene = build_scene(cell, world)
+    iks = MappingProxyType({name: arm_ik(arm) for name, arm in cell.arms.items()})
+    return Tooling(world, cell, scene, CollisionChecker(scene), iks)
+
+
 def build_context(world: World, masses: Mapping[str, float] | None = None) -> PlanningContext:
     """Build the robots, the scene, its checker and the IK of every arm of ``world``."""
-    cell = build_cell_model(world).with_speed(resolve(world.cell))
-    scene = build_scene(cell, world)
-    return PlanningContext(
+    t = _tooling(world)
+    ctx = PlanningContext(
         world,
-        cell,
-        scene,
-        CollisionChecker(scene),
-        MappingProxyType({name: arm_ik(arm) for name, arm in cell.arms.items()}),
+        t.cell.with_speed(resolve(world.cell)),
+        t.scene,
+        t.checker,
+        t.iks,
         MappingProxyType(dict(masses or {})),
         world.cell.clearance,
     )
+    ctx.tooling[tuple(sorted(world.tools.items()))] = t
+    return ctx

@@ -8,6 +8,7 @@ the next candidate where one cannot run) into a Program.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import json
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -29,6 +30,7 @@ from cellengine.family import SkillFamily, families, skill_name
 from cellengine.info.load import LoadedPlan, load_plan
 from cellengine.info.plan import Plan
 from cellengine.motion.robot import CellModel
+from cellengine.motion.scene import CollisionScene
 from cellengine.motion.speed import resolve, speed_json
 from cellengine.program import Program, Segment
 from cellengine.skill import Skill
@@ -153,6 +155,7 @@ def compile_loaded(
         "split" if chosen == "sequential" else chosen,  # type: ignore[arg-type]
         merge=merge,  # type: ignore[arg-type]
         clearance=ctx.clearance,
+        tooled=functools.partial(_tooled, ctx),
     )
     shown: set[int] = set()
 
@@ -169,6 +172,8 @@ def compile_loaded(
         program = compiler.program()
         report: dict[str, Any] = {}
         rules = next((c.overlap for c in taken if c.overlap is not None), None)
+        if rules is not None and program.changes:
+            rules = None  # each stream's segments would run on another arm's tools
         if rules is not None:
             alone = program.duration
             program, why = overlapped(
@@ -186,6 +191,13 @@ def compile_loaded(
         return _in_plan(plan, search)
     except InputError as e:
         raise CompileFailed(e, loaded, ctx, chosen) from None
+
+
+def _tooled(
+    ctx: PlanningContext, tools: Mapping[str, str | None]
+) -> tuple[World, CellModel, CollisionScene]:
+    c = ctx.tooled(tools)
+    return c.world, c.cell, c.scene
 
 
 class CompileFailed(InputError):
@@ -252,7 +264,9 @@ def trajectory_chunks(program: Program, knots: int = TEXT_KNOTS) -> Iterator[str
 
 
 def _events_json(program: Program) -> list[dict[str, Any]]:
-    return [
+    """The gripper events and the tool changes, in time order (a change after the gripper
+    events of its instant: it happens at its segment's very end)."""
+    grippers = [
         {
             "time_from_start": e.time,
             "arm": e.event.arm,
@@ -262,6 +276,11 @@ def _events_json(program: Program) -> list[dict[str, Any]]:
         }
         for e in program.events
     ]
+    changes = [
+        {"time_from_start": c.time, "arm": c.arm, "kind": "tool", "tool": c.tool, "was": c.was}
+        for c in program.changes
+    ]
+    return sorted(grippers + changes, key=lambda e: (e["time_from_start"], e["kind"] == "tool"))
 
 
 def step_label(step: Skill) -> str:

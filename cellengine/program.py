@@ -32,6 +32,16 @@ class GripperEvent:
 
 
 @dataclass(frozen=True)
+class ToolChange:
+    """At the end of its segment ``arm``'s tool changer takes ``tool`` (locks it) or, when
+    ``tool`` is None, lets go of the tool it carries, seated in its slot (unlocks). From then
+    on the arm's TCP, fingers and collision shape are those of what it carries."""
+
+    arm: str
+    tool: str | None
+
+
+@dataclass(frozen=True)
 class Measure:
     """At the end of its segment the runner reads ``arm``'s load cell: the mass (kg) of
     ``object``, which may change a runtime choice (``heavier_of``) and so the rest of the
@@ -119,6 +129,8 @@ class Segment:
     # each other on those pairs only (``branches`` says which of each arm's it looked at,
     # not which go together); two arms on another pair are refused here
     paired: tuple[tuple[str, str, frozenset[tuple[int, int]]], ...] = ()
+    # tool changers locking or unlocking at the segment's end, after its ``after`` events
+    changes: tuple[ToolChange, ...] = ()
 
     def arms(self) -> tuple[str, ...]:
         return tuple(p.arm for p in self.paths)
@@ -132,6 +144,17 @@ class Segment:
 class TimedEvent:
     time: float  # seconds from the program's start
     event: GripperEvent
+
+
+@dataclass(frozen=True)
+class TimedChange:
+    """A tool change at ``time``: ``arm`` carries ``tool`` from then on, having carried
+    ``was`` (None: a bare flange)."""
+
+    time: float  # seconds from the program's start
+    arm: str
+    tool: str | None
+    was: str | None
 
 
 @dataclass(frozen=True)
@@ -187,6 +210,18 @@ class Program:
     # a run resumed (or replanned) part way: the segments (``Scheduled.index``) it finished
     # before this program's start, left out of ``streams``
     done: frozenset[int] = frozenset()
+    # tool changes, in time order; a program with any runs its segments one after another
+    changes: tuple[TimedChange, ...] = ()
+    # the tool each arm carries at the program's start
+    tools: Mapping[str, str | None] = field(default_factory=lambda: MappingProxyType({}))
+
+    def tools_at(self, t: float) -> dict[str, str | None]:
+        """The tool each arm carries at time ``t`` (a change at ``t`` done)."""
+        out = dict(self.tools)
+        for c in self.changes:
+            if c.time <= t + SAME_INSTANT:
+                out[c.arm] = c.tool
+        return out
 
     @property
     def duration(self) -> float:

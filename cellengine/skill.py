@@ -22,13 +22,14 @@ from cellengine.info.units import Frozen
 class Ref:
     """Marks a string field as a reference to a ``kind`` of named thing."""
 
-    kind: str  # keypoint | guide | cable | object | container
+    kind: str  # keypoint | guide | cable | object | container | tool
 
 
 KeypointRef = Annotated[str, Ref("keypoint")]  # platform.element[.keypoint]
 GuideRef = Annotated[str, Ref("guide")]  # a keypoint reference whose element is a guide
 CableRef = Annotated[str, Ref("cable")]
 ObjectName = Annotated[str, Ref("object")]
+ToolRef = Annotated[str, Ref("tool")]  # a tool of cell.yaml with a slot in the tool changer
 
 
 def _distinct(names: tuple[str, ...]) -> tuple[str, ...]:

@@ -7,7 +7,7 @@ dimensions of ``routing.guide2``, the diameter of ``cable1``, every keypoint of 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from cellengine.arrays import Mat
@@ -37,6 +37,36 @@ class World:
     def warnings(self) -> tuple[Problem, ...]:
         """What the files allow but a user should know: the cell file's, each platform's."""
         return self.cell_warnings + tuple(w for p in self.platforms.values() for w in p.warnings)
+
+    @property
+    def tools(self) -> dict[str, str | None]:
+        """The tool each robot carries (None: a bare flange)."""
+        return {name: r.tool for name, r in self.cell.robots.items()}
+
+    def with_tools(self, tools: Mapping[str, str | None]) -> World:
+        """This world with the robots named in ``tools`` carrying those tools instead (a tool
+        change); every other tool that has a slot waits in it (:meth:`parked`)."""
+        robots = {
+            n: r.model_copy(update={"tool": tools[n]}) if n in tools else r
+            for n, r in self.cell.robots.items()
+        }
+        return replace(self, cell=self.cell.model_copy(update={"robots": robots}))
+
+    def slot(self, tool: str) -> Mat:
+        """T_cell_flange of a flange seated on ``tool`` in its changer slot."""
+        spec = self.cell.tools[tool].slot
+        if spec is None:
+            raise RefError(f"tool '{tool}' has no slot in the tool changer (tools.{tool}.slot)")
+        return self.pose(spec.at) if isinstance(spec.at, str) else spec.at.matrix()
+
+    def parked(self) -> dict[str, Mat]:
+        """Every tool that has a slot and that no robot carries: T_cell_flange of it seated."""
+        carried = {r.tool for r in self.cell.robots.values()}
+        return {
+            name: self.slot(name)
+            for name, tool in self.cell.tools.items()
+            if tool.slot is not None and name not in carried
+        }
 
     def resolve(self, ref: str, kind: str = "keypoint") -> tuple[Platform, Element, Keypoint]:
         """``platform.element[.keypoint]``; without a keypoint, the element's first."""
@@ -118,6 +148,10 @@ class World:
             self.cable(name)
         elif kind == "container":
             self.container(name)
+        elif kind == "tool":
+            if name not in self.cell.tools:
+                raise RefError(f"unknown tool '{name}'" + known(self.cell.tools))
+            self.slot(name)
         elif kind == "object":
             if name not in self.objects.names():
                 raise RefError(f"unknown object '{name}'" + known(self.objects.names()))

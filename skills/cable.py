@@ -48,7 +48,7 @@ from cellengine.arrays import Mat, Poses, Vec
 from cellengine.errors import InputError, Problem, StepError, at_step, known
 from cellengine.info.units import count
 from cellengine.motion import interpolate as ip
-from cellengine.program import Anchor, Annotation, ArmPath, GripperEvent, Segment
+from cellengine.program import Anchor, Annotation, ArmPath, GripperEvent, Segment, ToolChange
 from cellengine.skill import CableRef, GuideRef, KeypointRef, Skill
 from cellengine.skills import cable_geometry as cg
 from cellengine.skills.best_first import best_first
@@ -1142,6 +1142,8 @@ class _Builder:
         annotations: Iterable[Annotation] = (),
         branches: tuple[tuple[str, frozenset[int]], ...] = (),
         paired: Paired = (),
+        contacts: Iterable[tuple[str, str]] = (),
+        changes: Iterable[ToolChange] = (),
     ) -> None:
         seg = Segment(
             step=self.state.step,
@@ -1156,6 +1158,8 @@ class _Builder:
             annotations=tuple(annotations),
             branches=branches,
             paired=paired,
+            contacts=tuple(contacts),
+            changes=tuple(changes),
         )
         state = self.state
         for event in seg.before:
@@ -1164,6 +1168,8 @@ class _Builder:
             state = state.moved_along(path.arm, path.poses)
         for event in seg.after:
             state = state.gripped(event)
+        for change in seg.changes:
+            state = state.changed(change)
         self.state = state
         self.segments.append(seg)
 

@@ -15,7 +15,7 @@ from cellengine.errors import InputError, Problem, StepError, at_step
 from cellengine.family import Candidate
 from cellengine.program import Segment
 from cellengine.skill import Skill
-from cellengine.skills import cable_group, cable_meaning, cable_swap, cable_top
+from cellengine.skills import cable_group, cable_meaning, cable_swap, cable_top, cable_tools
 from cellengine.skills.cable import (
     RELEASE,
     PickCable,
@@ -27,6 +27,7 @@ from cellengine.skills.cable import (
 )
 from cellengine.skills.cable_meaning import Finding
 from cellengine.skills.cable_state import ANY_BRANCH, CableState
+from cellengine.skills.cable_tools import ChangeTool
 from cellengine.world import World
 
 if TYPE_CHECKING:
@@ -35,7 +36,7 @@ if TYPE_CHECKING:
 
 class CableFamily:
     name = "cable"
-    skills: tuple[type[Skill], ...] = (PickCable, PlaceConnector, RouteCable)
+    skills: tuple[type[Skill], ...] = (PickCable, PlaceConnector, RouteCable, ChangeTool)
 
     def check(self, world: World, steps: Sequence[Skill]) -> list[Finding]:
         return cable_meaning.check(world, steps)
@@ -69,7 +70,9 @@ def _from(
     ctx: PlanningContext, steps: Sequence[Skill], i: int, state: CableState, failed: Failed
 ) -> Iterator[Candidate]:
     """The candidates for ``steps[i]`` from ``state`` (for a RouteCable, its first guide's);
-    after the last step, the release."""
+    after the last step, the release. Planned on the cell with the tools ``state``'s arms
+    carry."""
+    ctx = ctx.tooled(state.tools)
     if i == len(steps):
         for segments, _ in release_ways(ctx, state):
             yield Candidate(tuple(segments))
@@ -77,6 +80,14 @@ def _from(
     step = steps[i]
     if isinstance(step, RouteCable):
         yield from _route(ctx, steps, i, replace(state, step=i), failed)
+        return
+    if isinstance(step, ChangeTool):
+        # the segments run on three cells (the old tool, none, the new): not narrowed to
+        # IK branches here; the changing arm reaches each slot by a transit
+        with at_step(i):
+            for segments, after in cable_tools.change_ways(ctx, step, replace(state, step=i)):
+                then = functools.partial(_from, ctx, steps, i + 1, after, failed)
+                yield Candidate(tuple(segments), then=then)
         return
 
     # a PickCable decides which arm holds the connector end, a PlaceConnector which arm routes

@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from cellengine.arrays import Mat
-from cellengine.program import GripperEvent
+from cellengine.program import GripperEvent, ToolChange
 from cellengine.skills.cable_geometry import LEAN, turn_about_vertical
 
 if TYPE_CHECKING:
@@ -116,6 +116,8 @@ class CableState:
     placed: Mapping[str, Placed] = field(default_factory=lambda: MappingProxyType({}))
     # the single cables whose routing has begun (a harness's groups are taken one by one)
     routed: frozenset[str] = frozenset()
+    # the tool each arm carries (None: a bare flange); ``tcp`` is that tool's TCP
+    tools: Mapping[str, str | None] = field(default_factory=lambda: MappingProxyType({}))
 
     def __post_init__(self) -> None:
         object.__setattr__(
@@ -126,13 +128,14 @@ class CableState:
         object.__setattr__(self, "wound", MappingProxyType(dict(self.wound)))
         object.__setattr__(self, "branches", MappingProxyType(dict(self.branches)))
         object.__setattr__(self, "placed", MappingProxyType(dict(self.placed)))
+        object.__setattr__(self, "tools", MappingProxyType(dict(self.tools)))
 
     @classmethod
     def at_home(cls, ctx: PlanningContext) -> CableState:
         """Every arm's TCP at the cell's home configuration, grippers in no known mode,
         nothing held."""
         tcp = {name: ctx.tcp_home(name) for name in ctx.cell.arms}
-        return cls(tcp=tcp, mode={name: None for name in tcp})
+        return cls(tcp=tcp, mode={name: None for name in tcp}, tools=ctx.world.tools)
 
     @property
     def arms(self) -> tuple[str, ...]:
@@ -164,6 +167,7 @@ class CableState:
             tuple((a, tuple(sorted(b))) for a, b in sorted(self.branches.items())),
             tuple((n, p.key()) for n, p in sorted(self.placed.items())),
             tuple(sorted(self.routed)),
+            tuple(sorted(self.tools.items())),
         )
 
     def branches_of(self, arm: str) -> frozenset[int]:
@@ -180,6 +184,15 @@ class CableState:
         if event.holds is None:
             held.pop(event.arm, None)
         return replace(self, mode={**self.mode, event.arm: event.mode}, held=held)
+
+    def changed(self, change: ToolChange) -> CableState:
+        """After a tool change: the arm carries the new tool (its gripper in no known mode,
+        its TCP where the skill says: a tool's TCP is not the flange's)."""
+        return replace(
+            self,
+            tools={**self.tools, change.arm: change.tool},
+            mode={**self.mode, change.arm: None},
+        )
 
     def hold(self, arm: str, cable: str, s: float) -> CableState:
         return replace(self, held={**self.held, arm: Hold(cable, s)})

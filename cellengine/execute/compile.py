@@ -19,9 +19,10 @@ held objects to its own), and the same inputs give the same program.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, replace
 from itertools import chain
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -47,10 +48,21 @@ from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.gate import SAMPLE_DT, GateReport
 from cellengine.motion.ik import arm_ik
 from cellengine.motion.robot import CellModel
-from cellengine.motion.scene import Pair
+from cellengine.motion.scene import CollisionScene, Pair
 from cellengine.motion.trajectory import Trajectory, concatenate
-from cellengine.program import CompiledSegment, Program, Segment, TimedEvent
+from cellengine.program import (
+    CompiledSegment,
+    Program,
+    Segment,
+    TimedChange,
+    TimedEvent,
+    ToolChange,
+)
 from cellengine.world import World
+
+# The cell with other tools on its arms (a tool change): its world, robot models (timed as
+# the compiler's) and scene, given the tool of every arm.
+Tooled = Callable[[Mapping[str, str | None]], tuple[World, CellModel, CollisionScene]]
 
 
 @dataclass(frozen=True)
@@ -64,6 +76,8 @@ class Mark:
     segments: int
     events: int
     held: Held
+    tools: tuple[tuple[str, str | None], ...]
+    changes: int
 
 
 class Compiler:
@@ -81,6 +95,7 @@ class Compiler:
         merge: Merge = "joint",
         split_threshold: float = SPLIT_THRESHOLD,
         clearance: float | None = None,
+        tooled: Tooled | None = None,
     ) -> None:
         if strategy not in STRATEGIES:
             raise ValueError(f"unknown strategy '{strategy}'; known: {', '.join(STRATEGIES)}")
@@ -101,6 +116,15 @@ class Compiler:
         self.t = 0.0
         self.segments: list[CompiledSegment] = []
         self.events: list[TimedEvent] = []
+        # the tool each arm carries; a change switches the cell model and the scene to those
+        # of the new tools (``tooled``), each assignment's built once and kept with its holding
+        self.tooled = tooled
+        self.tools = _key(world.tools)
+        self.start_tools = self.tools
+        self.changes: list[TimedChange] = []
+        self.tooling: dict[tuple[tuple[str, str | None], ...], tuple[CellModel, Holding]] = {
+            self.tools: (cell, self.holding)
+        }
 
     def add(
         self, segment: Segment, following: Sequence[Segment] = (), choice: int = 0
@@ -141,6 +165,8 @@ class Compiler:
             len(self.segments),
             len(self.events),
             self.holding.state,
+            self.tools,
+            len(self.changes),
         )
 
     def restore(self, mark: Mark) -> None:
@@ -151,6 +177,9 @@ class Compiler:
         self.q, self.t = mark.q, mark.t
         del self.segments[mark.segments :]
         del self.events[mark.events :]
+        del self.changes[mark.changes :]
+        self.tools = mark.tools
+        self.cell, self.holding = self.tooling[mark.tools]
         self.holding.restore(mark.held)
 
     @property
@@ -168,7 +197,37 @@ class Compiler:
         return self.holding.checker
 
     def program(self) -> Program:
-        return Program(self.cell.joint_names, tuple(self.segments), tuple(self.events))
+        return Program(
+            self.cell.joint_names,
+            tuple(self.segments),
+            tuple(self.events),
+            changes=tuple(self.changes),
+            tools=MappingProxyType(dict(self.start_tools)),
+        )
+
+    def _change(self, changes: Iterable[ToolChange], t: float) -> None:
+        """Each arm of ``changes`` carries its new tool from ``t``: the cell model and the
+        scene become those of the new tools, with what the grippers hold carried over."""
+        for c in changes:
+            tools = dict(self.tools)
+            if c.arm not in tools:
+                raise ValueError(f"a tool change of unknown arm '{c.arm}'")
+            held = self.holding.by_arm.get(c.arm)
+            if held is not None:
+                raise Refused(f"the {c.arm} arm changes its tool while it holds '{held}'")
+            if self.tooled is None:
+                raise ValueError("a tool change needs a compiler given `tooled`")
+            was, tools[c.arm] = tools[c.arm], c.tool
+            key = _key(tools)
+            if key not in self.tooling:
+                world, cell, scene = self.tooled(tools)
+                self.tooling[key] = (cell, Holding(world, scene))
+            state = self.holding.state
+            self.cell, self.holding = self.tooling[key]
+            jaw = {a: v for a, v in state.jaw.items() if a != c.arm}  # the new tool's widest
+            self.holding.restore(replace(state, jaw=jaw))
+            self.tools = key
+            self.changes.append(TimedChange(t, c.arm, c.tool, was))
 
     # ------------------------------------------------------------------------------ one segment
 
@@ -177,6 +236,7 @@ class Compiler:
     ) -> CompiledSegment:
         started = time.perf_counter()
         t0 = self.t
+        following = _until_change(segment, following)
         self._events(segment.before, t0, self.q)
         self.holding.touch(segment.contacts)
         has_transit = any(p.kind == "transit" for p in segment.paths)
@@ -250,6 +310,7 @@ class Compiler:
             kept = kept_distance(trajectory, self.cell, segment.keep_distance)
         self._events(segment.after, trajectory.end_time, np.asarray(trajectory.q[-1]))
         self.holding.touch(())
+        self._change(segment.changes, trajectory.end_time)
         summary = _report(
             segment, self.strategy, _merge_name(list(parts), merge, self.strategy), figures, kept
         )
@@ -342,6 +403,19 @@ class Compiler:
             except Refused as e:
                 refused = e
         raise refused
+
+
+def _until_change(segment: Segment, following: Sequence[Segment]) -> Sequence[Segment]:
+    """The segments a transit looks ahead at: none after a tool change (they run on
+    another cell model)."""
+    if segment.changes:
+        return ()
+    k = next((k for k, s in enumerate(following) if s.changes), None)
+    return following if k is None else following[: k + 1]
+
+
+def _key(tools: Mapping[str, str | None]) -> tuple[tuple[str, str | None], ...]:
+    return tuple(sorted(tools.items()))
 
 
 def compile_segments(

@@ -28,7 +28,7 @@ import numpy as np
 from cellengine import geometry as g
 from cellengine.arrays import Mat
 from cellengine.motion.collision import CollisionChecker
-from cellengine.motion.robot import tool_parts
+from cellengine.motion.robot import contact_parts
 from cellengine.motion.scene import (
     CollisionScene,
     HeldObject,
@@ -215,7 +215,7 @@ class Holding:
         for arm, obj in state.contacts:
             # the arm's tool, and what it holds (a cap coming off), against the object
             # standing or in either hand
-            mine = list(tool_parts(self.base.cell.arms[arm]))
+            mine = list(contact_parts(self.base.cell.arms[arm]))
             if arm in state.by_arm:
                 mine.append(held_name(arm, state.by_arm[arm]))
             for name in (obj, *(held_name(a, obj) for a in state.by_arm)):

@@ -85,8 +85,22 @@ class Fingers(Frozen):
 FINGER_NAMES = ("finger_left", "finger_right")  # +y, -y of the TCP
 
 
+class ToolSlot(Frozen):
+    """Where a tool waits in an automatic tool changer (ATC) while no arm carries it.
+
+    ``at``: the flange's pose when the tool is seated and locked in its slot, as a keypoint
+    (platform.element[.keypoint]: that element is the station) or a pose in the cell frame.
+    ``exit``: offsets in the slot frame, in order, that a seated tool leaves its slot
+    through on the arm (reversed to put it back). ``retreat``: the offsets the bare flange
+    leaves a seated tool through (reversed to take it)."""
+
+    at: str | Pose
+    exit: tuple[Vec3Length, ...] = Field(min_length=1)
+    retreat: tuple[Vec3Length, ...] = Field(min_length=1)
+
+
 class Tool(Frozen):
-    kind: Literal["parallel_gripper"]
+    kind: Literal["parallel_gripper", "taping_gun"]
     tcp: Pose = Pose()  # fingertip centre in the flange frame
     finger_width: Length | None = Field(None, gt=0)
     finger_thickness: Length | None = Field(None, gt=0)
@@ -102,6 +116,7 @@ class Tool(Frozen):
     # side (the tool's z horizontal). Lab skills choose grasps by it.
     grasp: Literal["top", "side"] = "top"
     load_cell: bool = False  # the tool weighs what it holds (gives the Weigh skill)
+    slot: ToolSlot | None = None  # its place in the tool changer: arms change to and from it
 
     @model_validator(mode="after")
     def _parts(self) -> Tool:

@@ -273,6 +273,24 @@ def _frame_name(arm: Arm, frame_id: int) -> str:
     return str(arm.model.frames[frame_id].name)
 
 
+def parked_solids(world: World, tool: str, T_cell_flange: Mat) -> list[tuple[str, Mat, Any]]:
+    """``tool``'s solids seated in its changer slot, (name, T_cell_solid, coal shape), the
+    fingers at their widest; named ``<tool>@slot`` (``#2``, ``#3``... for its others)."""
+    spec = world.cell.tools[tool]
+    read = mesh_reader(world.cell_file, tool, world.cell.units)
+    solids = tool_solids(spec, spec.tcp.matrix(), read)
+    name = parked_name(tool)
+    return [
+        (name + (f"#{k + 1}" if k else ""), T_cell_flange @ s.T_flange_solid, s.shape)
+        for k, s in enumerate(solids)
+    ]
+
+
+def parked_name(tool: str) -> str:
+    """The scene's name of ``tool`` waiting in its slot."""
+    return f"{tool}@slot"
+
+
 def build_arm(
     name: str, robot: Robot, tool: Tool | None, cell_file: Path, units: Units | None = None
 ) -> Arm:
@@ -304,7 +322,7 @@ def build_arm(
     geom = build_geometry(raw, urdf, prefix, name)
     fingers = None
     if tool is not None and robot.tool is not None:
-        read = _mesh_reader(cell_file, robot.tool, units)
+        read = mesh_reader(cell_file, robot.tool, units)
         _add_tool_geometry(raw, geom, tool0, tool_solids(tool, T_flange_tcp, read), name)
         fingers = fingers_of(tool, T_flange_tcp)
     T_cell_base = robot.base.matrix()
@@ -354,7 +372,7 @@ def _add_tool_geometry(
         )
 
 
-def _mesh_reader(cell_file: Path, tool_name: str, units: Units) -> Callable[[str], Any]:
+def mesh_reader(cell_file: Path, tool_name: str, units: Units) -> Callable[[str], Any]:
     """Reads a tool's mesh (inside the cell folder, in the file's length unit) as its hull."""
 
     def read(ref: str) -> Any:
@@ -373,6 +391,16 @@ def tool_parts(arm: Arm) -> tuple[str, ...]:
     """The names of ``arm``'s tool's collision objects (``left/tool``, ``left/tool/...``)."""
     names = (str(o.name) for o in arm.collision.geometryObjects)
     return tuple(n for n in names if is_tool(n, arm.name))
+
+
+def contact_parts(arm: Arm) -> tuple[str, ...]:
+    """What of ``arm`` touches what it works on: its tool's collision objects, or, for a
+    bare flange (an arm between two tools), the link objects the flange is on."""
+    parts = tool_parts(arm)
+    if parts:
+        return parts
+    joint = arm.model.frames[arm.tool0].parentJoint
+    return tuple(str(o.name) for o in arm.collision.geometryObjects if o.parentJoint == joint)
 
 
 def finger_placements(arm: Arm, opening: float) -> dict[str, Any]:

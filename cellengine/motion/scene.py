@@ -64,7 +64,7 @@ from cellengine.info.files import resolve_inside
 from cellengine.info.mesh import Mesh
 from cellengine.info.xmlsafe import parse_xml
 from cellengine.motion.hull import convex_hull
-from cellengine.motion.robot import Arm, CellModel, finger_placements, is_tool
+from cellengine.motion.robot import Arm, CellModel, finger_placements, is_tool, parked_solids
 from cellengine.world import World
 
 Pair = tuple[str, str]  # two object names, sorted
@@ -542,6 +542,9 @@ def environment(world: World) -> tuple[list[StaticShape], list[str]]:
     for cname, c in world.objects.containers.items():
         if c.at is not None:
             out.append(standing_container(world, cname, world.standing(c)))
+    for tool, T_cell_flange in world.parked().items():
+        for name, T_cell_solid, shape in parked_solids(world, tool, T_cell_flange):
+            out.append(StaticShape(name, T_cell_solid, shape, shape, True))
     return out, notes
 
 
