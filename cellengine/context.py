@@ -78,6 +78,14 @@ class PlanningContext:
         cell = t.cell.with_speed(self.speed)
         return replace(self, world=t.world, cell=cell, scene=t.scene, checker=t.checker, iks=t.iks)
 
+    def tooled_parts(
+        self, tools: Mapping[str, str | None]
+    ) -> tuple[World, CellModel, CollisionScene]:
+        """:meth:`tooled`'s world, robot models and scene (what a compiler switches to at
+        a tool change)."""
+        c = self.tooled(tools)
+        return c.world, c.cell, c.scene
+
     @property
     def speed(self) -> Speed:
         """How fast trajectories are timed (the cell model's)."""

@@ -57,7 +57,7 @@ def examine(error: CompileFailed) -> FailedPlan:
         return FailedPlan(error, before or empty, (first,), error.problems)
     compiler = Compiler(
         ctx.world, ctx.cell, ctx.checker, ctx.home, error.strategy,  # type: ignore[arg-type]
-        clearance=ctx.clearance,
+        clearance=ctx.clearance, tooled=ctx.tooled_parts,
     )  # fmt: skip
     try:
         add_all(compiler, failure.ahead)

@@ -7,9 +7,11 @@ The journal is append-only, one JSON object per line, on disk at each entry (:cl
 ``recovery`` (a move to where a segment starts), then per segment
 ``sent`` and ``finished`` (with the arms' q and grippers after it; when the arms work at
 once, ``streams``: each robot's segments finished and running then), ``measured`` (a load
-cell), ``tared`` (each load cell's zero, taken with its gripper empty when the run
-started: a resumed run, whose gripper may hold something, uses it), ``replanned``,
-``cycle`` (``run --cycles N``: the program begins again; the start says how many cycles),
+cell), ``tool`` (a tool changer locked a tool, or unlocked leaving one in its slot, at the
+end of a segment, before its ``finished``), ``tared`` (each load cell's zero, taken with its
+gripper empty when the run started: a resumed run, whose gripper may hold something, uses
+it), ``replanned``, ``cycle`` (``run --cycles N``: the program begins again; the start says
+how many cycles),
 ``fault`` (what stopped the run), ``timing`` (the servo loop's), ``end``.
 A run killed at any moment leaves whole lines and at most one torn last line, which is
 ignored; any other line that is not a JSON object is an error at its line. So is every value
@@ -44,6 +46,7 @@ class Entry(StrEnum):
     SENT = "sent"
     FINISHED = "finished"
     MEASURED = "measured"
+    TOOL = "tool"
     TARED = "tared"
     REPLANNED = "replanned"
     CYCLE = "cycle"
@@ -286,6 +289,15 @@ def _measured(entry: dict[str, Any]) -> None:
         raise _Bad(f"'mass_kg' must be a finite mass in kg (0 to {MAX_MASS:g}), got {_shown(mass)}")
 
 
+def _tool(entry: dict[str, Any]) -> None:
+    _index(_field(entry, "segment"), "segment")
+    _text(_field(entry, "arm"), "arm")
+    for key in ("tool", "was"):
+        value = _field(entry, key)
+        if value is not None:
+            _text(value, key)
+
+
 def _tared(entry: dict[str, Any]) -> None:
     zeros = _field(entry, "load_cells")
     if not isinstance(zeros, dict) or not all(
@@ -354,6 +366,7 @@ _CHECKS: dict[str, Callable[[dict[str, Any]], None]] = {
     Entry.START: _start,
     Entry.FINISHED: _finished,
     Entry.MEASURED: _measured,
+    Entry.TOOL: _tool,
     Entry.TARED: _tared,
     Entry.FAULT: _fault,
     Entry.CYCLE: _cycle,

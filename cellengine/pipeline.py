@@ -8,7 +8,6 @@ the next candidate where one cannot run) into a Program.
 
 from __future__ import annotations
 
-import functools
 import itertools
 import json
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -30,7 +29,6 @@ from cellengine.family import SkillFamily, families, skill_name
 from cellengine.info.load import LoadedPlan, load_plan
 from cellengine.info.plan import Plan
 from cellengine.motion.robot import CellModel
-from cellengine.motion.scene import CollisionScene
 from cellengine.motion.speed import resolve, speed_json
 from cellengine.program import Program, Segment
 from cellengine.skill import Skill
@@ -155,7 +153,7 @@ def compile_loaded(
         "split" if chosen == "sequential" else chosen,  # type: ignore[arg-type]
         merge=merge,  # type: ignore[arg-type]
         clearance=ctx.clearance,
-        tooled=functools.partial(_tooled, ctx),
+        tooled=ctx.tooled_parts,
     )
     shown: set[int] = set()
 
@@ -191,13 +189,6 @@ def compile_loaded(
         return _in_plan(plan, search)
     except InputError as e:
         raise CompileFailed(e, loaded, ctx, chosen) from None
-
-
-def _tooled(
-    ctx: PlanningContext, tools: Mapping[str, str | None]
-) -> tuple[World, CellModel, CollisionScene]:
-    c = ctx.tooled(tools)
-    return c.world, c.cell, c.scene
 
 
 class CompileFailed(InputError):

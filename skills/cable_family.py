@@ -15,7 +15,7 @@ from cellengine.errors import InputError, Problem, StepError, at_step
 from cellengine.family import Candidate
 from cellengine.program import Segment
 from cellengine.skill import Skill
-from cellengine.skills import cable_group, cable_meaning, cable_swap, cable_top, cable_tools
+from cellengine.skills import cable_group, cable_meaning, cable_swap, cable_tools, cable_top
 from cellengine.skills.cable import (
     RELEASE,
     PickCable,
@@ -78,6 +78,13 @@ def _from(
             yield Candidate(tuple(segments))
         return
     step = steps[i]
+    if not isinstance(step, ChangeTool):
+        with at_step(i):
+            need = {a: cable_tools.GRIPPER for a in state.arms}
+            fits = cable_tools.fitting(ctx, state, need, f"steps[{i}] {step.skill}")
+        if fits:
+            yield from _fitted(ctx, steps, i, replace(state, step=i), fits, failed)
+            return
     if isinstance(step, RouteCable):
         yield from _route(ctx, steps, i, replace(state, step=i), failed)
         return
@@ -86,8 +93,8 @@ def _from(
         # IK branches here; the changing arm reaches each slot by a transit
         with at_step(i):
             for segments, after in cable_tools.change_ways(ctx, step, replace(state, step=i)):
-                then = functools.partial(_from, ctx, steps, i + 1, after, failed)
-                yield Candidate(tuple(segments), then=then)
+                following = functools.partial(_from, ctx, steps, i + 1, after, failed)
+                yield Candidate(tuple(segments), then=following)
         return
 
     # a PickCable decides which arm holds the connector end, a PlaceConnector which arm routes
@@ -102,6 +109,25 @@ def _from(
         return _from(ctx, steps, i + 1, after, failed)
 
     yield from _chosen(ctx, i, step, state, step_ways(ctx, steps, i, state), then, decides)
+
+
+def _fitted(
+    ctx: PlanningContext,
+    steps: Sequence[Skill],
+    i: int,
+    state: CableState,
+    fits: dict[str, str],
+    failed: Failed,
+) -> Iterator[Candidate]:
+    """The tool change ``steps[i]`` needs first (the first of ``fits``), then the step (or the
+    next change it needs) from the state it leaves."""
+    arm, tool = next(iter(fits.items()))
+    label = f"ChangeTool {arm} (for {steps[i].skill})"
+    where = f"steps[{i}] {steps[i].skill}"
+    with at_step(i):
+        for segments, after in cable_tools.released_change(ctx, state, arm, tool, where, label):
+            then = functools.partial(_from, ctx, steps, i, after, failed)
+            yield Candidate(tuple(segments), then=then)
 
 
 def _route(

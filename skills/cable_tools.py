@@ -65,19 +65,31 @@ def change_ways(
     if state.tools[arm] == step.tool:
         yield [], state
         return
+    yield from released_change(ctx, state, arm, step.tool, where, f"ChangeTool {arm}")
+
+
+def released_change(
+    ctx: PlanningContext, state: CableState, arm: str, tool: str, where: str, label: str
+) -> Iterator[tuple[list[Segment], CableState]]:
+    """Each way of letting go of what the hands hold (release_ways), then the change."""
     for released, after in c.release_ways(ctx, state):
-        segments, changed = change(ctx, after, arm, step.tool, where)
+        segments, changed = change(ctx, after, arm, tool, where, label)
         yield [*released, *segments], changed
 
 
 def change(
-    ctx: PlanningContext, state: CableState, arm: str, tool: str | None, where: str
+    ctx: PlanningContext,
+    state: CableState,
+    arm: str,
+    tool: str | None,
+    where: str,
+    label: str,
 ) -> tuple[list[Segment], CableState]:
     """``arm`` (holding nothing) leaves its tool in its slot and takes ``tool`` (None: stays
-    bare): the segments and the state after them, the arm's TCP the new tool's."""
+    bare): the segments (labelled ``label: ...``) and the state after them, the arm's TCP
+    the new tool's."""
     world = ctx.world
     b = c._Builder(state)
-    label = f"ChangeTool {arm}"
     was = state.tools[arm]
     T_flange = state.tcp[arm] @ g.inverse(_T_flange_tcp(ctx, was))
     if was is not None:
@@ -145,3 +157,45 @@ def _station(at: str | Pose, arm: str) -> list[tuple[str, str]]:
     """The slot's station (the element of its keypoint) as ``arm``'s contact: its tool goes
     into and out of it; none for a slot given as a pose."""
     return [(arm, cg.element_of(at))] if isinstance(at, str) else []
+
+
+GRIPPER = "parallel_gripper"
+
+
+def fitting(
+    ctx: PlanningContext, state: CableState, need: dict[str, str], where: str
+) -> dict[str, str]:
+    """The tool changes (arm -> tool) that give each arm of ``need`` a tool of the kind it
+    needs (REMODEL changes tools before any operation that needs another, HARNESS.md 2.6):
+    the tool the arm started with if it is of that kind and free, else the free one of that
+    kind whose slot is nearest the arm's base. A step no free tool can serve is refused."""
+    tools = ctx.world.cell.tools
+    carried = {t for t in state.tools.values() if t is not None}
+    start = ctx.world.cell.robots
+    out: dict[str, str] = {}
+    for arm, kind in sorted(need.items()):
+        now = state.tools[arm]
+        if now is not None and tools[now].kind == kind:
+            continue
+        free = [
+            n
+            for n, t in tools.items()
+            if t.kind == kind and t.slot is not None and n not in carried
+        ]
+        base = start[arm].base.matrix()[:3, 3]
+        free.sort(
+            key=lambda n: (
+                n != start[arm].tool,
+                float(np.linalg.norm(ctx.world.slot(n)[:3, 3] - base)),
+                n,
+            )
+        )
+        if not free:
+            what = f"carries '{now}'" if now is not None else "carries no tool"
+            raise c._error(
+                f"{where} needs a {kind} on the {arm} arm, which {what}, and no {kind} waits in "
+                "the tool changer (a cell.yaml tool of that kind with a slot)"
+            )
+        out[arm] = free[0]
+        carried.add(free[0])
+    return out

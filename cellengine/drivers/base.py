@@ -33,7 +33,7 @@ from cellengine.arrays import FloatArray
 from cellengine.drivers.fault import DriverFault, DriverRefused, Fault
 from cellengine.drivers.layout import CellLayout
 from cellengine.drivers.lifecycle import Lifecycle, LifecycleError, State
-from cellengine.drivers.record import FaultRecord, Played, Recorder, Sent, Transition
+from cellengine.drivers.record import FaultRecord, Played, Recorder, Sent, ToolChanged, Transition
 from cellengine.errors import known
 from cellengine.info.bounds import MAX_MASS
 from cellengine.info.cell import Cell
@@ -65,6 +65,7 @@ class Driver(ABC):
         *,
         objects: Objects | None = None,
         start_tolerance: float = START_TOLERANCE,
+        tools: Mapping[str, str | None] | None = None,
     ) -> None:
         if not start_tolerance > 0:
             raise ValueError(f"start_tolerance must be > 0, got {start_tolerance!r}")
@@ -76,6 +77,9 @@ class Driver(ABC):
         self.start_move_limit = math.inf
         self.recorder = Recorder()
         self.fault: Fault | None = None  # the fault that put the driver in error, if any
+        # the tool each arm carries: the cell file's, or where a run resumes, the program's
+        self.tools: dict[str, str | None] = {a: r.tool for a, r in cell.robots.items()}
+        self.tools.update(tools or {})
         self._life = Lifecycle(self.kind)
 
     # -- state --------------------------------------------------------------------------
@@ -149,6 +153,25 @@ class Driver(ABC):
             self._fail(played.fault)
             raise DriverFault(self.kind, played.fault)
         return played
+
+    def change_tool(self, arm: str, tool: str | None) -> None:
+        """``arm``'s tool changer locks ``tool`` (None: unlocks, the tool it carried seated
+        in its slot); nothing is done when it carries ``tool`` already. The arm stands still
+        meanwhile (a program changes tools at a segment's end)."""
+        self._life.check_operation("change_tool")
+        self._check_arm(arm)
+        was = self.tools[arm]
+        if tool == was:
+            return
+        if tool is not None and tool not in self.cell.tools:
+            raise DriverRefused(self.kind, f"unknown tool '{tool}'" + known(self.cell.tools))
+        if tool is not None and was is not None:
+            raise DriverRefused(
+                self.kind, f"arm '{arm}' carries '{was}': it leaves it before it takes '{tool}'"
+            )
+        self._guarded(lambda: self._on_change_tool(arm, tool))
+        self.tools[arm] = tool
+        self.recorder.add(ToolChanged(arm, tool, was))
 
     def joint_state(self) -> FloatArray:
         """The measured q, cell order (a copy)."""
@@ -233,6 +256,10 @@ class Driver(ABC):
     def _read_mass(self, arm: str) -> float:
         raise DriverRefused(self.kind, f"arm '{arm}': the {self.kind} driver has no load cell")
 
+    def _on_change_tool(self, arm: str, tool: str | None) -> None:
+        """Lock (``tool``) or unlock (None) ``arm``'s tool changer."""
+        raise DriverRefused(self.kind, f"arm '{arm}': the {self.kind} driver has no tool changer")
+
     # -- internals ------------------------------------------------------------------------
 
     def _transition(self, name: str, hook: Callable[[], None]) -> None:
@@ -309,7 +336,8 @@ class Driver(ABC):
                     f"{where}: event '{mode}' of arm '{arm}' at t = {ev.time:.3f} s is outside "
                     f"the segment ({traj.start_time:.3f} to {traj.end_time:.3f} s)",
                 )
-            tool = self.layout.tools[arm]
+            carried = self.tools[arm]
+            tool = self.cell.tools[carried] if carried is not None else None
             if tool is None:
                 raise DriverRefused(
                     self.kind, f"{where}: arm '{arm}' has no tool to set to '{mode}'"

@@ -27,6 +27,7 @@ from cellengine.errors import DriverError, Problem
 FaultKind = Literal[
     "tracking",
     "gripper",
+    "tool_changer",
     "connection",
     "protective_stop",
     "emergency_stop",

@@ -56,12 +56,14 @@ IDEMPOTENT: dict[str, State] = {
 # operations that are not transitions, and the states they need
 OPERATIONS: dict[str, frozenset[State]] = {
     "execute": frozenset({State.ACTIVE}),
+    "change_tool": frozenset({State.ACTIVE}),
     "joint_state": frozenset({State.INACTIVE, State.ACTIVE, State.ERROR}),
     "gripper": frozenset({State.INACTIVE, State.ACTIVE, State.ERROR}),
     "read_mass": frozenset({State.INACTIVE, State.ACTIVE}),
 }
 # how refusals name the operations that are not transitions
 DISPLAY = {
+    "change_tool": "change tools",
     "joint_state": "read joint states",
     "gripper": "read grippers",
     "read_mass": "read masses",

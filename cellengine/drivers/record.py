@@ -56,6 +56,18 @@ class Sent:
 
 
 @dataclass(frozen=True)
+class ToolChanged:
+    """An arm's tool changer locked ``tool`` (None: unlocked, leaving ``was`` in its slot)."""
+
+    arm: str
+    tool: str | None
+    was: str | None
+
+    def to_json(self) -> dict[str, Any]:
+        return {"entry": "tool", "arm": self.arm, "tool": self.tool, "was": self.was}
+
+
+@dataclass(frozen=True)
 class AppliedEvent:
     time: float  # when it was applied (the servo tick), program time
     arm: str
@@ -133,7 +145,7 @@ class FaultRecord:
         }
 
 
-Entry = Transition | Sent | Played | FaultRecord
+Entry = Transition | Sent | Played | FaultRecord | ToolChanged
 E = TypeVar("E", Transition, Sent, Played, FaultRecord)
 
 

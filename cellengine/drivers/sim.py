@@ -90,12 +90,15 @@ class SimDriver(Driver):
         grippers: Mapping[str, GripperState] | None = None,
         mass_noise: float = 0.0,
         seed: int = 0,
+        tools: Mapping[str, str | None] | None = None,
     ) -> None:
         """``lag``: the arms' time constant (s; 0: they follow exactly). ``q0``: where the
         arms start (cell order, or per arm; default zeros). ``grippers``: their starting
         modes (default 'open' where the tool has it). ``mass_noise``: the load cell's
         standard deviation (kg), drawn from a generator seeded with ``seed``."""
-        super().__init__(cell, joints, objects=objects, start_tolerance=start_tolerance)
+        super().__init__(
+            cell, joints, objects=objects, start_tolerance=start_tolerance, tools=tools
+        )
         for name, value in (
             ("tracking_tolerance", tracking_tolerance),
             ("servo_period", servo_period),
@@ -186,6 +189,11 @@ class SimDriver(Driver):
         mass = 0.0 if held is None else self._object_mass(arm, held)
         noise = float(self._rng.normal(0.0, self.mass_noise)) if self.mass_noise > 0 else 0.0
         return mass + noise
+
+    def _on_change_tool(self, arm: str, tool: str | None) -> None:
+        """The changer locks or unlocks at once; the gripper it now has is in no known mode."""
+        self._check_connection()
+        self.grippers.set(arm, GripperState(None, None))
 
     def commanded(self) -> FloatArray:
         """The position the arms are commanded to hold now (cell order; a copy)."""
@@ -317,7 +325,8 @@ class SimDriver(Driver):
         self, given: Mapping[str, GripperState] | None
     ) -> dict[str, GripperState]:
         out: dict[str, GripperState] = {}
-        for arm, tool in self.layout.tools.items():
+        for arm, name in self.tools.items():
+            tool = self.cell.tools[name] if name is not None else None
             mode = "open" if tool is not None and "open" in tool.jaw else None
             out[arm] = GripperState(mode, None)
         for arm, state in (given or {}).items():

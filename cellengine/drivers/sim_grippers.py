@@ -21,6 +21,9 @@ class SimGrippers:
     def snapshot(self) -> dict[str, GripperState]:
         return dict(self._state)
 
+    def set(self, arm: str, state: GripperState) -> None:
+        self._state[arm] = state
+
     def apply(self, event: GripperEvent, works: bool) -> bool:
         """Change mode and what is held; a gripper that does not work keeps both."""
         if works:

@@ -36,7 +36,7 @@ from cellengine.arrays import FloatArray
 from cellengine.drivers.base import Driver as Base
 from cellengine.drivers.base import GripperState
 from cellengine.drivers.clock import sleep_until
-from cellengine.drivers.fault import DriverRefused, Fault
+from cellengine.drivers.fault import DriverFault, DriverRefused, Fault
 from cellengine.drivers.lead_in import lead_in
 from cellengine.drivers.record import AppliedEvent, Played
 from cellengine.drivers.servo_timing import servo_timing
@@ -79,13 +79,16 @@ class UrDriver(Base):
         objects: Objects | None = None,
         connect_timeout: float = CONNECT_TIMEOUT,
         servo_period: float = SERVO_PERIOD,
+        tools: Mapping[str, str | None] | None = None,
     ) -> None:
         if not isinstance(cell.driver, Config):
             raise DriverRefused(
                 "ur_rtde", f"the cell's driver is '{cell.driver.kind}', not ur_rtde"
             )
         self.config: Config = cell.driver
-        super().__init__(cell, joints, objects=objects, start_tolerance=self.config.start_tolerance)
+        super().__init__(
+            cell, joints, objects=objects, start_tolerance=self.config.start_tolerance, tools=tools
+        )
         self.addresses = {arm: str(ip) for arm, ip in self.config.arms.items()}
         self.start_move_limit = self.config.start_move_limit
         self.connect_timeout = connect_timeout
@@ -142,7 +145,7 @@ class UrDriver(Base):
                 self.kind, f"arm '{arm}' at {ip}: robot mode {mode}, not running (7)"
             )
         self._ask(arm, f"{answers} (RTDE control)", "connect_control")
-        if self.config.gripper_io:  # the grippers' digital outputs
+        if self.config.gripper_io or self.config.changer_release is not None:  # digital outputs
             self._ask(arm, f"{answers} (RTDE IO)", "connect_io")
 
     def _ask(self, arm: str, what: str, op: str) -> Any:
@@ -396,6 +399,28 @@ class UrDriver(Base):
             f"time at t = {t:.3f} s (is the speed slider down?); {STOPPED}",
             time=t,
         )
+
+    def _on_change_tool(self, arm: str, tool: str | None) -> None:
+        """The changer's release output high to unlock, low to lock."""
+        pin = self.config.changer_release
+        if pin is None:
+            raise DriverRefused(
+                self.kind,
+                f"arm '{arm}': the cell's ur_rtde driver names no tool changer output "
+                "(driver.changer_release)",
+            )
+        what = "lock" if tool is not None else "unlock"
+        try:
+            refused = self._links[arm].call("dout", [(pin, tool is None)], timeout=TICK_TIMEOUT)
+        except LinkError as e:
+            message = f"connection to arm '{arm}' lost changing tools ({e.why}); {STOPPED}"
+            raise DriverFault(self.kind, Fault("connection", message, arm)) from None
+        if refused is not None:
+            message = (
+                f"tool changer of arm '{arm}': the controller refused digital output {pin} "
+                f"to {what} it; {STOPPED}"
+            )
+            raise DriverFault(self.kind, Fault("tool_changer", message, arm))
 
     def _apply_due(
         self, t: float, pending: list[TimedEvent], applied: list[AppliedEvent]

@@ -246,6 +246,9 @@ class UrRtdeDriver(Frozen):
     # the grippers: the standard digital outputs high in each jaw mode (the others listed
     # for any mode are set low)
     gripper_io: dict[Name, tuple[Annotated[int, Field(ge=0, le=7)], ...]] = {}
+    # the tool changer: the standard digital output that, high, releases its lock (low
+    # locks it; REMODEL sets its IO 10026 to 1 to release)
+    changer_release: Annotated[int, Field(ge=0, le=7)] | None = None
 
 
 class GrblAxis(Frozen):

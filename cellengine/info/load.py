@@ -119,7 +119,17 @@ def _check_cell(cell: Cell, doc: YamlDoc) -> list[Problem]:
         except InputError as e:
             out.extend(e.problems)
 
+    carriers: dict[str, str] = {}
     for name, robot in cell.robots.items():
+        tool = cell.tools.get(robot.tool or "")
+        if tool is not None and tool.slot is not None and robot.tool in carriers:
+            err(
+                f"robots.{name}.tool: '{robot.tool}' has a slot in the tool changer, so it is "
+                f"one tool, and robots.{carriers[robot.tool]} carries it: give each robot a "
+                "tool of its own",
+                *("robots", name, "tool"),
+            )
+        carriers.setdefault(robot.tool or "", name)
         if robot.tool is not None and robot.tool not in cell.tools:
             err(
                 f"robots.{name}.tool: unknown tool '{robot.tool}'" + known(cell.tools),
@@ -257,6 +267,19 @@ def _check_zone_keypoints(world: World, doc: YamlDoc) -> list[Problem]:
     return out
 
 
+def _check_slots(world: World, doc: YamlDoc) -> list[Problem]:
+    """A tool's slot given as a keypoint must be one of the cell."""
+    out: list[Problem] = []
+    for name, tool in world.cell.tools.items():
+        if tool.slot is not None and isinstance(tool.slot.at, str):
+            try:
+                world.resolve(tool.slot.at)
+            except RefError as e:
+                loc = ("tools", name, "slot", "at")
+                out.extend(doc.error(f"tools.{name}.slot.at: {e}", loc).problems)
+    return out
+
+
 def _check_objects(world: World, doc: YamlDoc) -> list[Problem]:
     """Where each container stands must be a keypoint of the cell."""
     out: list[Problem] = []
@@ -288,6 +311,7 @@ def load_world(cell_path: Path, objects_path: Path | None = None) -> World:
     world = World(cell, cell_path, platforms, objects, tuple(_cell_warnings(cell, doc)))
     if not problems:
         problems.extend(_check_zone_keypoints(world, doc))
+        problems.extend(_check_slots(world, doc))
     if objects_doc is not None and not problems:
         problems.extend(_check_objects(world, objects_doc))
     if problems:

@@ -39,6 +39,17 @@ def check_cycles(compiled: Compiled, cycles: int) -> None:
                     plan,
                 )
             )
+    ends = program.tools_at(program.duration)
+    for arm, tool in program.tools.items():
+        if ends[arm] != tool:
+            raise InputError(
+                Problem(
+                    f"--cycles {cycles}: the plan ends with the {arm} arm carrying "
+                    f"{_tool(ends[arm])}, and starts with it carrying {_tool(tool)}: a cycle "
+                    "must end with the tools it starts with (add a ChangeTool step)",
+                    plan,
+                )
+            )
     holding = {e.event.arm: e.event.holds for e in program.events}
     for arm, held in holding.items():
         if held is not None:
@@ -49,3 +60,7 @@ def check_cycles(compiled: Compiled, cycles: int) -> None:
                     plan,
                 )
             )
+
+
+def _tool(name: str | None) -> str:
+    return f"'{name}'" if name is not None else "no tool"

@@ -31,23 +31,29 @@ def open_driver(
     q0: Any = None,
     grippers: dict[str, Any] | None = None,
     tares: dict[str, float] | None = None,
+    at: int = 0,
 ) -> Driver:
     """The cell's driver (or ``options.kind``'s), unconfigured. The simulated cell starts
     where the program does, or at ``q0`` with ``grippers`` (where a journal left it); the
-    lab bench's load cells keep the zeros ``tares`` (the run's start took them)."""
+    lab bench's load cells keep the zeros ``tares`` (the run's start took them). The arms
+    carry the tools the program has them carry at its segment ``at``."""
     from cellengine.drivers.registry import make_driver
 
     world, cell = compiled.world, compiled.cell
     joints = {name: arm.joint_names for name, arm in cell.arms.items()}
-    sim: dict[str, Any] = {}
+    extra: dict[str, Any] = {}  # the driver class's own options
+    program = compiled.program
+    if program.changes:  # only a cell with a tool changer: other drivers take no tools
+        at = min(at, len(program.segments) - 1)
+        extra["tools"] = program.tools_at(program.segments[at].trajectory.start_time)
     if (options.kind or world.cell.driver.kind) == "lab":  # settings checked against these
-        sim = {"specs": joint_specs(cell), "tares": tares or {}}
+        extra.update(specs=joint_specs(cell), tares=tares or {})
     if (options.kind or world.cell.driver.kind) == "sim":
         start = compiled.program.segments[0].trajectory.q[0] if q0 is None else q0
-        sim = {"realtime": options.realtime, "q0": start}
+        extra.update(realtime=options.realtime, q0=start)
         if grippers is not None:
-            sim["grippers"] = grippers
-    return make_driver(world.cell, joints, objects=world.objects, kind=options.kind, **sim)
+            extra["grippers"] = grippers
+    return make_driver(world.cell, joints, objects=world.objects, kind=options.kind, **extra)
 
 
 def joint_specs(cell: CellModel) -> dict[str, JointSpec]:

@@ -94,6 +94,18 @@ def _send(
         if program.streams and e.fault.time is not None:  # the fault entry says it too
             e.streams = streams_entry(program, e.fault.time)
         raise
+    for change in seg.changes:  # at the segment's end, the arm standing at the slot
+        was = driver.tools[change.arm]
+        driver.change_tool(change.arm, change.tool)
+        append(
+            journal,
+            Entry.TOOL,
+            step=seg.step,
+            segment=index,
+            arm=change.arm,
+            tool=change.tool,
+            was=was,
+        )
     grippers = {arm: list(driver.gripper(arm)) for arm in arms}
     more: dict[str, Any] = {}
     if program.streams:  # what --resume goes on from: each robot's segments

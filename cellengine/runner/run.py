@@ -98,7 +98,12 @@ def resume_run(
         write_plan_outputs(compiled, run_dir)
         q0, grippers = _where_left(progress)
         driver = open_driver(
-            compiled, driver_options, q0=q0, grippers=grippers, tares=progress.tares
+            compiled,
+            driver_options,
+            q0=q0,
+            grippers=grippers,
+            tares=progress.tares,
+            at=progress.done,
         )
         left = progress.cycles - progress.cycle + 1
         confirm(driver, yes, lambda: motion_summary(compiled, left), quiet)
