@@ -41,6 +41,7 @@ from cellengine.program import CompiledSegment, GripperEvent, Program, TimedEven
 from cellengine.report.distance import ArmDistance
 from cellengine.report.jsonable import jsonable
 from cellengine.report.sampling import joint_order
+from cellengine.report.tools import tool_timeline
 
 REPORT_FORMAT = "cellengine.report/1"
 DISTANCE_DT = 0.01  # s between states measured for a segment's distance between the arms
@@ -71,6 +72,8 @@ def report_data(
         "segments": segments,
         "events": [event_entry(e) for e in program.events],
     }
+    if program.changes:  # the tool each arm carries at the start, and every change
+        out["tools"] = tool_timeline(program)
     for key, value in (extra or {}).items():
         if key in out:
             raise ValueError(f"extra key '{key}' would replace the report's own")

@@ -28,7 +28,7 @@ from cellengine.arrays import IntArray, Vec
 from cellengine.info import primitives
 from cellengine.info.cell import Obstacle
 from cellengine.info.mesh import Mesh
-from cellengine.motion.robot import CellModel, home_configuration
+from cellengine.motion.robot import CellModel, home_configuration, is_tool
 from cellengine.motion.scene import place_fingers
 from cellengine.program import Anchor, Program, TimedEvent
 from cellengine.report.data import event_entry, step_names
@@ -37,6 +37,7 @@ from cellengine.report.joints import joint_kinds
 from cellengine.report.names import part_names, segment_name, step_title
 from cellengine.report.objects import containers, zones
 from cellengine.report.sampling import joint_order, program_span, sample_program, sample_times
+from cellengine.report.tools import PREFIX, changes_tools, tool_links, tool_timeline
 from cellengine.world import World
 
 REPLAY_FORMAT = "cellengine.replay/1"
@@ -83,7 +84,8 @@ def replay_data(
         },
         "q": _round(q.T, JOINT_DECIMALS),
         "qd": _round(qd.T, JOINT_DECIMALS),
-        "links": link_shapes(cell, geometry),
+        "links": _links(program, cell, world, geometry, q, times),
+        "tools": tool_timeline(program),
         "tcp": {arm: _round(p.ravel(), DECIMALS) for arm, p in tcp.items()},
         "arm_distance": None if distance is None else _round(distance[0], DECIMALS),
         "static": static_meshes(world),
@@ -97,6 +99,22 @@ def replay_data(
         "zones": zones(world),
         "part_names": part_names(_collision_names(cell, world), _tools(world)),
     }
+
+
+def _links(
+    program: Program, cell: CellModel, world: World, M: Vec, Q: Vec, times: Vec
+) -> list[dict[str, Any]]:
+    """The arms' links; in a cell with a tool changer, every tool drawn on its own where it
+    is (report/tools.py) instead of the arms' own tool objects."""
+    links = link_shapes(cell, M)
+    if not changes_tools(world.cell.tools):
+        return links
+    arms = [link for link in links if not is_tool(link["name"], link["arm"])]
+    tools = [
+        _link(name, PREFIX, shape, P, False)
+        for name, shape, P in tool_links(program, cell, world, Q, times)
+    ]
+    return arms + tools
 
 
 def _tools(world: World) -> dict[str, str]:
@@ -162,20 +180,22 @@ def link_shapes(cell: CellModel, M: Vec) -> list[dict[str, Any]]:
     out = []
     for i, obj in enumerate(cell.collision.geometryObjects):
         fixed = int(obj.parentJoint) == 0
-        kind, radius, points = shape_points(obj.geometry, M[:1, i] if fixed else M[:, i])
         name = str(obj.name)
-        out.append(
-            {
-                "name": name,
-                "arm": name.split("/", 1)[0],
-                "kind": kind,
-                "radius": radius,
-                "fixed": fixed,
-                "stride": points.shape[1],
-                "points": _round(points.ravel(), DECIMALS),
-            }
-        )
+        out.append(_link(name, name.split("/", 1)[0], obj.geometry, M[:, i], fixed))
     return out
+
+
+def _link(name: str, arm: str, shape: Any, M: Vec, fixed: bool) -> dict[str, Any]:
+    kind, radius, points = shape_points(shape, M[:1] if fixed else M)
+    return {
+        "name": name,
+        "arm": arm,
+        "kind": kind,
+        "radius": radius,
+        "fixed": fixed,
+        "stride": points.shape[1],
+        "points": _round(points.ravel(), DECIMALS),
+    }
 
 
 def shape_points(shape: Any, M: Vec) -> tuple[str, float, Vec]:

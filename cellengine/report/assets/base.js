@@ -93,9 +93,12 @@ function capture(target, e) {
     // a synthetic or already released pointer: dragging works without capture
   }
 }
-// a collision object's name for people (replay.py's part_names; a held object, 'vial3@robot1',
-// as held by its arm; else without its '#k')
+// a collision object's name for people (replay.py's part_names; a tool in its changer slot,
+// 'gun@slot(#k)', as in its slot; a held object, 'vial3@robot1', as held by its arm; else
+// without its '#k')
 function partName(n) {
+  const parked = /^(.+)@slot(#\d+)?$/.exec(n);
+  if (parked) return parked[1] + ' (in its slot)';
   const held = /^(.+)@([^@]+)$/.exec(n);
   if (held) return held[1] + ' (held by ' + held[2] + ')';
   return (RP.part_names || {})[n] || String(n).replace(/#\d+$/, '');

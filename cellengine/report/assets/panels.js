@@ -1,6 +1,6 @@
 // report.html's script (see base.js): the panels; 'now' (time, step, grippers, joints), the
 // step timeline, the steps table, the header's chips, the run's details, the 3D legend.
-/* global $, armColor, DASH, DATA, DUR, el, fmt, grippersAt, isNum, jointUnit, lastStarted,
+/* global $, armColor, DASH, DATA, DUR, el, fmt, grippersAt, toolsAt, isNum, jointUnit, lastStarted,
    locate, MISSION_COLORS, niceTicks, pairText, RE, RP, seek, seriesAt, setPlaying, shortJoint, state,
    STEP_COLORS, STRATEGY_COLORS, T0, T1, valueText */
 /* exported buildDetails, buildHeader, buildLegend, buildNow, buildTable, buildTimeline, pct,
@@ -24,6 +24,9 @@ function buildNow() {
   nowCells.strategy = kv(dl, 'strategy');
   if (RP.arm_distance) nowCells.distance = kv(dl, 'arm distance');
   for (const arm of RP.arms) nowCells['grip_' + arm] = kv(dl, arm + ' gripper');
+  if (RP.tools.changes.length) {
+    for (const arm of RP.arms) nowCells['tool_' + arm] = kv(dl, arm + ' tool');
+  }
   now.append(top);
   nowCells.joints = {};
   for (const arm of RP.arms) {
@@ -62,6 +65,10 @@ function updateNow() {
     const g = grips[arm];
     nowCells['grip_' + arm].textContent = g
       ? g.mode + (g.holds ? ' \u00b7 holds ' + g.holds : '') : DASH;
+  }
+  if (RP.tools.changes.length) {
+    const tools = toolsAt(t);
+    for (const arm of RP.arms) nowCells['tool_' + arm].textContent = tools[arm] || 'none';
   }
   for (const [j, cells] of Object.entries(nowCells.joints)) {
     const u = jointUnit(j);
@@ -150,6 +157,14 @@ function buildTimeline() {
       ev.append(el('div', { class: 'tick', style: 'left:' + pct(e.time) + ';border-top-color:' +
         (armColor[e.arm] || '#333'), title: fmt(e.time, 3) + ' s: ' + e.arm + ' ' + e.mode +
         (e.holds ? ' (holds ' + e.holds + ')' : '') }));
+    }
+  }
+  if (RP.tools.changes.length) {
+    const ch = lane('events', 'Tool changes');
+    for (const c of RP.tools.changes) {
+      ch.append(el('div', { class: 'tick', style: 'left:' + pct(c.time) + ';border-top-color:' +
+        (armColor[c.arm] || '#333'), title: fmt(c.time, 3) + ' s: ' + c.arm + ' ' +
+        (c.tool ? 'takes ' + c.tool : 'leaves ' + c.was + ' in its slot') }));
     }
   }
   const axis = el('div', { class: 'axis' });

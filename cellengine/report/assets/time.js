@@ -1,7 +1,7 @@
 // report.html's script (see base.js): the clock; the replay's samples at a time, the current
 // step, segment and grippers.
 /* global RP */
-/* exported clampT, DUR, grippersAt, lastStarted, linkAt, locate, seriesAt, state, tcpAt */
+/* exported clampT, DUR, grippersAt, toolsAt, lastStarted, linkAt, locate, seriesAt, state, tcpAt */
 
 // ---------------------------------------------------------------- time and sampling
 const T = RP.times;
@@ -44,6 +44,12 @@ function lastStarted(list, t) {
   let best = null;
   for (const s of list) if (s.start <= t + 1e-9) best = s;
   return best;
+}
+// the tool each arm carries at time t (null: a bare flange)
+function toolsAt(t) {
+  const out = Object.assign({}, RP.tools.start);
+  for (const c of RP.tools.changes) if (c.time <= t + 1e-9) out[c.arm] = c.tool;
+  return out;
 }
 function grippersAt(t) {
   const g = {};
