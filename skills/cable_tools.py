@@ -129,7 +129,9 @@ def change(
         )
         out = _through([T_slot @ T_tcp, *_offsets(T_slot, spec.exit, T_tcp)])
         b.add(
-            f"{label}: out of the slot", [c._cartesian(arm, out)], contacts=_station(spec.at, arm)
+            f"{label}: {tool} out of its slot",
+            [c._cartesian(arm, out)],
+            contacts=_station(spec.at, arm),
         )
         T_flange = out[-1] @ g.inverse(T_tcp)
     # the builder moved the TCP along each path as given: after the last, the arm's TCP is

@@ -33,6 +33,7 @@ from cellengine.execute import winding
 from cellengine.execute.checks import gate, kept_distance, near_pairs
 from cellengine.execute.failure import FailedAt
 from cellengine.execute.following import required
+from cellengine.execute.growing import UntilChange
 from cellengine.execute.held import Held, Holding
 from cellengine.execute.merge import MERGES, Merge, Merged, merge_rows, on_one_axis
 from cellengine.execute.preview import preview
@@ -236,7 +237,7 @@ class Compiler:
     ) -> CompiledSegment:
         started = time.perf_counter()
         t0 = self.t
-        following = _until_change(segment, following)
+        following = () if segment.changes else UntilChange(following)
         self._events(segment.before, t0, self.q)
         self.holding.touch(segment.contacts)
         has_transit = any(p.kind == "transit" for p in segment.paths)
@@ -403,15 +404,6 @@ class Compiler:
             except Refused as e:
                 refused = e
         raise refused
-
-
-def _until_change(segment: Segment, following: Sequence[Segment]) -> Sequence[Segment]:
-    """The segments a transit looks ahead at: none after a tool change (they run on
-    another cell model)."""
-    if segment.changes:
-        return ()
-    k = next((k for k, s in enumerate(following) if s.changes), None)
-    return following if k is None else following[: k + 1]
 
 
 def _key(tools: Mapping[str, str | None]) -> tuple[tuple[str, str | None], ...]:

@@ -150,3 +150,26 @@ class _Window(_Lazy):
     def __len__(self) -> int:
         n = max(0, len(self.source) - self.start)
         return n if self.stop is None else min(n, self.stop - self.start)
+
+
+class UntilChange(_Lazy):
+    """``source`` up to its first segment that changes tools, that one included, as lazy as
+    ``source`` (the segments after it run on other robot models: a transit does not look
+    ahead at them)."""
+
+    def __init__(self, source: Sequence[Segment]) -> None:
+        self.source = source
+
+    def _at(self, i: int) -> Segment:
+        if any(self.source[j].changes for j in range(i)):
+            raise IndexError(i)
+        return self.source[i]
+
+    def __len__(self) -> int:
+        n = 0
+        while True:
+            try:
+                self._at(n)
+            except IndexError:
+                return n
+            n += 1

@@ -23,8 +23,19 @@ def check_cycles(compiled: Compiled, cycles: int) -> None:
     if cycles == 1:
         return
     program, cell = compiled.program, compiled.cell
-    start, end = program.segments[0].trajectory.q[0], program.segments[-1].trajectory.q[-1]
     plan = str(compiled.loaded.plan.file)
+    ends = program.tools_at(program.duration)
+    for arm, tool in program.tools.items():
+        if ends[arm] != tool:
+            raise InputError(
+                Problem(
+                    f"--cycles {cycles}: the plan ends with the {arm} arm carrying "
+                    f"{_tool(ends[arm])}, and starts with it carrying {_tool(tool)}: a cycle "
+                    "must end with the tools it starts with (add a ChangeTool step)",
+                    plan,
+                )
+            )
+    start, end = program.segments[0].trajectory.q[0], program.segments[-1].trajectory.q[-1]
     for arm, s in cell.slices.items():
         off = np.abs(end[s] - start[s])
         if float(off.max()) > SAME_PLACE:
@@ -36,17 +47,6 @@ def check_cycles(compiled: Compiled, cycles: int) -> None:
                     f"{off[j]:.3f} {joint_unit(compiled, joint)} from where it starts (joint "
                     f"'{joint}'): a cycle must "
                     "end where the next one starts; give the plan `return_home: true`",
-                    plan,
-                )
-            )
-    ends = program.tools_at(program.duration)
-    for arm, tool in program.tools.items():
-        if ends[arm] != tool:
-            raise InputError(
-                Problem(
-                    f"--cycles {cycles}: the plan ends with the {arm} arm carrying "
-                    f"{_tool(ends[arm])}, and starts with it carrying {_tool(tool)}: a cycle "
-                    "must end with the tools it starts with (add a ChangeTool step)",
                     plan,
                 )
             )
