@@ -131,6 +131,10 @@ class Segment:
     paired: tuple[tuple[str, str, frozenset[tuple[int, int]]], ...] = ()
     # tool changers locking or unlocking at the segment's end, after its ``after`` events
     changes: tuple[ToolChange, ...] = ()
+    # s the arms then stand still (a tool at work: ``triggers``)
+    hold: float = 0.0
+    # arms whose tool works (is triggered) from the segment's start to its end: a taping gun
+    triggers: tuple[str, ...] = ()
 
     def arms(self) -> tuple[str, ...]:
         return tuple(p.arm for p in self.paths)

@@ -170,7 +170,7 @@ def test_deep_nesting(tmp_path: Path) -> None:
 def test_unknown_entry(tmp_path: Path) -> None:
     assert error(tmp_path, START, {"entry": ["finished"]}) == (
         'journal.jsonl:2: unknown journal entry ["finished"]; known: cycle, end, fault, '
-        "finished, measured, recovery, replanned, resume, sent, start, tared, timing"
+        "finished, measured, recovery, replanned, resume, sent, start, tared, timing, tool"
     )
 
 

@@ -21,6 +21,8 @@ class then moves to ``error`` and raises :class:`DriverFault`.
 
 from __future__ import annotations
 
+import contextlib
+import functools
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping, Sequence
@@ -33,7 +35,15 @@ from cellengine.arrays import FloatArray
 from cellengine.drivers.fault import DriverFault, DriverRefused, Fault
 from cellengine.drivers.layout import CellLayout
 from cellengine.drivers.lifecycle import Lifecycle, LifecycleError, State
-from cellengine.drivers.record import FaultRecord, Played, Recorder, Sent, ToolChanged, Transition
+from cellengine.drivers.record import (
+    FaultRecord,
+    Played,
+    Recorder,
+    Sent,
+    ToolChanged,
+    Transition,
+    Triggered,
+)
 from cellengine.errors import known
 from cellengine.info.bounds import MAX_MASS
 from cellengine.info.cell import Cell
@@ -147,7 +157,20 @@ class Driver(ABC):
         traj = segment.trajectory
         label, step = segment.segment.label, segment.segment.step
         self.recorder.add(Sent(step, label, traj.start_time, traj.end_time, tuple(q.tolist())))
-        played = self._guarded(lambda: self._on_execute(segment, ordered))
+        triggers = self._triggers(segment)
+        for arm, tool in triggers:
+            self._guarded(functools.partial(self._on_trigger, arm, tool, True))
+        try:
+            played = self._guarded(lambda: self._on_execute(segment, ordered))
+        except BaseException:
+            self._triggers_off(triggers)
+            raise
+        if played.fault is not None:
+            self._triggers_off(triggers)
+        for arm, tool in triggers:
+            if played.fault is None:
+                self._guarded(functools.partial(self._on_trigger, arm, tool, False))
+            self.recorder.add(Triggered(arm, tool, traj.start_time, traj.end_time))
         self.recorder.add(played)
         if played.fault is not None:
             self._fail(played.fault)
@@ -255,6 +278,32 @@ class Driver(ABC):
 
     def _read_mass(self, arm: str) -> float:
         raise DriverRefused(self.kind, f"arm '{arm}': the {self.kind} driver has no load cell")
+
+    def _on_trigger(self, arm: str, tool: str, on: bool) -> None:
+        """Start (``on``) or stop the work of the tool ``arm`` carries (a taping gun)."""
+        raise DriverRefused(self.kind, f"arm '{arm}': the {self.kind} driver triggers no tools")
+
+    def _triggers(self, segment: CompiledSegment) -> list[tuple[str, str]]:
+        """(arm, tool) of each tool the segment works with: DriverRefused, nothing sent,
+        for an arm that carries none."""
+        out = []
+        for arm in segment.segment.triggers:
+            self._check_arm(arm)
+            tool = self.tools[arm]
+            if tool is None:
+                raise DriverRefused(
+                    self.kind,
+                    f"segment '{segment.segment.label}' works the {arm} arm's tool, and it "
+                    "carries none",
+                )
+            out.append((arm, tool))
+        return out
+
+    def _triggers_off(self, triggers: list[tuple[str, str]]) -> None:
+        """The tools stopped after a fault: best effort (the arms are stopped already)."""
+        for arm, tool in triggers:
+            with contextlib.suppress(Exception):
+                self._on_trigger(arm, tool, False)
 
     def _on_change_tool(self, arm: str, tool: str | None) -> None:
         """Lock (``tool``) or unlock (None) ``arm``'s tool changer."""

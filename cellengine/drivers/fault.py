@@ -27,7 +27,7 @@ from cellengine.errors import DriverError, Problem
 FaultKind = Literal[
     "tracking",
     "gripper",
-    "tool_changer",
+    "tool",  # a tool changer that did not lock or unlock, a tool that did not start or stop
     "connection",
     "protective_stop",
     "emergency_stop",

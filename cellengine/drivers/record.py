@@ -68,6 +68,25 @@ class ToolChanged:
 
 
 @dataclass(frozen=True)
+class Triggered:
+    """``arm``'s ``tool`` worked from program time ``start`` to ``end`` (a taping gun)."""
+
+    arm: str
+    tool: str
+    start: float
+    end: float
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "entry": "triggered",
+            "arm": self.arm,
+            "tool": self.tool,
+            "start": self.start,
+            "end": self.end,
+        }
+
+
+@dataclass(frozen=True)
 class AppliedEvent:
     time: float  # when it was applied (the servo tick), program time
     arm: str
@@ -145,7 +164,7 @@ class FaultRecord:
         }
 
 
-Entry = Transition | Sent | Played | FaultRecord | ToolChanged
+Entry = Transition | Sent | Played | FaultRecord | ToolChanged | Triggered
 E = TypeVar("E", Transition, Sent, Played, FaultRecord)
 
 

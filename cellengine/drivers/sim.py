@@ -190,6 +190,11 @@ class SimDriver(Driver):
         noise = float(self._rng.normal(0.0, self.mass_noise)) if self.mass_noise > 0 else 0.0
         return mass + noise
 
+    def _on_trigger(self, arm: str, tool: str, on: bool) -> None:
+        """The simulated tool works at once; the recorder keeps when (Triggered)."""
+        if on:
+            self._check_connection()
+
     def _on_change_tool(self, arm: str, tool: str | None) -> None:
         """The changer locks or unlocks at once; the gripper it now has is in no known mode."""
         self._check_connection()

@@ -145,7 +145,8 @@ class UrDriver(Base):
                 self.kind, f"arm '{arm}' at {ip}: robot mode {mode}, not running (7)"
             )
         self._ask(arm, f"{answers} (RTDE control)", "connect_control")
-        if self.config.gripper_io or self.config.changer_release is not None:  # digital outputs
+        outputs = self.config.gripper_io or self.config.trigger_io
+        if outputs or self.config.changer_release is not None:  # digital outputs
             self._ask(arm, f"{answers} (RTDE IO)", "connect_io")
 
     def _ask(self, arm: str, what: str, op: str) -> Any:
@@ -400,6 +401,30 @@ class UrDriver(Base):
             time=t,
         )
 
+    def _on_trigger(self, arm: str, tool: str, on: bool) -> None:
+        """The tool's output (driver.trigger_io) high while it works."""
+        pin = self.config.trigger_io.get(tool)
+        if pin is None:
+            raise DriverRefused(
+                self.kind,
+                f"arm '{arm}': the cell's ur_rtde driver names no output for '{tool}' "
+                f"(driver.trigger_io: {{{tool}: <output>}})",
+            )
+        self._dout(arm, pin, on, f"{tool} of arm '{arm}'", "start" if on else "stop")
+
+    def _dout(self, arm: str, pin: int, high: bool, what: str, doing: str) -> None:
+        """One standard digital output of ``arm``'s controller; DriverFault if it fails."""
+        try:
+            refused = self._links[arm].call("dout", [(pin, high)], timeout=TICK_TIMEOUT)
+        except LinkError as e:
+            message = f"connection to arm '{arm}' lost ({e.why}); {STOPPED}"
+            raise DriverFault(self.kind, Fault("connection", message, arm)) from None
+        if refused is not None:
+            message = (
+                f"{what}: the controller refused digital output {pin} to {doing} it; {STOPPED}"
+            )
+            raise DriverFault(self.kind, Fault("tool", message, arm))
+
     def _on_change_tool(self, arm: str, tool: str | None) -> None:
         """The changer's release output high to unlock, low to lock."""
         pin = self.config.changer_release
@@ -410,17 +435,7 @@ class UrDriver(Base):
                 "(driver.changer_release)",
             )
         what = "lock" if tool is not None else "unlock"
-        try:
-            refused = self._links[arm].call("dout", [(pin, tool is None)], timeout=TICK_TIMEOUT)
-        except LinkError as e:
-            message = f"connection to arm '{arm}' lost changing tools ({e.why}); {STOPPED}"
-            raise DriverFault(self.kind, Fault("connection", message, arm)) from None
-        if refused is not None:
-            message = (
-                f"tool changer of arm '{arm}': the controller refused digital output {pin} "
-                f"to {what} it; {STOPPED}"
-            )
-            raise DriverFault(self.kind, Fault("tool_changer", message, arm))
+        self._dout(arm, pin, tool is None, f"tool changer of arm '{arm}'", what)
 
     def _apply_due(
         self, t: float, pending: list[TimedEvent], applied: list[AppliedEvent]

@@ -38,6 +38,7 @@ from cellengine.execute.held import Held, Holding
 from cellengine.execute.merge import MERGES, Merge, Merged, merge_rows, on_one_axis
 from cellengine.execute.preview import preview
 from cellengine.execute.refused import Refused, in_plan_terms
+from cellengine.execute.retime import standing
 from cellengine.execute.schedule import SCHEDULE_DT, schedule
 from cellengine.execute.search import add_all
 from cellengine.execute.solve import Lookahead
@@ -305,6 +306,8 @@ class Compiler:
             pieces.append(traj)
             figures.append((part, merged, report, starts))
             t, q = traj.end_time, np.array(traj.q[-1])
+        if segment.hold > 0.0:  # the arms stand still where the motion ended
+            pieces.append(standing(q, self.cell.joint_names, t, segment.hold))
         trajectory = concatenate(pieces) if len(pieces) > 1 else pieces[0]
         kept = None
         if segment.keep_distance is not None:

@@ -144,3 +144,10 @@ def still(q: Vec, names: Sequence[str], t: float = 0.0) -> Trajectory:
     qa = np.asarray(q, dtype=float)[None, :]
     z = np.zeros_like(qa)
     return Trajectory(tuple(names), np.array([t]), qa, z, z)
+
+
+def standing(q: Vec, names: Sequence[str], t: float, seconds: float) -> Trajectory:
+    """Standing at ``q`` from ``t`` for ``seconds``."""
+    qa = np.repeat(np.asarray(q, dtype=float)[None, :], 2, axis=0)
+    z = np.zeros_like(qa)
+    return Trajectory(tuple(names), np.array([t, t + seconds]), qa, z, z)

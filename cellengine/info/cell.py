@@ -117,6 +117,8 @@ class Tool(Frozen):
     grasp: Literal["top", "side"] = "top"
     load_cell: bool = False  # the tool weighs what it holds (gives the Weigh skill)
     slot: ToolSlot | None = None  # its place in the tool changer: arms change to and from it
+    # a taping gun's working time per trigger (s): the arms stand still while it tapes
+    dwell: float | None = Field(None, gt=0, le=600)
 
     @model_validator(mode="after")
     def _parts(self) -> Tool:
@@ -124,6 +126,12 @@ class Tool(Frozen):
             raise ValueError("shape: give at least one part, or leave shape out")
         if self.fingers is not None and not self.jaw:
             raise ValueError("fingers need the jaw's openings (jaw: {open: ..., ...})")
+        if (self.kind == "taping_gun") != (self.dwell is not None):
+            raise ValueError(
+                "a taping_gun needs dwell (s it tapes for)"
+                if self.kind == "taping_gun"
+                else f"dwell is a taping_gun's; a {self.kind} has none"
+            )
         names = [p.name or f"part{k + 1}" for k, p in enumerate(self.shape or ())]
         names += list(FINGER_NAMES) if self.fingers is not None else []
         twice = sorted({n for n in names if names.count(n) > 1})
@@ -249,6 +257,9 @@ class UrRtdeDriver(Frozen):
     # the tool changer: the standard digital output that, high, releases its lock (low
     # locks it; REMODEL sets its IO 10026 to 1 to release)
     changer_release: Annotated[int, Field(ge=0, le=7)] | None = None
+    # the tools that work on a trigger (a taping gun): the standard digital output high
+    # while the tool works, by tool
+    trigger_io: dict[Name, Annotated[int, Field(ge=0, le=7)]] = {}
 
 
 class GrblAxis(Frozen):

@@ -87,8 +87,8 @@ def test_unknown_key_and_bad_values(write) -> None:
         "{kind: sim}", "{kind: simulated}"
     )
     assert errors(write, text) == [
-        ":17:5: tools.gripper: unknown key 'finger_widht'; known: finger_thickness, "
-        "finger_width, fingers, grasp, jaw, kind, load_cell, mass, mesh, shape, tcp",
+        ":17:5: tools.gripper: unknown key 'finger_widht'; known: dwell, finger_thickness, "
+        "finger_width, fingers, grasp, jaw, kind, load_cell, mass, mesh, shape, slot, tcp",
         ":21:16: driver.kind: unknown kind 'simulated'; known: lab, sim, ur_rtde",
     ]
 

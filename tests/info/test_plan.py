@@ -58,7 +58,8 @@ def test_unknown_guide_names_step_and_lists_known() -> None:
 def test_unknown_skill_lists_skills() -> None:
     assert errors(PLAN.replace("skill: RouteCable", "skill: RouteCables")) == [
         "plan.yaml:7:12: steps[1]: unknown skill 'RouteCables'; known: BimanualCarry, "
-        "Handover, Pick, PickCable, Place, PlaceConnector, Pour, RouteCable, Unscrew, Weigh"
+        "ChangeTool, Handover, Pick, PickCable, Place, PlaceConnector, Pour, RouteCable, Tape, "
+        "Unscrew, Weigh"
     ]
 
 

@@ -23,6 +23,7 @@ TOOLS = f"""
   taping_gun:
     kind: taping_gun
     tcp: {{xyz: [0, 0, 180]}}
+    dwell: 3
     shape:
       - {{name: body, box: [60, 60, 150], pose: {{xyz: [0, 0, 75]}}}}
     slot: {{at: {{xyz: [250, 400, 320], rpy: [180, 0, 0]}}, {SLOT}}}
