@@ -255,8 +255,9 @@ def trajectory_chunks(program: Program, knots: int = TEXT_KNOTS) -> Iterator[str
 
 
 def _events_json(program: Program) -> list[dict[str, Any]]:
-    """The gripper events and the tool changes, in time order (a change after the gripper
-    events of its instant: it happens at its segment's very end)."""
+    """The gripper events, the tools' work (triggers: a taping gun) and the tool changes, in
+    time order (a change after the others of its instant: it happens at its segment's very
+    end)."""
     grippers = [
         {
             "time_from_start": e.time,
@@ -271,7 +272,21 @@ def _events_json(program: Program) -> list[dict[str, Any]]:
         {"time_from_start": c.time, "arm": c.arm, "kind": "tool", "tool": c.tool, "was": c.was}
         for c in program.changes
     ]
-    return sorted(grippers + changes, key=lambda e: (e["time_from_start"], e["kind"] == "tool"))
+    triggers = [
+        {
+            "time_from_start": cs.trajectory.start_time,
+            "arm": arm,
+            "kind": "trigger",
+            "tool": program.tools_at(cs.trajectory.start_time)[arm],
+            "duration": cs.trajectory.duration,
+        }
+        for cs in program.segments
+        for arm in cs.segment.triggers
+    ]
+    order = {"gripper": 0, "trigger": 1, "tool": 2}
+    return sorted(
+        grippers + triggers + changes, key=lambda e: (e["time_from_start"], order[e["kind"]])
+    )
 
 
 def step_label(step: Skill) -> str:

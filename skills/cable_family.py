@@ -15,7 +15,14 @@ from cellengine.errors import InputError, Problem, StepError, at_step
 from cellengine.family import Candidate
 from cellengine.program import Segment
 from cellengine.skill import Skill
-from cellengine.skills import cable_group, cable_meaning, cable_swap, cable_tools, cable_top
+from cellengine.skills import (
+    cable_group,
+    cable_meaning,
+    cable_swap,
+    cable_tape,
+    cable_tools,
+    cable_top,
+)
 from cellengine.skills.cable import (
     RELEASE,
     PickCable,
@@ -27,6 +34,7 @@ from cellengine.skills.cable import (
 )
 from cellengine.skills.cable_meaning import Finding
 from cellengine.skills.cable_state import ANY_BRANCH, CableState
+from cellengine.skills.cable_tape import Tape
 from cellengine.skills.cable_tools import ChangeTool
 from cellengine.world import World
 
@@ -36,10 +44,10 @@ if TYPE_CHECKING:
 
 class CableFamily:
     name = "cable"
-    skills: tuple[type[Skill], ...] = (PickCable, PlaceConnector, RouteCable, ChangeTool)
+    skills: tuple[type[Skill], ...] = (PickCable, PlaceConnector, RouteCable, ChangeTool, Tape)
 
     def check(self, world: World, steps: Sequence[Skill]) -> list[Finding]:
-        return cable_meaning.check(world, steps)
+        return cable_meaning.check(world, steps) + cable_tape.check(world, steps)
 
     def plan(self, ctx: PlanningContext, steps: Sequence[Skill]) -> Iterator[Candidate]:
         _picked_once(steps)
@@ -78,6 +86,12 @@ def _from(
             yield Candidate(tuple(segments))
         return
     step = steps[i]
+    if isinstance(step, Tape):  # it changes the tools it needs itself
+        with at_step(i):
+            for segments, after in cable_tape.tape_ways(ctx, step, replace(state, step=i)):
+                following = functools.partial(_from, ctx, steps, i + 1, after, failed)
+                yield Candidate(tuple(segments), then=following)
+        return
     if not isinstance(step, ChangeTool):
         with at_step(i):
             need = {a: cable_tools.GRIPPER for a in state.arms}

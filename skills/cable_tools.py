@@ -179,6 +179,11 @@ def fitting(
         now = state.tools[arm]
         if now is not None and tools[now].kind == kind:
             continue
+        if now is not None and tools[now].slot is None:
+            raise c._error(
+                f"{where} needs a {kind} on the {arm} arm, which carries '{now}', and '{now}' "
+                f"has no slot in the tool changer to be left in (cell.yaml tools.{now}.slot)"
+            )
         free = [
             n
             for n, t in tools.items()

@@ -145,7 +145,8 @@ class Driver(ABC):
 
     def execute(self, segment: CompiledSegment, events: Sequence[TimedEvent] = ()) -> Played:
         """Play one segment and the gripper events that happen during it (times within the
-        segment's span; applied in time order, ties in the given order). DriverRefused, with
+        segment's span; applied in time order, ties in the given order), with its tools at
+        work (its triggers) and, at its end, its tool changes. DriverRefused, with
         nothing sent, unless the arms are at the segment's first point within
         ``start_tolerance``. A fault stops both arms and raises :class:`DriverFault`."""
         self._life.check_operation("execute")
@@ -172,6 +173,9 @@ class Driver(ABC):
                 self._guarded(functools.partial(self._on_trigger, arm, tool, False))
             self.recorder.add(Triggered(arm, tool, traj.start_time, traj.end_time))
         self.recorder.add(played)
+        if played.fault is None:
+            for change in segment.segment.changes:  # the arm standing where the motion ended
+                self.change_tool(change.arm, change.tool)
         if played.fault is not None:
             self._fail(played.fault)
             raise DriverFault(self.kind, played.fault)

@@ -88,15 +88,14 @@ def _send(
     segment = program.segments[index]
     seg = segment.segment
     append(journal, Entry.SENT, step=seg.step, segment=index, label=seg.label)
+    carried = dict(driver.tools)
     try:
         driver.execute(segment, events)
     except DriverFault as e:
         if program.streams and e.fault.time is not None:  # the fault entry says it too
             e.streams = streams_entry(program, e.fault.time)
         raise
-    for change in seg.changes:  # at the segment's end, the arm standing at the slot
-        was = driver.tools[change.arm]
-        driver.change_tool(change.arm, change.tool)
+    for change in seg.changes:  # the driver changed tools at the segment's end
         append(
             journal,
             Entry.TOOL,
@@ -104,8 +103,9 @@ def _send(
             segment=index,
             arm=change.arm,
             tool=change.tool,
-            was=was,
+            was=carried[change.arm],
         )
+        carried[change.arm] = change.tool
     grippers = {arm: list(driver.gripper(arm)) for arm in arms}
     more: dict[str, Any] = {}
     if program.streams:  # what --resume goes on from: each robot's segments

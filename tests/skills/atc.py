@@ -30,9 +30,7 @@ TOOLS = f"""
 """
 
 
-def atc_cell(
-    tmp_path: Path, steps: str, edit: tuple[str, str] = ("", ""), head: str = ""
-) -> Path:
+def atc_cell(tmp_path: Path, steps: str, edit: tuple[str, str] = ("", ""), head: str = "") -> Path:
     """The cell in ``tmp_path``/cell with a plan.yaml of ``steps`` (YAML list items) after
     ``head`` (plan keys); its cell.yaml's text ``edit[0]`` replaced by ``edit[1]`` after the
     tools are added."""
