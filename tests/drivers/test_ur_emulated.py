@@ -186,21 +186,21 @@ def test_grippers_on_digital_outputs_follow_the_programs_events(
         assert seen[-1] == modes[-1]
 
 
-def test_a_tool_change_releases_and_locks_the_changer_on_its_output(
+def test_tool_changes_and_the_taping_gun_on_their_outputs(
     tmp_path: Path, emulated: tuple[Path, list[str], list[Emulator]]
 ) -> None:
     """With ``changer_release`` each tool change sets that standard digital output of the
-    changing arm's controller through the real RTDEIOInterface: high to leave the tool in
-    its slot, low to lock the next; the other arm's outputs are not touched."""
+    changing arm's controller through the real RTDEIOInterface (high to leave the tool in
+    its slot, low to lock the next), and with ``trigger_io`` the taping gun's output is high
+    while it tapes; the other arm's outputs are not touched."""
     from tests.skills.atc import atc_cell
+    from tests.skills.test_cable_tape import ROUTE, TAPE
 
     _, hosts, started = emulated
-    driver = f"{{kind: ur_rtde, arms: {{left: {hosts[0]}, right: {hosts[1]}}}, changer_release: 4}}"
-    steps = (
-        "  - {skill: ChangeTool, arm: left, tool: taping_gun}\n"
-        "  - {skill: ChangeTool, arm: left, tool: gripper_left}\n"
-    )
-    plan = atc_cell(tmp_path, steps, ("driver: {kind: sim}", f"driver: {driver}"))
+    arms = f"arms: {{left: {hosts[0]}, right: {hosts[1]}}}"
+    driver = f"{{kind: ur_rtde, {arms}, changer_release: 4, trigger_io: {{taping_gun: 5}}}}"
+    steps = ROUTE + TAPE % "routing.guide2"
+    plan = atc_cell(tmp_path / "atc", steps, ("driver: {kind: sim}", f"driver: {driver}"))
     program = compile_plan(plan).program
     emulator = start(hosts, program.segments[0].trajectory.q[0], started)
     run = tmp_path / "run"
@@ -211,11 +211,7 @@ def test_a_tool_change_releases_and_locks_the_changer_on_its_output(
         host: [int(v, 16) for v in re.findall(rf"{re.escape(host)}: digital outputs (0x\w+)", log)]
         for host in hosts
     }
-    assert seen == {hosts[0]: [0x10, 0x00, 0x10, 0x00], hosts[1]: []}
+    # released (pin 4), locked on the gun, the gun on (pin 5) and off
+    assert seen == {hosts[0]: [0x10, 0x00, 0x20, 0x00], hosts[1]: []}
     tools = [(e["tool"], e["was"]) for e in journal(run) if e["entry"] == "tool"]
-    assert tools == [
-        (None, "gripper_left"),
-        ("taping_gun", None),
-        (None, "taping_gun"),
-        ("gripper_left", None),
-    ]
+    assert tools == [(None, "gripper_left"), ("taping_gun", None)]
