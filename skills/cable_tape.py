@@ -262,34 +262,42 @@ def _laid(
     refs: tuple[str, str, str],
     i: int,
 ) -> list[tuple[tuple[str | int, ...], str]]:
+    """The cables of ``cables`` routed so far that run straight between the two guides are
+    taped there (a harness's trunk, its branches that went on elsewhere not): at least one
+    must, and each of those must lie in the hold guide."""
     a, b, hold = refs
-    for n in cables:
-        route = routes.get(n)
+    routed = [n for n in cables if n in routes]
+    if not routed:
+        what = (
+            f"{step.cable} is not"
+            if list(cables) == [step.cable]
+            else f"none of {step.cable}'s cables is"
+        )
+        message = f"{what} routed before this step: tape it after the RouteCable that lays it"
+        return [(("steps", i, "cable"), message)]
+
+    def straight(route: list[str]) -> bool:
+        return any({route[k], route[k + 1]} == {a, b} for k in range(len(route) - 1))
+
+    laid = [n for n in routed if straight(routes[n])]
+    if not laid:
+        n = routed[0]
         what = step.cable if n == step.cable else f"{n} of {step.cable}"
-        if route is None:
-            return [
-                (
-                    ("steps", i, "cable"),
-                    f"{what} is not routed before this step: tape it "
-                    "after the RouteCable that lays it",
-                )
-            ]
-        shown = ", ".join(route)
-        adjacent = any({route[k], route[k + 1]} == {a, b} for k in range(len(route) - 1))
-        if not adjacent:
-            return [
-                (
-                    ("steps", i, "between"),
-                    f"{what} does not run straight from {a} to {b}: "
-                    f"its route is {shown} (tape between two guides next to each other on it)",
-                )
-            ]
-        if hold not in route:
+        return [
+            (
+                ("steps", i, "between"),
+                f"{what} does not run straight from {a} to {b}: its route is "
+                f"{', '.join(routes[n])} (tape between two guides next to each other on it)",
+            )
+        ]
+    for n in laid:
+        if hold not in routes[n]:
+            what = step.cable if n == step.cable else f"{n} of {step.cable}"
             return [
                 (
                     ("steps", i, "hold"),
-                    f"{what} does not lie in {hold}: its route is "
-                    f"{shown} (hold it beside a guide it lies in)",
+                    f"{what} does not lie in {hold}: its route is {', '.join(routes[n])} "
+                    "(hold it beside a guide it lies in)",
                 )
             ]
     return []

@@ -27,6 +27,7 @@ from typing import Any, TypeVar
 import yaml
 
 from cellengine.commands.remodel_links import Labels, Link, connector_data
+from cellengine.commands.remodel_tools import atc_tools
 from cellengine.errors import (
     EXIT_OK,
     InputError,
@@ -56,7 +57,7 @@ MODELS = "Jigs_definition*.xml"  # the sample has Jigs_definition_v2.xml
 # The reader's size cap of each kind of copied file (the .wri ids file is read as CSV).
 _CAP_KINDS = {".x3d": "x3d", ".wri": "csv", ".xml": "xml"}
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_-]*$")
-_SKILLS = {"EC": "PickCable", "PC": "PlaceConnector", "RC": "RouteCable"}
+_SKILLS = {"EC": "PickCable", "PC": "PlaceConnector", "RC": "RouteCable", "T": "Tape"}
 T = TypeVar("T")
 
 # Without --robots: the two-arm cell of the published method (DESIGN 3.1), in mm and deg.
@@ -104,7 +105,8 @@ Turn a REMODEL cable-routing folder into a native cell in DEST:
   plan.yaml     Assembly_sequence.csv, in file order as REMODEL runs it (its Order
                 column is not used): EC -> PickCable, PC -> PlaceConnector (the
                 spot's L/R picks robot left/right; with --arms auto, the engine),
-                RC -> RouteCable (of a branch: its cables as a group). A spot
+                RC -> RouteCable (of a branch: its cables as a group), T -> Tape
+                (between the first two spots' guides, held beside the third). A spot
                 such as C2.1 is guide 1 of element C2 of whichever platform has
                 C2. Labels are typed by their first letter as in REMODEL (T table,
                 J jig, B box, C comb, A tool changer slot): J, B, C and A labels
@@ -113,8 +115,13 @@ Turn a REMODEL cable-routing folder into a native cell in DEST:
 The Label column names a connector (a harness's first connector names the harness),
 a cable, or, in RC rows, a branch. What REMODEL itself would read otherwise (an Order
 out of file order, a lower-case type, an EC arm its PC contradicts) is a warning at
-its line. The later system's one-comb EC and T (taping) rows are read and checked,
-then refused at their rows: the engine cannot do them yet.
+its line. The later system's one-comb EC rows are read and checked, then refused at
+their rows: the engine cannot do them yet.
+
+A tool changer platform's A-labelled stations become tools with slots at their
+tool_base (`Agun`: a taping gun `gun`; `Agripper_left`: the setup's gripper as
+`gripper_left`, carried by robot `left` at the start), their TCP at the station's
+tool_end, approached as REMODEL does.
 
 Platforms are placed with --pose (default: at the cell origin). REMODEL's Blender
 exports come out turned 180 deg about z in the z-up cell frame; a yaw of 180 lays
@@ -428,6 +435,8 @@ def read_inputs(source: Source, setup: Setup, arms: str = "file") -> Inputs:
     wh = source.harness
     wiring = attempt(lambda: load_wiring(wh)) if wh is not None else None
     elements = attempt(lambda: element_platforms(source, warnings))
+    slots = attempt(lambda: atc_tools(source, setup.data))
+    warnings += slots[2] if slots is not None else []
     harnesses = None
     if wiring is not None:
         harnesses, more = wiring
@@ -464,13 +473,12 @@ def build_steps(inputs: Inputs) -> tuple[list[Step], dict[str, str], list[Proble
 # What the later REMODEL system does that the engine's skills do not do yet (issue #15).
 _NOT_YET = {
     "EC": "picking from one comb with one hand (the later system's EC) is not built yet",
-    "T": "taping is not built yet",
 }
 
 
 def _step(op: Operation, link: Link, inputs: Inputs) -> Step:
     single_comb = op.kind == "EC" and len(op.spots) == 1
-    if single_comb or op.kind == "T":
+    if single_comb:
         what = f"{op.kind} {op.label} {op.spot}: {_NOT_YET[op.kind]}"
         raise InputError.at(f"{what} in this engine (issue #15)", inputs.source.sequence, op.row)
     refs = [_ref(op, i, inputs) for i in range(len(op.spots))]
@@ -479,6 +487,8 @@ def _step(op: Operation, link: Link, inputs: Inputs) -> Step:
     data = Block(skill=_SKILLS[op.kind], cable=link.branch or link.name)
     if op.kind == "EC":
         data["from"] = refs  # the Spot writes the connector end first, as PickCable does
+    elif op.kind == "T":  # the two guides to tape between, then the one to hold beside
+        data["between"], data["hold"] = refs[:2], refs[2]
     elif op.kind == "PC":
         data["guide"] = refs[0]
         arm = op.spots[0].arm
@@ -623,13 +633,10 @@ def cell_text(inputs: Inputs, name: str, poses: Mapping[str, Any], dest: Path) -
         }
         for p, (cad, ids) in source.platforms.items()
     }
-    data: dict[str, Any] = {
-        "name": name,
-        "units": setup.data["units"],
-        "robots": setup.data["robots"],
-    }
-    if setup.data["tools"]:
-        data["tools"] = setup.data["tools"]
+    tools, robots, _ = atc_tools(source, setup.data)
+    data: dict[str, Any] = {"name": name, "units": setup.data["units"], "robots": robots}
+    if tools:
+        data["tools"] = tools
     data["platforms"] = platforms
     data["driver"] = setup.data["driver"]
     if "clearance" in setup.data:

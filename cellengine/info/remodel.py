@@ -60,6 +60,7 @@ class RemodelModel:
     keypoints: Mapping[str, Keypoint]  # in the element frame, metres
     boxes: tuple[CollisionBox, ...]
     source: Source
+    tool: str | None = None  # an ATC_station's: the kind of tool it holds (gun, gripper)
 
 
 def load_remodel_platform(
@@ -320,6 +321,7 @@ def _atc_model(doc: _Doc, el: Any) -> RemodelModel:
         MappingProxyType(keypoints),
         (),
         Source(str(doc.path), el.sourceline),
+        el.get("tool"),
     )
 
 

@@ -94,6 +94,25 @@ def test_an_atc_platform_with_its_own_table_t1_imports(src: Path, tmp_path: Path
     gripper = world.platforms["ATC"].elements["Agripper_left"]
     assert sorted(gripper.keypoints) == ["gripper_nail", "tool_base", "tool_end"]
     assert gripper.dimensions["finger_length"] == pytest.approx(0.040, abs=1e-9)
+    # each station's tool, with its slot at the station's tool_base and REMODEL's approach
+    # (out 70 mm along x, back 50 mm plus the tool along z; the bare flange back 50 mm)
+    tools = cell["tools"]
+    assert sorted(tools) == ["cable_gripper", "gripper_left", "gripper_right", "gun"]
+    assert tools["gun"]["kind"] == "taping_gun" and tools["gun"]["dwell"] == 3.0
+    assert tools["gun"]["slot"] == {
+        "at": "ATC.Agun.tool_base",
+        "exit": [[70, 0, 0], [70, 0, -150]],
+        "retreat": [[0, 0, -50]],
+    }
+    assert tools["gun"]["tcp"] == {"xyz": [100, -55, 86], "rpy": [0, pytest.approx(89.95437), 0]}
+    assert tools["gripper_left"]["slot"]["exit"] == [[70, 0, 0], [70, 0, -315]]
+    assert tools["gripper_left"]["tcp"] == {"xyz": [0, 0, 240], "rpy": [0, 0, 0]}
+    assert tools["gripper_left"]["fingers"] == tools["cable_gripper"]["fingers"]
+    assert {r: cell["robots"][r]["tool"] for r in cell["robots"]} == {
+        "left": "gripper_left",
+        "right": "gripper_right",
+    }
+    assert world.slot("gun") == pytest.approx(world.pose("ATC.Agun.tool_base"), abs=1e-12)
 
 
 def test_a_jig_label_on_two_platforms_is_refused(
@@ -173,12 +192,46 @@ def test_later_rows_not_built_yet_are_refused_at_their_rows(
     assert capsys.readouterr().err.splitlines() == [
         f"Assembly_sequence.csv:2: EC WH1 C1.1.R: picking from one comb with one hand (the "
         f"later system's EC) {not_yet}",
-        f"Assembly_sequence.csv:5: T WH1 J3.1-J4.1-J4.1: taping {not_yet}",
         "Assembly_sequence.csv:6: unknown Label 'WH3': not a connector or cable of "
         "Components_definition.csv nor a branch of WH_configuration.xml; known: CA1, CA2, CA3, "
         "CA4, CON1, GR11, GR12, WH1",
     ]
     assert not (tmp_path / "cell").exists()
+
+
+def test_a_taping_row_is_a_tape_step(
+    src: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """T's spots: the two guides to tape between, then the one to hold beside (HARNESS.md
+    1.7); the harness's cables laid between them by the rows before are taped."""
+    sequence(
+        src,
+        "1;EC;WH1;C2.1-C1.1",
+        "2;PC;WH1;J8.1.L",
+        "3;RC;GR11;J3.1-J4.1",
+        "4;T;WH1;J3.1-J4.1-J4.1",
+    )
+    monkeypatch.chdir(src)
+    assert run(src, tmp_path / "cell") == 0
+    steps = yaml.safe_load((tmp_path / "cell" / "plan.yaml").read_text())["steps"]
+    assert steps[-1] == {
+        "skill": "Tape",
+        "cable": "WH1",
+        "between": ["platform.J3.1", "platform.J4.1"],
+        "hold": "platform.J4.1",
+    }
+
+
+def test_a_taping_row_before_its_cables_are_laid(
+    src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    sequence(src, "1;EC;WH1;C2.1-C1.1", "2;PC;WH1;J8.1.L", "3;T;WH1;J3.1-J4.1-J4.1")
+    monkeypatch.chdir(src)
+    assert run(src, tmp_path / "cell") == 1
+    assert capsys.readouterr().err.splitlines()[0] == (
+        "Assembly_sequence.csv:4: steps[2].cable: none of WH1's cables is routed before this "
+        "step: tape it after the RouteCable that lays it"
+    )
 
 
 def test_a_connector_that_starts_no_harness(
