@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -84,34 +84,48 @@ def check_compiled(compiled: Compiled, world: World | None = None) -> CheckResul
     """Check ``compiled`` against ``world`` (default: its own; another one moves keypoints)."""
     cell = compiled.cell
     a, b = tuple(cell.arms)
-    checkers = _jaw_checkers(compiled)
+    tooled = _jaw_checkers(compiled)
 
     def distance(k: int) -> ArmDistance:
-        return lambda q: checkers[k].distance(q, (a, b))
+        return lambda q: tooled[k][1].distance(q, (a, b))
 
+    cells = [c for c, _ in tooled]
     return check_program(
-        compiled.program, world or compiled.world, cell, routes(compiled), distance
+        compiled.program, world or compiled.world, cell, routes(compiled), distance, cells
     )
 
 
-def _jaw_checkers(compiled: Compiled) -> list[CollisionChecker]:
-    """Each segment's collision checker, with the grippers' jaws (and what they hold) as the
-    program's gripper events leave them: a closed gripper's fingers are not where an open
-    one's are."""
-    cell = compiled.cell
-    holding = Holding(compiled.world, compiled.context.checker.scene)
-
-    def apply(events: Sequence[GripperEvent], q: Vec) -> None:
-        for e in events:
-            T_cell_tcp = cell.arms[e.arm].fk(cell.split(q)[e.arm])
-            holding.set(e.arm, e.holds, T_cell_tcp, e.mode)
-
+def _jaw_checkers(compiled: Compiled) -> list[tuple[CellModel, CollisionChecker]]:
+    """Each segment's robot models and collision checker: with the tools the arms carry then
+    (a tool change switches both), the grippers' jaws (and what they hold) as the program's
+    gripper events leave them: a closed gripper's fingers are not where an open one's are."""
+    program = compiled.program
+    kept: dict[tuple[tuple[str, str | None], ...], tuple[CellModel, Holding]] = {}
+    last: tuple[tuple[str, str | None], ...] | None = None
     out = []
-    for seg in compiled.program.segments:
-        apply(seg.segment.before, seg.trajectory.q[0])
-        out.append(holding.checker)
-        apply(seg.segment.after, seg.trajectory.q[-1])
+    for seg in program.segments:
+        tools = program.tools_at(seg.trajectory.start_time) if program.changes else {}
+        key = tuple(sorted(tools.items()))
+        if key not in kept:
+            ctx = compiled.context.tooled(tools)
+            kept[key] = (ctx.cell, Holding(ctx.world, ctx.scene))
+        cell, holding = kept[key]
+        if last is not None and last != key:  # a tool change: what is held carries over
+            state = kept[last][1].state
+            changed = {a for a, t in tools.items() if dict(last).get(a) != t}
+            jaw = {a: v for a, v in state.jaw.items() if a not in changed}
+            holding.restore(replace(state, jaw=jaw))
+        last = key
+        _apply(cell, holding, seg.segment.before, seg.trajectory.q[0])
+        out.append((cell, holding.checker))
+        _apply(cell, holding, seg.segment.after, seg.trajectory.q[-1])
     return out
+
+
+def _apply(cell: CellModel, holding: Holding, events: Sequence[GripperEvent], q: Vec) -> None:
+    for e in events:
+        T_cell_tcp = cell.arms[e.arm].fk(cell.split(q)[e.arm])
+        holding.set(e.arm, e.holds, T_cell_tcp, e.mode)
 
 
 def check_program(
@@ -120,9 +134,11 @@ def check_program(
     cell: CellModel,
     steps: Sequence[Route],
     distance: Callable[[int], ArmDistance],
+    cells: Sequence[CellModel] | None = None,
 ) -> CheckResult:
-    """The checks; ``distance(k)``: the distance between the two arms during segment k."""
-    failures = _inserts(program, world, cell, steps)
+    """The checks; ``distance(k)``: the distance between the two arms during segment k;
+    ``cells[k]``: the robot models with the tools the arms carry then (default ``cell``)."""
+    failures = _inserts(program, world, cells or [cell] * len(program.segments), steps)
     report = check_trajectory(
         concatenate([s.trajectory for s in program.segments]), cell.joint_names, cell.limits
     )
@@ -149,12 +165,13 @@ def _least_arm_distance(
 
 
 def _inserts(
-    program: Program, world: World, cell: CellModel, steps: Sequence[Route]
+    program: Program, world: World, cells: Sequence[CellModel], steps: Sequence[Route]
 ) -> list[Failure]:
     """Each RouteCable step's guides inserted by its own segments, in plan order, with what
     it routes (a cable, a harness or one of its branches) held through each slot."""
     out: list[Failure] = []
     last = -math.inf
+    index = {id(s): k for k, s in enumerate(program.segments)}
     for i, cable, guides in steps:
         ends = _insert_ends(program, i)
         for guide in guides:
@@ -168,6 +185,7 @@ def _inserts(
                 msg = f"{guide}: inserted before the guide planned before it"
                 out.append(Failure("order", msg))
             last = max(last, t)
+            cell = cells[index[id(seg)]]
             problem = _through_slot(program, world, cell, guide, cable, seg)
             if problem:
                 out.append(Failure("insert", f"{guide}: {problem}"))
