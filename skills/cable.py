@@ -406,6 +406,9 @@ class RouteCable(Skill):
     skill: Literal["RouteCable"]
     cable: CableRef
     guides: tuple[GuideRef, ...] = Field(min_length=1)
+    # a harness's bottom branch: the cables above it still to be routed are laid aside in
+    # this guide first (a separation guide, REMODEL's J<n>S)
+    separate_into: GuideRef | None = None
 
     def plan(self, ctx: PlanningContext, state: CableState) -> tuple[list[Segment], CableState]:
         """Algorithm 1, ROUTECABLE, for each guide: the other arm lets go of the previous

@@ -24,7 +24,8 @@ group's route starts as a single cable's does after PlaceConnector.
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+import functools
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -35,6 +36,7 @@ from cellengine.errors import InputError
 from cellengine.info.harness import Harness
 from cellengine.program import GripperEvent, Segment
 from cellengine.skills import cable as c
+from cellengine.skills import cable_aside
 from cellengine.skills import cable_geometry as cg
 from cellengine.skills.cable_state import CableState, Placed
 
@@ -85,9 +87,10 @@ def separation_point(harness: Harness, group: Sequence[str], left: Sequence[str]
 def group_ways(
     ctx: PlanningContext, step: c.RouteCable, state: CableState
 ) -> Iterator[tuple[list[Segment], CableState]] | None:
-    """The ways to take ``step``'s group at its harness's connector, each with the state
-    RouteCable's first guide starts from; None when ``step`` routes no branch, or routes on
-    a branch it already holds."""
+    """The ways to take ``step``'s group at its harness's connector (or back from the
+    separation guide it was laid aside in; or, with ``separate_into``, after laying the
+    cables above it aside), each with the state RouteCable's first guide starts from; None
+    when ``step`` routes no branch, or routes on a branch it already holds."""
     world = ctx.world
     found = world.objects.branch_of(step.cable)
     if found is None or state.cable == step.cable:
@@ -97,13 +100,25 @@ def group_ways(
     if placed is None:  # cable_group_meaning refuses such a plan before any motion
         raise c._error(f"steps[{state.step}] RouteCable {step.cable}: {name} is not placed")
     group = harness.branches[step.cable].cables
-    left = [n for n in harness.cables if n not in state.routed]
-    sep = separation_point(harness, group, left)
+    aside = state.aside.get(name)
+    away = set(aside.cables) if aside is not None else set()
+    left = [n for n in harness.cables if n not in state.routed and n not in away]
     where = f"steps[{state.step}] RouteCable {step.cable}"
-    return _ways(ctx, step, state, placed, sep, where)
+    up = cg.platform_up(ctx.world, placed.guide)
+    T_end = _shifted(placed.T_hold, LIFT * up)
+    if aside is not None and set(group) <= away:
+        back = functools.partial(_back, ctx, step, placed, aside, T_end, where)
+        return _ways(ctx, step, state, placed, back, cg.position(world, aside.guide), where)
+    low = min(harness.cables[n].pin for n in group)
+    above = tuple(
+        n for n in harness.in_order(left) if n not in group and harness.cables[n].pin > low
+    )
+    if step.separate_into is not None and above:
+        return _aside_then(ctx, step, state, placed, (name, harness), above, where)
+    return _grasp_ways(ctx, step, state, placed, separation_point(harness, group, left), where)
 
 
-def _ways(
+def _grasp_ways(
     ctx: PlanningContext,
     step: c.RouteCable,
     state: CableState,
@@ -111,26 +126,95 @@ def _ways(
     sep: Separation,
     where: str,
 ) -> Iterator[tuple[list[Segment], CableState]]:
-    """Release what the hands hold (each way of release_ways), then the arm whose base is
-    nearer the route's end takes the group, else the other."""
+    """The group separated from the cables below it, or grasped (cable_group's notes)."""
     up = cg.platform_up(ctx.world, placed.guide)
     T_take = _shifted(placed.T_hold, sep.height * up)
     T_above = _shifted(T_take, cg.APPROACH_HEIGHT * up)
     # every group then held where the placing held the bundle, a little higher: the route
     # starts as it does after the placing, whichever rows the group came from
     T_end = _shifted(placed.T_hold, LIFT * up)
+
+    def take(state: CableState, arm: str) -> tuple[list[Segment], CableState]:
+        what = "separating grasp" if sep.separates else "group's grasp"
+        c._check_reach(ctx, arm, [(f"{what} approach", T_above), (what, T_take)], where)
+        return _take(step, state, placed, sep, arm, (T_above, T_take, T_end))
+
+    end = cg.position(ctx.world, step.guides[-1])
+    return _ways(ctx, step, state, placed, take, end, where)
+
+
+def _aside_then(
+    ctx: PlanningContext,
+    step: c.RouteCable,
+    state: CableState,
+    placed: Placed,
+    owner: tuple[str, Harness],
+    above: tuple[str, ...],
+    where: str,
+) -> Iterator[tuple[list[Segment], CableState]]:
+    """The cables ``above`` the group laid aside in ``step.separate_into`` (cable_aside),
+    then the group, the bottom of what is left, grasped."""
+    name, harness = owner
+    guide = step.separate_into
+    assert guide is not None
+    left = [n for n in harness.cables if n not in state.routed]
+    sep = separation_point(harness, above, left)
+    up = cg.platform_up(ctx.world, placed.guide)
+    T_take = _shifted(placed.T_hold, sep.height * up)
+    T_above = _shifted(T_take, cg.APPROACH_HEIGHT * up)
+
+    def lay(state: CableState, arm: str) -> tuple[list[Segment], CableState]:
+        c._check_reach(ctx, arm, [("separating grasp", T_take)], where)
+        take = (T_above, T_take)
+        return cable_aside.lay_aside(ctx, state, placed, name, above, take, guide, arm, where)
+
+    group = harness.branches[step.cable].cables
+    rest = [n for n in left if n not in above]
+    at = cg.position(ctx.world, guide)
+    for laid, after in _ways(ctx, step, state, placed, lay, at, where):
+        for more, taken in _grasp_ways(
+            ctx, step, after, placed, separation_point(harness, group, rest), where
+        ):
+            yield [*laid, *more], taken
+
+
+def _back(
+    ctx: PlanningContext,
+    step: c.RouteCable,
+    placed: Placed,
+    aside: cable_aside.Aside,
+    T_end: Mat,
+    where: str,
+    state: CableState,
+    arm: str,
+) -> tuple[list[Segment], CableState]:
+    """The group taken back out of the separation guide by ``arm``, held at ``T_end``."""
+    more, after = cable_aside.take_back(ctx, state, placed, step.cable, aside, arm, T_end, where)
+    group = ctx.world.objects.cables_of(step.cable)
+    return more, _holding(after, placed, tuple(group), arm, step.cable, T_end)
+
+
+Act = Callable[[CableState, str], tuple[list[Segment], CableState]]
+
+
+def _ways(
+    ctx: PlanningContext,
+    step: c.RouteCable,
+    state: CableState,
+    placed: Placed,
+    act: Act,
+    near: Vec,
+    where: str,
+) -> Iterator[tuple[list[Segment], CableState]]:
+    """Release what the hands hold (each way of release_ways), move the other arm out of the
+    way, then ``act`` with the arm whose base is nearer ``near`` (the route's end, the
+    separation guide), else with the other."""
     first: InputError | None = None
-    # the arm whose base is nearer the route's end first, as PlaceConnector's roles keep each
-    # arm on its side: the other's take is the search's next choice ("arms")
-    arms = sorted(state.arms, key=lambda a: c._base_distance(ctx, a, step.guides[-1]))
+    # the arm whose base is nearer first, as PlaceConnector's roles keep each arm on its
+    # side: the other's is the search's next choice ("arms")
+    arms = sorted(state.arms, key=lambda a: _base_distance(ctx, a, near))
     for released, after in c.release_ways(ctx, state):
         for arm in arms:
-            what = "separating grasp" if sep.separates else "group's grasp"
-            try:
-                c._check_reach(ctx, arm, [(f"{what} approach", T_above), (what, T_take)], where)
-            except InputError as e:
-                first = first or e
-                continue
             other = next(a for a in after.arms if a != arm)
             # the other arm out of the way first: where the placing left it, when it is the
             # arm that stood there, else at home (a route's release leaves it over the board)
@@ -140,9 +224,11 @@ def _ways(
                 f"RouteCable {step.cable}: {other} out of the way",
                 [c._transit(other, T_idle)],
             )
-            more, taken = _take(
-                step, idle.state.transited(other), placed, sep, arm, (T_above, T_take, T_end)
-            )
+            try:
+                more, taken = act(idle.state.transited(other), arm)
+            except InputError as e:
+                first = first or e
+                continue
             yield [*released, *idle.segments, *more], taken
     if first is not None:
         raise first
@@ -181,11 +267,19 @@ def _take(
         after=[GripperEvent(arm, c.GRASP, branch)] if sep.separates else [],
         near=[(arm, element)],
     )
+    return b.segments, _holding(b.state, placed, sep.group, arm, branch, T_end)
+
+
+def _holding(
+    state: CableState, placed: Placed, group: tuple[str, ...], arm: str, branch: str, T_end: Mat
+) -> CableState:
+    """The state a group's route starts from: ``arm`` holds ``branch`` at ``T_end``, over
+    where the placing held the bundle; the other holds the connector end."""
     rear = np.asarray(placed.rear, dtype=float)
     more = float(np.linalg.norm(T_end[:3, 3] - rear) - np.linalg.norm(placed.T_hold[:3, 3] - rear))
     other = next(a for a in state.arms if a != arm)
-    after = b.state.hold(arm, branch, placed.s_hold).transited(arm)
-    return b.segments, replace(
+    after = state.hold(arm, branch, placed.s_hold).transited(arm)
+    return replace(
         after,
         cable=branch,
         routing_arm=arm,
@@ -194,8 +288,14 @@ def _take(
         guides=(placed.guide,),
         route=(placed.rear,),
         pull_distance=placed.pull_distance + more,
-        routed=state.routed | set(sep.group),
+        routed=state.routed | set(group),
     )
+
+
+def _base_distance(ctx: PlanningContext, arm: str, p: Vec) -> float:
+    """Horizontal distance (m) from ``arm``'s base to ``p``."""
+    d = np.asarray(p, dtype=float) - ctx.cell.arms[arm].T_cell_base[:3, 3]
+    return float(np.hypot(d[0], d[1]))
 
 
 def _shifted(T: Mat, by: Vec) -> Mat:

@@ -26,6 +26,7 @@ def group_findings(world: World, steps: Sequence[Skill]) -> list[Finding]:
     placed: set[str] = set()  # harnesses (and cables) whose connector is placed
     routed: set[str] = set()  # the single cables whose route has begun
     laid: dict[str, list[str]] = {}  # guide -> the single cables in its slot
+    aside: dict[str, str] = {}  # single cable -> the separation guide it lies aside in
     current = ""  # what the last RouteCable routed: the next one of it goes on
     for i, step in enumerate(steps):
         if isinstance(step, PlaceConnector):
@@ -45,7 +46,11 @@ def group_findings(world: World, steps: Sequence[Skill]) -> list[Finding]:
                     f"before it: plan PlaceConnector (cable: {name}) first"
                 )
                 out.append((at, msg))
-            out += _rows(owner, step.cable, routed, at)
+            out += _rows(owner, step.cable, routed, aside, step.separate_into, at)
+            out += _aside(world, owner, step, routed, aside, ("steps", i))
+        elif step.separate_into is not None:
+            at_sep: Loc = ("steps", i, "separate_into")
+            out.append((at_sep, f"{step.cable} is no branch of a harness: nothing to lay aside"))
         group = objects.cables_of(step.cable)
         for j, ref in enumerate(step.guides):
             here: Loc = ("steps", i, "guides", j)
@@ -66,14 +71,73 @@ def _whole(harness: Harness, routed: set[str], at: Loc) -> list[Finding]:
     return [(at, msg + (f" ({', '.join(rest)})" if rest else ""))]
 
 
-def _rows(harness: Harness, branch: str, routed: set[str], at: Loc) -> list[Finding]:
+def _aside(
+    world: World,
+    harness: Harness,
+    step: RouteCable,
+    routed: set[str],
+    aside: dict[str, str],
+    at: Loc,
+) -> list[Finding]:
+    """``separate_into``: the cables above the branch still at the connector go into that
+    guide (once per harness, as REMODEL does), which takes them."""
+    group = harness.branches[step.cable].cables
+    mine = [n for n in harness.cables if n in aside]
+    if step.separate_into is None:
+        return []
+    here: Loc = (*at, "separate_into")
+    low = min(harness.cables[n].pin for n in group)
+    above = [
+        n
+        for n in harness.in_order(list(harness.cables))
+        if n not in routed and n not in aside and n not in group and harness.cables[n].pin > low
+    ]
+    if not above:
+        return [
+            (here, f"no cable still to be routed lies above {step.cable}: nothing to lay aside")
+        ]
+    if mine:
+        return [(here, f"{', '.join(mine)} lie aside already: a harness is laid aside once")]
+    aside.update({n: step.separate_into for n in above})
+    d = packed_diameter([_diameter(world, n) for n in above])
+    try:
+        gap = world.dimensions(step.separate_into)["gap"]
+    except (RefError, KeyError):
+        return []  # the plan's own checks say what is wrong with the guide
+    if gap > d:
+        return []
+    msg = (
+        f"guide '{step.separate_into}' has a {_mm(gap)} mm slot (its gap); {', '.join(above)} "
+        f"to lay aside in it are a {_mm(d)} mm bundle: it does not fit"
+    )
+    return [(here, msg)]
+
+
+def _rows(
+    harness: Harness,
+    branch: str,
+    routed: set[str],
+    aside: dict[str, str],
+    separate_into: str | None,
+    at: Loc,
+) -> list[Finding]:
     """The branch's cables are not routed yet and lie on top of those still to be routed
-    at the connector (cable_group takes a group from the top)."""
+    at the connector (cable_group takes a group from the top), or all lie aside in a
+    separation guide, or lie below the others and the step lays those aside."""
     group = harness.branches[branch].cables
     taken = [n for n in harness.in_order(group) if n in routed]
     if taken:
         return [(at, f"{', '.join(taken)} of {branch} are routed already")]
-    rows = {n: harness.cables[n].pin for n in harness.cables if n not in routed}
+    if all(n in aside for n in group):
+        for n in group:
+            del aside[n]
+        return []
+    if any(n in aside for n in group):
+        away = ", ".join(n for n in harness.in_order(group) if n in aside)
+        return [(at, f"{away} of {branch} lie aside and the rest do not: no grasp takes them")]
+    if separate_into is not None:
+        return []  # _aside checks what is laid aside
+    rows = {n: harness.cables[n].pin for n in harness.cables if n not in routed and n not in aside}
     others = [n for n in rows if n not in group]
     if all(rows[g] > rows[o] for g in group for o in others):
         return []
@@ -84,8 +148,8 @@ def _rows(harness: Harness, branch: str, routed: set[str], at: Loc) -> list[Find
         tops = [b for b, br in harness.branches.items() if set(br.cables) & set(others)]
         msg = (
             f"{branch}'s cables ({mine}) leave the connector below {above}, still to be routed: "
-            "separating those needs a separation guide to lay them aside in (REMODEL's J<n>S), "
-            f"which this engine does not have yet; route {' or '.join(tops)} before {branch}"
+            f"route {' or '.join(tops)} before {branch}, or lay those aside in a separation "
+            "guide first (separate_into: <guide>, REMODEL's J<n>S)"
         )
         return [(at, msg)]
     msg = (

@@ -14,7 +14,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -118,6 +118,8 @@ class CableState:
     routed: frozenset[str] = frozenset()
     # the tool each arm carries (None: a bare flange); ``tcp`` is that tool's TCP
     tools: Mapping[str, str | None] = field(default_factory=lambda: MappingProxyType({}))
+    # harnesses -> their cables laid aside in a separation guide (cable_aside.Aside)
+    aside: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
 
     def __post_init__(self) -> None:
         object.__setattr__(
@@ -129,6 +131,7 @@ class CableState:
         object.__setattr__(self, "branches", MappingProxyType(dict(self.branches)))
         object.__setattr__(self, "placed", MappingProxyType(dict(self.placed)))
         object.__setattr__(self, "tools", MappingProxyType(dict(self.tools)))
+        object.__setattr__(self, "aside", MappingProxyType(dict(self.aside)))
 
     @classmethod
     def at_home(cls, ctx: PlanningContext) -> CableState:
@@ -168,6 +171,7 @@ class CableState:
             tuple((n, p.key()) for n, p in sorted(self.placed.items())),
             tuple(sorted(self.routed)),
             tuple(sorted(self.tools.items())),
+            tuple(sorted(self.aside.items())),
         )
 
     def branches_of(self, arm: str) -> frozenset[int]:
