@@ -456,10 +456,14 @@ def build_steps(inputs: Inputs) -> tuple[list[Step], dict[str, str], list[Proble
     steps: list[Step] = []
     connectors: dict[str, str] = {}
     problems: list[Problem] = []
+    routed: set[str] = set()  # the cables earlier RC rows route (REMODEL's routed_cables)
     for op in inputs.operations:
         try:
             link = inputs.labels.link(op)
-            steps.append(_step(op, link, inputs))
+            step = _step(op, link, inputs)
+            if op.kind == "RC" and link.branch is not None:
+                step = _separation(op, link.branch, step, routed, inputs)
+            steps.append(step)
         except InputError as e:
             problems.extend(e.problems)
             continue
@@ -504,6 +508,34 @@ def _step(op: Operation, link: Link, inputs: Inputs) -> Step:
     if op.kind == "PC" and inputs.arms == "auto" and op.spots[0].arm is not None:
         comment += f"; the engine chooses the arm, not the spot's {op.spots[0].arm} (--arms auto)"
     return Step(op.row, comment, data, tuple((kind, r) for r in refs))
+
+
+def _separation(op: Operation, branch: str, step: Step, routed: set[str], inputs: Inputs) -> Step:
+    """REMODEL's case A1 (HARNESS.md 1.8): a branch below cables of its harness still to be
+    routed has those laid aside first in the separation guide J<id>S (its guide 1), which
+    the step names as ``separate_into``; a folder without that guide is refused at the row."""
+    h = inputs.labels.branches[branch]
+    group = {c.cable: c.row1 for b in h.branches if b.label == branch for c in b.cables}
+    remaining = {c.cable: c.row1 for c in h.cables if c.cable not in routed}
+    routed.update(group)
+    rows = [r for r in remaining.values() if r is not None]
+    mine = [r for r in group.values() if r is not None]
+    if len(group) >= len(remaining) or not mine or max(mine) >= max(rows, default=-1):
+        return step
+    label = f"J{h.id}S"
+    platform = inputs.elements.get(label)
+    if platform is None:
+        above = ", ".join(n for n, r in remaining.items() if n not in group)
+        raise InputError.at(
+            f"RC {branch} {op.spot}: {branch}'s cables leave the connector below {above}, "
+            f"still to be routed: REMODEL lays those aside in the separation guide {label} "
+            "first, which no platform has (add it to a platform's ids file)",
+            inputs.source.sequence,
+            op.row,
+        )
+    ref = f"{platform}.{label}.1"
+    step.data["separate_into"] = ref
+    return replace(step, refs=(*step.refs, ("guide", ref)))
 
 
 def _side_warnings(inputs: Inputs) -> list[Problem]:

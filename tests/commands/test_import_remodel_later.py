@@ -163,16 +163,51 @@ def test_a_harness_of_several_cables_with_branches(src: Path, tmp_path: Path) ->
 def test_a_bottom_branch_first_is_refused_at_its_row(
     src: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """REMODEL lays the top cables into a separation guide first (case A1): not built."""
+    """REMODEL lays the top cables into the separation guide J<id>S first (case A1): a
+    folder without one is refused at the row."""
     sequence(src, "1;EC;WH1;C2.1-C1.1", "2;PC;WH1;J8.1.L", "3;RC;GR12;J3.1")
     monkeypatch.chdir(src)
     assert run(src, tmp_path / "cell") == 1
     assert capsys.readouterr().err.splitlines()[0] == (
-        "Assembly_sequence.csv:4: steps[2].cable: GR12's cables (CA4) leave the connector below "
-        "CA2, CA3, still to be routed: separating those needs a separation guide to lay them "
-        "aside in (REMODEL's J<n>S), which this engine does not have yet; route GR11 before GR12"
+        "Assembly_sequence.csv:4: RC GR12 J3.1: GR12's cables leave the connector below CA2, "
+        "CA3, still to be routed: REMODEL lays those aside in the separation guide J2S first, "
+        "which no platform has (add it to a platform's ids file)"
     )
     assert not (tmp_path / "cell").exists()
+
+
+def test_a_bottom_branch_first_lays_the_others_aside_in_its_separation_guide(
+    src: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """With J2S on a platform, the bottom branch's RouteCable names it (separate_into) and
+    the top branch, routed after it, is taken back from there by the engine (REMODEL's GCS)."""
+    x3d = src / "ATC_cad.x3d"
+    x3d.write_text(
+        x3d.read_text().replace(
+            "</Transform></Scene>",
+            '<Transform DEF="ID000005" translation="150 0 100" rotation="0 0 1 0">'
+            + _CUBE.format(x=10, y=24, z=60)
+            + "</Transform></Transform></Scene>",
+        )
+    )
+    jig = next(
+        line.split("\t")[2].strip()
+        for line in (src / "platform_ids.wri").read_text().splitlines()
+        if line.split("\t")[1] == "J3"
+    )
+    with (src / "ATC_ids.wri").open("a") as f:
+        f.write(f"ID000005\tJ2S\t{jig}\r\n")
+    sequence(src, "1;EC;WH1;C2.1-C1.1", "2;PC;WH1;J8.1.L", "3;RC;GR12;J3.1", "4;RC;GR11;J3.1-J4.1")
+    monkeypatch.chdir(src)
+    assert run(src, tmp_path / "cell") == 0
+    steps = yaml.safe_load((tmp_path / "cell" / "plan.yaml").read_text())["steps"]
+    assert steps[2] == {
+        "skill": "RouteCable",
+        "cable": "GR12",
+        "guides": ["platform.J3.1"],
+        "separate_into": "ATC.J2S.1",
+    }
+    assert "separate_into" not in steps[3]
 
 
 def test_later_rows_not_built_yet_are_refused_at_their_rows(

@@ -97,9 +97,9 @@ def test_a_bottom_branch_first_needs_a_separation_guide(tmp_path: Path) -> None:
     with pytest.raises(InputError) as e:
         load_plan(plan)  # before any motion: `validate` says so too
     assert e.value.problems[0].message == (
-        "steps[2].cable: BOT's cables (CA1) leave the connector below CA2, CA3, still "
-        "to be routed: separating those needs a separation guide to lay them aside in "
-        "(REMODEL's J<n>S), which this engine does not have yet; route TOP before BOT"
+        "steps[2].cable: BOT's cables (CA1) leave the connector below CA2, CA3, still to be "
+        "routed: route TOP before BOT, or lay those aside in a separation guide first "
+        "(separate_into: <guide>, REMODEL's J<n>S)"
     )
 
 
