@@ -126,3 +126,42 @@ def test_the_simulated_cell_plays_it() -> None:
     assert [(x.arm, x.tool) for x in driver.recorder.of(Triggered)] == [("right", "taping_gun")]
     assert driver.tools == dict(program.tools)
     assert np.abs(driver.joint_state() - program.segments[-1].trajectory.q[-1]).max() <= 1e-6
+
+
+@cache
+def separated() -> Compiled:
+    return compile_plan(CELLS / "harness" / "plan_separation.yaml")
+
+
+def test_a_bottom_branch_first_lays_the_others_aside_in_the_separation_guide() -> None:
+    """plan_separation.yaml: TOP's cables (the top rows) are laid aside in board.sep, BOT is
+    grasped below where they were and routed, then TOP is taken back out of board.sep and
+    routed; each group through each slot of its route (the independent check)."""
+    c = separated()
+    result = check_compiled(c)
+    assert result.ok, result.failures
+    assert result.min_arm_distance is not None and result.min_arm_distance >= 0.010 - 1e-9
+    program, world = c.program, c.world
+    labels = [s.segment.label for s in program.segments]
+    laid = next(s for s in program.segments if s.segment.label.endswith("into its slot"))
+    take = next(s.segment.facts for s in program.segments if "aside" in s.segment.facts)
+    assert (take["aside"], take["guide"]) == (["W1d", "W1e"], "board.sep")
+    # the cables laid aside run from the connector guide's exit to the fingertips through
+    # the separation guide's slot: within half its gap, along its x within 15 deg
+    (arm,) = laid.segment.arms()
+    _, T_tip = _at(c, laid, laid.trajectory.end_time, arm)
+    slot = world.pose("board.sep")
+    gap = world.dimensions("board.sep")["gap"]
+    connector_exit = cg.position(world, "board.connector.exit")
+    a, b = connector_exit, T_tip[:3, 3]
+    d = b - a
+    s_ = float(np.clip((slot[:3, 3] - a) @ d / (d @ d), 0.0, 1.0))
+    assert np.linalg.norm(slot[:3, 3] - (a + s_ * d)) <= gap / 2
+    angle = np.degrees(np.arccos(abs(float(d @ slot[:3, 0])) / np.linalg.norm(d)))
+    assert angle <= 15.0
+    # BOT grasped as all that is left at the connector, then TOP taken back from board.sep
+    grasp = next(s.segment.facts for s in program.segments if "group" in s.segment.facts)
+    assert (grasp["group"], grasp["below"]) == (["W1a", "W1b", "W1c"], [])
+    back = [k for k, label in enumerate(labels) if "takes it back from board.sep" in label]
+    first_bot = labels.index(next(x for x in labels if x.startswith("RouteCable board.guide4")))
+    assert back and back[0] > first_bot
