@@ -19,6 +19,7 @@ def test_plan_schema_has_one_branch_per_skill() -> None:
     assert names == sorted(
         [
             "BimanualCarry",
+            "ChangeTool",
             "Handover",
             "Pick",
             "PickCable",
@@ -26,6 +27,7 @@ def test_plan_schema_has_one_branch_per_skill() -> None:
             "PlaceConnector",
             "Pour",
             "RouteCable",
+            "Tape",
             "Unscrew",
             "Weigh",
         ]
