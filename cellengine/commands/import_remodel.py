@@ -522,13 +522,20 @@ def _separation(op: Operation, branch: str, step: Step, routed: set[str], inputs
     mine = [r for r in group.values() if r is not None]
     if len(group) >= len(remaining) or not mine or max(mine) >= max(rows, default=-1):
         return step
+    above = ", ".join(n for n in remaining if n not in group)
+    what = f"RC {branch} {op.spot}: {branch}'s cables leave the connector below {above}, still "
+    if h.id is None:
+        raise InputError.at(
+            what + "to be routed: REMODEL lays those aside in their harness's separation guide "
+            f"J<id>S first, and the harness has no id ({HARNESS} line {h.line})",
+            inputs.source.sequence,
+            op.row,
+        )
     label = f"J{h.id}S"
     platform = inputs.elements.get(label)
     if platform is None:
-        above = ", ".join(n for n, r in remaining.items() if n not in group)
         raise InputError.at(
-            f"RC {branch} {op.spot}: {branch}'s cables leave the connector below {above}, "
-            f"still to be routed: REMODEL lays those aside in the separation guide {label} "
+            what + f"to be routed: REMODEL lays those aside in the separation guide {label} "
             "first, which no platform has (add it to a platform's ids file)",
             inputs.source.sequence,
             op.row,
