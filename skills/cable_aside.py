@@ -162,9 +162,10 @@ def take_back(
     )
     b.add(f"{label}: to the connector", [c._cartesian(arm, cg.line(T_out, T_end))])
     group = set(ctx.world.objects.cables_of(branch))
-    rest = {h: a for h, a in state.aside.items() if a is not aside}
-    still = tuple(n for n in aside.cables if n not in group)
-    for h, a in state.aside.items():
-        if a is aside and still:
-            rest[h] = Aside(aside.guide, still)
+    still = tuple(n for n in aside.cables if n not in group)  # what stays aside
+    rest = {
+        h: Aside(a.guide, still) if a is aside else a
+        for h, a in state.aside.items()
+        if a is not aside or still
+    }
     return b.segments, replace(b.state, aside=rest)

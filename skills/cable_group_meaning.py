@@ -99,13 +99,10 @@ def _aside(
     if mine:
         return [(here, f"{', '.join(mine)} lie aside already: a harness is laid aside once")]
     aside.update({n: step.separate_into for n in above})
-    d = packed_diameter([_diameter(world, n) for n in above])
-    try:
-        gap = world.dimensions(step.separate_into)["gap"]
-    except (RefError, KeyError):
-        return []  # the plan's own checks say what is wrong with the guide
-    if gap > d:
+    tight = _tight(world, step.separate_into, above)
+    if tight is None:
         return []
+    gap, d = tight
     msg = (
         f"guide '{step.separate_into}' has a {_mm(gap)} mm slot (its gap); {', '.join(above)} "
         f"to lay aside in it are a {_mm(d)} mm bundle: it does not fit"
@@ -165,19 +162,27 @@ def _slot(
     """The guide's slot takes ``group`` beside the cables laid in it before."""
     if not laid:
         return []
-    d = packed_diameter([_diameter(world, n) for n in [*laid, *group]])
-    try:
-        gap = world.dimensions(ref)["gap"]
-    except (RefError, KeyError):
-        return []  # the plan's own checks say what is wrong with the guide
-    if gap > d:
+    tight = _tight(world, ref, [*laid, *group])
+    if tight is None:
         return []
+    gap, d = tight
     msg = (
         f"guide '{ref}' has a {_mm(gap)} mm slot (its gap); {', '.join(laid)} lie in it "
         f"already, and with {name} ({', '.join(group)}) the bundle is {_mm(d)} mm thick: it "
         "does not fit"
     )
     return [(at, msg)]
+
+
+def _tight(world: World, ref: str, cables: Sequence[str]) -> tuple[float, float] | None:
+    """(gap, bundle diameter) when the guide's slot does not take ``cables`` packed; None
+    when it does (or has no gap: the plan's own checks say what is wrong with the guide)."""
+    d = packed_diameter([_diameter(world, n) for n in cables])
+    try:
+        gap = world.dimensions(ref)["gap"]
+    except (RefError, KeyError):
+        return None
+    return None if gap > d else (gap, d)
 
 
 def _diameter(world: World, cable: str) -> float:

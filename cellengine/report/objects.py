@@ -9,7 +9,7 @@ A vial's screw cap is drawn on it, a cylinder of its own (the top quarter of the
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -54,12 +54,18 @@ def zones(world: World) -> list[dict[str, Any]]:
 
 def _tcp_poses(cell: CellModel, q: Vec) -> dict[str, Vec]:
     """Each arm's TCP pose (S, 4, 4) at the rows of ``q``."""
+    return frame_poses(cell, q, cell.tcp)
+
+
+def frame_poses(cell: CellModel, q: Vec, frames: Mapping[str, int]) -> dict[str, Vec]:
+    """Each arm's pose (S, 4, 4) of its frame in ``frames`` (the TCP, the flange) at the
+    rows of ``q``."""
     model = cell.model
     data = model.createData()
-    out = {arm: np.empty((len(q), 4, 4)) for arm in cell.arms}
+    out = {arm: np.empty((len(q), 4, 4)) for arm in frames}
     for s, row in enumerate(q):
         pin.framesForwardKinematics(model, data, row)
-        for arm, frame in cell.tcp.items():
+        for arm, frame in frames.items():
             out[arm][s] = data.oMf[frame].homogeneous
     return out
 

@@ -12,13 +12,13 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 
 from cellengine.arrays import Mat, Vec
 from cellengine.info.cell import FINGER_NAMES
 from cellengine.motion.robot import CellModel, mesh_reader
 from cellengine.motion.tool import Solid, fingers_of, tool_solids
 from cellengine.program import Program
+from cellengine.report.objects import frame_poses
 
 PREFIX = "tools"  # a drawn tool's name: tools/<tool>/tool[/<part>]
 
@@ -44,7 +44,7 @@ def tool_links(
     """Each solid of every tool that has a slot or that an arm carries: (name, coal shape,
     placements (S, 4, 4) in the cell frame), on its arm's flange while carried (fingers at
     the opening of the arm's last jaw mode since it took the tool), else in its slot."""
-    flanges = _flanges(cell, Q)
+    flanges = frame_poses(cell, Q, cell.tool0)
     carried = _carried(program, times)
     modes = _modes(program, times)
     names = sorted({t for row in carried for t in row.values() if t is not None})
@@ -77,16 +77,6 @@ def _finger(solid: Solid, fingers: Any, mode: str | None) -> Mat:
         return np.asarray(solid.T_flange_solid, dtype=float)
     opening = fingers.opening(mode) if mode is not None else fingers.widest
     return np.asarray(fingers.placements(opening)[side.index(solid.name)], dtype=float)
-
-
-def _flanges(cell: CellModel, Q: Vec) -> dict[str, Mat]:
-    model, data = cell.model, cell.model.createData()
-    out = {arm: np.empty((len(Q), 4, 4)) for arm in cell.arms}
-    for s, q in enumerate(Q):
-        pin.framesForwardKinematics(model, data, q)
-        for arm, frame in cell.tool0.items():
-            out[arm][s] = data.oMf[frame].homogeneous
-    return out
 
 
 def _carried(program: Program, times: Vec) -> list[dict[str, str | None]]:
