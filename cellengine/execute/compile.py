@@ -35,6 +35,7 @@ from cellengine.execute.failure import FailedAt
 from cellengine.execute.following import required
 from cellengine.execute.growing import UntilChange
 from cellengine.execute.held import Held, Holding
+from cellengine.execute.laid import Anchored, root, stretches
 from cellengine.execute.merge import MERGES, Merge, Merged, merge_rows, on_one_axis
 from cellengine.execute.preview import preview
 from cellengine.execute.refused import Refused, in_plan_terms
@@ -53,6 +54,7 @@ from cellengine.motion.robot import CellModel
 from cellengine.motion.scene import CollisionScene, Pair
 from cellengine.motion.trajectory import Trajectory, concatenate
 from cellengine.program import (
+    Anchor,
     CompiledSegment,
     Program,
     Segment,
@@ -80,6 +82,8 @@ class Mark:
     held: Held
     tools: tuple[tuple[str, str | None], ...]
     changes: int
+    anchors: tuple[Anchored, ...]
+    working: str | None
 
 
 class Compiler:
@@ -127,6 +131,10 @@ class Compiler:
         self.tooling: dict[tuple[tuple[str, str | None], ...], tuple[CellModel, Holding]] = {
             self.tools: (cell, self.holding)
         }
+        # where cables are fixed so far, and the harness (or cable) the hands held last: the
+        # cables laid of any other are obstacles (execute/laid.py)
+        self.anchors: tuple[Anchored, ...] = ()
+        self.working: str | None = None
 
     def add(
         self, segment: Segment, following: Sequence[Segment] = (), choice: int = 0
@@ -169,6 +177,8 @@ class Compiler:
             self.holding.state,
             self.tools,
             len(self.changes),
+            self.anchors,
+            self.working,
         )
 
     def restore(self, mark: Mark) -> None:
@@ -183,6 +193,7 @@ class Compiler:
         self.tools = mark.tools
         self.cell, self.holding = self.tooling[mark.tools]
         self.holding.restore(mark.held)
+        self.anchors, self.working = mark.anchors, mark.working
 
     @property
     def transit_clearance(self) -> float:
@@ -206,6 +217,18 @@ class Compiler:
             changes=tuple(self.changes),
             tools=MappingProxyType(dict(self.start_tools)),
         )
+
+    def _lay(self, segment: Segment) -> None:
+        """The cables the segment anchors, and the one it holds, from its end on."""
+        world = self.holding.world
+        anchors = [(a.object, a.point) for a in segment.annotations if isinstance(a, Anchor)]
+        held = [e.holds for e in (*segment.before, *segment.after) if e.holds is not None]
+        if not anchors and not held:
+            return
+        self.anchors += tuple(anchors)
+        if held:
+            self.working = root(world, held[-1])
+        self.holding.lay(stretches(world, self.anchors, self.working))
 
     def _change(self, changes: Iterable[ToolChange], t: float) -> None:
         """Each arm of ``changes`` carries its new tool from ``t``: the cell model and the
@@ -314,6 +337,7 @@ class Compiler:
             kept = kept_distance(trajectory, self.cell, segment.keep_distance)
         self._events(segment.after, trajectory.end_time, np.asarray(trajectory.q[-1]))
         self.holding.touch(())
+        self._lay(segment)
         self._change(segment.changes, trajectory.end_time)
         summary = _report(
             segment, self.strategy, _merge_name(list(parts), merge, self.strategy), figures, kept

@@ -20,19 +20,22 @@ guides are made with. The arms themselves are still checked against every elemen
 from __future__ import annotations
 
 from collections import OrderedDict
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
+import coal
 import numpy as np
 
 from cellengine import geometry as g
 from cellengine.arrays import Mat
+from cellengine.execute.laid import Point, Stretch
 from cellengine.motion.collision import CollisionChecker
 from cellengine.motion.robot import contact_parts
 from cellengine.motion.scene import (
     CollisionScene,
     HeldObject,
     Pair,
+    StaticShape,
     assemble,
     held_box,
     held_from_world,
@@ -91,9 +94,12 @@ class Held:
     standing: Mapping[str, tuple[tuple[float, ...], ...]]
     contacts: frozenset[tuple[str, str]] = frozenset()
     jaw: Mapping[str, float] = field(default_factory=dict)
+    # cables laid on the board that the hands keep clear of (execute/laid.py)
+    laid: tuple[Stretch, ...] = ()
 
     def key(self) -> tuple[object, ...]:
         return (
+            self.laid,
             tuple(sorted(self.by_arm.items())),
             tuple(sorted(self.grips.items())),
             tuple(sorted(self.standing.items())),
@@ -175,6 +181,11 @@ class Holding:
             return self.state.jaw
         return {**self.state.jaw, arm: fingers.opening(mode)}
 
+    def lay(self, laid: Sequence[Stretch]) -> None:
+        """The cables laid that the hands keep clear of from now on."""
+        if tuple(laid) != self.state.laid:
+            self._use(replace(self.state, laid=tuple(laid)))
+
     def touch(self, contacts: Iterable[tuple[str, str]]) -> None:
         """The contacts the next segment expects (see :class:`Held`)."""
         self._use(replace(self.state, contacts=frozenset(contacts)))
@@ -194,7 +205,8 @@ class Holding:
         in one go (each change one at a time built a scene for each: ~10 ms apiece)."""
         base = self.base
         jaw = {**base.jaw, **state.jaw}
-        if not state.grips and not state.contacts and self._standing_as_built(state):
+        plain = not state.grips and not state.contacts and not state.laid
+        if plain and self._standing_as_built(state):
             if not state.by_arm and not state.jaw:
                 return base
             riding = [held_object(self.world, base, a, o) for a, o in sorted(state.by_arm.items())]
@@ -205,6 +217,7 @@ class Holding:
         statics += [
             standing_container(self.world, n, _mat(T)) for n, T in sorted(state.standing.items())
         ]
+        statics += [_stretch(*s) for s in state.laid]
         held: dict[str, HeldObject] = {}
         for arm, obj in sorted(state.by_arm.items()):
             h = held_object(self.world, self.base, arm, obj)
@@ -233,6 +246,15 @@ class Holding:
             if s.name in containers
         }
         return built == dict(state.standing)
+
+
+def _stretch(name: str, a: Point, b: Point, radius: float) -> StaticShape:
+    """A stretch of laid cable: a capsule from ``a`` to ``b``."""
+    p, q = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    length = float(np.linalg.norm(q - p))
+    shape = coal.Capsule(radius, length)
+    T = g.transform(g.z_along((q - p) / length), (p + q) / 2.0)
+    return StaticShape(name, T, shape, shape, True)
 
 
 def _half_height(world: World, name: str, sign: float) -> Mat:

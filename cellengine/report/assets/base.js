@@ -94,11 +94,11 @@ function capture(target, e) {
   }
 }
 // a collision object's name for people (replay.py's part_names; a tool in its changer slot,
-// 'gun@slot(#k)', as in its slot; a held object, 'vial3@robot1', as held by its arm; else
-// without its '#k')
+// 'gun@slot(#k)', as in its slot; a cable laid on the board, 'TOP@laid(#k)', as laid; a held
+// object, 'vial3@robot1', as held by its arm; else without its '#k')
 function partName(n) {
-  const parked = /^(.+)@slot(#\d+)?$/.exec(n);
-  if (parked) return parked[1] + ' (in its slot)';
+  const parked = /^(.+)@(slot|laid)(#\d+)?$/.exec(n);
+  if (parked) return parked[1] + (parked[2] === 'slot' ? ' (in its slot)' : ' (laid)');
   const held = /^(.+)@([^@]+)$/.exec(n);
   if (held) return held[1] + ' (held by ' + held[2] + ')';
   return (RP.part_names || {})[n] || String(n).replace(/#\d+$/, '');
