@@ -48,7 +48,7 @@ from cellengine.errors import known
 from cellengine.info.bounds import MAX_MASS
 from cellengine.info.cell import Cell
 from cellengine.info.objects import Objects
-from cellengine.program import CompiledSegment, TimedEvent
+from cellengine.program import CompiledSegment, Program, TimedEvent
 
 T = TypeVar("T")
 
@@ -153,12 +153,12 @@ class Driver(ABC):
         ordered = tuple(sorted(events, key=lambda e: e.time))
         self._check_joints(segment)
         self._check_events(segment, ordered)
+        triggers = self._triggers(segment)
         q = self._guarded(self._read_joints)
         self._check_start(segment, q)
         traj = segment.trajectory
         label, step = segment.segment.label, segment.segment.step
         self.recorder.add(Sent(step, label, traj.start_time, traj.end_time, tuple(q.tolist())))
-        triggers = self._triggers(segment)
         for arm, tool in triggers:
             self._guarded(functools.partial(self._on_trigger, arm, tool, True))
         try:
@@ -180,6 +180,18 @@ class Driver(ABC):
             self._fail(played.fault)
             raise DriverFault(self.kind, played.fault)
         return played
+
+    def check_program(self, program: Program) -> None:
+        """DriverRefused, before anything moves, when the program changes tools or works a
+        tool (a taping gun) this driver cannot."""
+        for c in program.changes:
+            self._check_arm(c.arm)
+            self._check_changer(c.arm)
+        for s in program.segments:
+            tools = program.tools_at(s.trajectory.start_time)
+            for arm in s.segment.triggers:
+                self._check_arm(arm)
+                self._check_trigger(arm, tools.get(arm))
 
     def change_tool(self, arm: str, tool: str | None) -> None:
         """``arm``'s tool changer locks ``tool`` (None: unlocks, the tool it carried seated
@@ -287,9 +299,17 @@ class Driver(ABC):
         """Start (``on``) or stop the work of the tool ``arm`` carries (a taping gun)."""
         raise DriverRefused(self.kind, f"arm '{arm}': the {self.kind} driver triggers no tools")
 
+    def _check_changer(self, arm: str) -> None:
+        """DriverRefused unless ``arm``'s tool changer can be locked and unlocked."""
+        raise DriverRefused(self.kind, f"arm '{arm}': the {self.kind} driver has no tool changer")
+
+    def _check_trigger(self, arm: str, tool: str | None) -> None:
+        """DriverRefused unless ``arm``'s ``tool`` can be set to work."""
+        raise DriverRefused(self.kind, f"arm '{arm}': the {self.kind} driver triggers no tools")
+
     def _triggers(self, segment: CompiledSegment) -> list[tuple[str, str]]:
         """(arm, tool) of each tool the segment works with: DriverRefused, nothing sent,
-        for an arm that carries none."""
+        for an arm that carries none or a tool the driver cannot work."""
         out = []
         for arm in segment.segment.triggers:
             self._check_arm(arm)
@@ -300,6 +320,7 @@ class Driver(ABC):
                     f"segment '{segment.segment.label}' works the {arm} arm's tool, and it "
                     "carries none",
                 )
+            self._check_trigger(arm, tool)
             out.append((arm, tool))
         return out
 

@@ -190,6 +190,12 @@ class SimDriver(Driver):
         noise = float(self._rng.normal(0.0, self.mass_noise)) if self.mass_noise > 0 else 0.0
         return mass + noise
 
+    def _check_changer(self, arm: str) -> None:
+        """Every simulated arm has a tool changer."""
+
+    def _check_trigger(self, arm: str, tool: str | None) -> None:
+        """Every simulated tool works on a trigger."""
+
     def _on_trigger(self, arm: str, tool: str, on: bool) -> None:
         """The simulated tool works at once; the recorder keeps when (Triggered)."""
         if on:

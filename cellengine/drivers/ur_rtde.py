@@ -401,15 +401,26 @@ class UrDriver(Base):
             time=t,
         )
 
-    def _on_trigger(self, arm: str, tool: str, on: bool) -> None:
-        """The tool's output (driver.trigger_io) high while it works."""
-        pin = self.config.trigger_io.get(tool)
-        if pin is None:
+    def _check_changer(self, arm: str) -> None:
+        if self.config.changer_release is None:
             raise DriverRefused(
                 self.kind,
-                f"arm '{arm}': the cell's ur_rtde driver names no output for '{tool}' "
-                f"(driver.trigger_io: {{{tool}: <output>}})",
+                f"arm '{arm}' changes tools, and the cell's ur_rtde driver names no tool "
+                "changer output (driver.changer_release)",
             )
+
+    def _check_trigger(self, arm: str, tool: str | None) -> None:
+        if tool is None or tool not in self.config.trigger_io:
+            raise DriverRefused(
+                self.kind,
+                f"arm '{arm}' works '{tool}', and the cell's ur_rtde driver names no output "
+                f"for it (driver.trigger_io: {{{tool}: <output>}})",
+            )
+
+    def _on_trigger(self, arm: str, tool: str, on: bool) -> None:
+        """The tool's output (driver.trigger_io) high while it works."""
+        self._check_trigger(arm, tool)
+        pin = self.config.trigger_io[tool]
         self._dout(arm, pin, on, f"{tool} of arm '{arm}'", "start" if on else "stop")
 
     def _dout(self, arm: str, pin: int, high: bool, what: str, doing: str) -> None:
@@ -427,13 +438,9 @@ class UrDriver(Base):
 
     def _on_change_tool(self, arm: str, tool: str | None) -> None:
         """The changer's release output high to unlock, low to lock."""
+        self._check_changer(arm)
         pin = self.config.changer_release
-        if pin is None:
-            raise DriverRefused(
-                self.kind,
-                f"arm '{arm}': the cell's ur_rtde driver names no tool changer output "
-                "(driver.changer_release)",
-            )
+        assert pin is not None
         what = "lock" if tool is not None else "unlock"
         self._dout(arm, pin, tool is None, f"tool changer of arm '{arm}'", what)
 

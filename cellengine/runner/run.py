@@ -179,6 +179,7 @@ def _drive(
         finally:
             shown.close()  # before anything else is printed
 
+    driver.check_program(now.program)  # a tool it cannot change or work: before anything
     with timed(journal, driver, out, quiet, compiled):
         driver.configure()
         driver.activate()

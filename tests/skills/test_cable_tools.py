@@ -144,3 +144,22 @@ def test_bad_tool_changes(tmp_path: Path, steps: str, edit: tuple[str, str], mes
     with pytest.raises(InputError) as e:
         compile_plan(atc_cell(tmp_path, steps, edit))
     assert message in str(e.value)
+
+
+def test_a_driver_without_the_changers_output_refuses_before_anything_moves(
+    tmp_path: Path,
+) -> None:
+    from cellengine.drivers.fault import DriverRefused
+    from cellengine.drivers.registry import make_driver
+
+    driver_spec = "driver: {kind: ur_rtde, arms: {left: 127.0.0.2, right: 127.0.0.3}}"
+    compiled = compile_plan(atc_cell(tmp_path, GUN, ("driver: {kind: sim}", driver_spec)))
+    joints = {n: arm.joint_names for n, arm in compiled.cell.arms.items()}
+    driver = make_driver(compiled.world.cell, joints, objects=compiled.world.objects)
+    with pytest.raises(DriverRefused) as e:
+        driver.check_program(compiled.program)
+    assert str(e.value) == (
+        "ur_rtde driver: arm 'left' changes tools, and the cell's ur_rtde driver names no tool "
+        "changer output (driver.changer_release)"
+    )
+    assert driver.recorder.entries == []  # nothing sent, not even connected
