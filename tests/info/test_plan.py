@@ -69,7 +69,8 @@ def test_skill_parameters_validated() -> None:
     assert errors(text) == [
         "plan.yaml:6:11: steps[0].from: expected 2 keypoints [connector end, other end], got 1",
         "plan.yaml:7:5: steps[1]: missing required key 'guides'",
-        "plan.yaml:9:5: steps[1]: unknown key 'guide'; known: after, arm, cable, guides, id, skill",
+        "plan.yaml:9:5: steps[1]: unknown key 'guide'; known: after, arm, cable, guides, id, "
+        "separate_into, skill",
     ]
 
 
