@@ -12,12 +12,13 @@ from cellengine.execute.laid import stretches
 from cellengine.info.load import load_world
 from cellengine.program import Anchor, ArmPath, GripperEvent, Segment
 from cellengine.skills import cable_geometry as cg
+from cellengine.world import World
 from tests.conftest import CELLS
 
 CELL = CELLS / "harness"
 
 
-def _point(world, ref: str) -> tuple[float, float, float]:  # type: ignore[no-untyped-def]
+def _point(world: World, ref: str) -> tuple[float, float, float]:
     x, y, z = (float(v) for v in cg.position(world, ref))
     return (x, y, z)
 

@@ -12,7 +12,7 @@ import pytest
 
 from cellengine import geometry as g
 from cellengine.errors import InputError
-from cellengine.pipeline import compile_plan, trajectory_json
+from cellengine.pipeline import Compiled, compile_plan, trajectory_json
 from cellengine.program import Program
 from cellengine.runner.cycles import check_cycles
 from tests.skills.atc import atc_cell
@@ -22,7 +22,7 @@ BACK = "  - {skill: ChangeTool, arm: left, tool: gripper_left}\n"
 POSITION, ANGLE = 1e-6, 1e-6  # m, rad: where a Cartesian path ends (its IK's tolerance)
 
 
-def _flange(compiled, t: float) -> np.ndarray:  # type: ignore[no-untyped-def]
+def _flange(compiled: Compiled, t: float) -> np.ndarray:
     """T_cell_flange of the left arm at program time ``t``."""
     program: Program = compiled.program
     k = next(i for i, s in enumerate(program.segments) if s.trajectory.end_time >= t - 1e-9)
